@@ -1,0 +1,134 @@
+// cpstep — command-line front end.
+//
+//   cpstep moves U V [--k K] [--rep R] [--engine rtl|model|oracle] [--stats] [--table]
+//
+// Exit codes: 0 success, 2 refused input (one line on stderr), 1 internal error.
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include <cstdint>
+#include <iostream>
+#include <optional>
+
+#include "model/oracle.h"
+#include "sim/engine_configs.h"
+#include "sim/engine_session.h"
+
+namespace {
+
+using namespace cpstep;
+
+constexpr int kExitRefused = 2;
+
+struct MovesOptions {
+  uint64_t u = 0, v = 0, k = 0, rep = 1;
+  std::string engine = "rtl";
+  bool stats = false, table = false;
+};
+
+const char* engine_error_text(uint32_t code) {
+  switch (model::EngineError(code)) {
+    case model::EngineError::u_zero: return "u must be at least 1";
+    case model::EngineError::v_gt_u: return "v must not exceed u";
+    case model::EngineError::u_gt_w: return "u exceeds the pattern capacity W";
+    case model::EngineError::k_gt_kmax: return "k exceeds the largest doubling exponent KMAX";
+    case model::EngineError::rep_zero: return "rep must be at least 1";
+    default: return "refused";
+  }
+}
+
+void print_table(const std::vector<oracle::Iteration>& rows) {
+  fmt::print("{:>6} {:>6}  {:<24} {}\n", "x", "y", "M1", "M2");
+  for (const auto& r : rows) fmt::print("{:>6} {:>6}  {:<24} {}\n", r.x, r.y, r.m1, r.m2);
+}
+
+int run_moves(const MovesOptions& o) {
+  using P = sim::EngineDefault;
+  const auto params = P::model_params();
+  sim::EngineRun run;
+  std::optional<uint64_t> build_cycles;
+  if (o.engine == "oracle") {
+    // The oracle has no registers; it applies the card's limits so that every
+    // engine refuses the same requests.
+    uint32_t err = 0;
+    if (o.u == 0) err = 1;
+    else if (o.v > o.u) err = 2;
+    else if (o.u > params.w) err = 3;
+    else if (o.k > params.kmax) err = 4;
+    else if (o.rep == 0) err = 5;
+    if (err) {
+      fmt::print(stderr, "cpstep moves: refused: {} (u={} v={} k={})\n", engine_error_text(err),
+                 o.u, o.v, o.k);
+      return kExitRefused;
+    }
+    std::string once = oracle::castle_pitteway(o.u << o.k, o.v << o.k, &run.iterations);
+    for (uint64_t r = 0; r < o.rep; ++r) run.moves += once;
+  } else {
+    // Values wider than the ports are refused as the engine would refuse them.
+    const uint64_t umax = (1ull << params.uw()) - 1;
+    if (o.u > umax || o.v > umax || o.k > (1ull << params.kw()) - 1 || o.rep > 0xffff) {
+      const uint32_t err = o.u > umax ? (o.v > o.u ? 2 : 3) : o.v > umax ? 2 : o.rep > 0xffff ? 5 : 4;
+      fmt::print(stderr, "cpstep moves: refused: {} (u={} v={} k={})\n",
+                 o.rep > 0xffff ? "rep exceeds 65535" : engine_error_text(err), o.u, o.v, o.k);
+      return kExitRefused;
+    }
+    const sim::EngineRequest req{uint32_t(o.u), uint32_t(o.v), uint32_t(o.k), uint32_t(o.rep)};
+    model::CpEngineIn reset{};
+    reset.rst = true;
+    if (o.engine == "rtl") {
+      sim::RtlDut<P> dut;
+      dut.step(reset);
+      dut.step(reset);
+      run = sim::run_request(dut, params.aw(), req);
+    } else {
+      sim::ModelDut<P> dut;
+      dut.step(reset);
+      dut.step(reset);
+      run = sim::run_request(dut, params.aw(), req);
+    }
+    if (run.err_code) {
+      fmt::print(stderr, "cpstep moves: refused: {} (u={} v={} k={})\n",
+                 engine_error_text(run.err_code), o.u, o.v, o.k);
+      return kExitRefused;
+    }
+    build_cycles = run.build_cycles();
+  }
+  if (o.table) print_table(run.iterations);
+  fmt::print("{}\n", run.moves);
+  if (o.stats)
+    fmt::print("iterations={} build_cycles={}\n", run.iterations.size(),
+               build_cycles ? std::to_string(*build_cycles) : "none");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"cpstep: Castle-Pitteway FPGA step generator — model, simulated card and host"};
+  app.require_subcommand(1);
+
+  MovesOptions mo;
+  auto* moves = app.add_subcommand("moves", "Print the move string of the segment (0,0)-(U,V)");
+  moves->add_option("U", mo.u, "major-axis count u (1..W)")->required();
+  moves->add_option("V", mo.v, "minor-axis count v (0..u)")->required();
+  moves->add_option("--k", mo.k, "step-doubling exponent: u*2^k moves");
+  moves->add_option("--rep", mo.rep, "replay the whole string this many times");
+  moves->add_option("--engine", mo.engine, "rtl (Verilated), model (C++ golden model) or oracle")
+      ->check(CLI::IsMember({"rtl", "model", "oracle"}));
+  moves->add_flag("--stats", mo.stats, "second line: iterations=N build_cycles=M");
+  moves->add_flag("--table", mo.table, "print the register table (x, y, M1, M2) first");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? 0 : kExitRefused;
+  }
+  try {
+    if (*moves) return run_moves(mo);
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "cpstep: internal error: {}\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,422 @@
+// cp_engine — Castle–Pitteway move-string engine for one (major, minor) axis pair.
+//
+// Accepts (u, v, k, rep) on a valid/ready handshake, grows the register pair
+// M1/M2 with Euclid's subtractive loop and swap-and-reverse, then streams the
+// pattern M2·reverse(M1) replayed x·2^k·rep times (x = gcd(u, v) when the loop
+// ends) as a valid/ready stream of moves: 1 = diagonal (major and minor step),
+// 0 = axial (major only). Exactly u·2^k·rep moves are emitted.
+//
+// Storage (docs/ENGINE.md): each register is a 1-bit-wide memory of 2^AW bits
+// holding a circular window [lo, lo+len) and a direction flag rev; the logical
+// string is the window read forward (rev=0) or backward (rev=1). Reversal flips
+// the flag; "M = S + reverse(M)" flips M's flag, then prepends S's bits, last bit
+// first, one bit per clock (the seed paper's serial transfer, Figure 6). The read
+// of the source is synchronous (block RAM), its write lands one clock later, and
+// consecutive iterations overlap, so a build costs one clock per copied bit:
+// u/gcd(u,v) - 2 clocks in all.
+//
+// Valid/ready contract (docs/ENGINE.md): a transfer happens on a rising edge
+// where valid && ready; valid never waits for ready; while valid && !ready the
+// data holds.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module cp_engine #(
+    // Pattern capacity: the largest reduced major count u accepted (u <= W).
+    parameter integer W = 1024,
+    // Largest step-doubling exponent k accepted.
+    parameter integer KMAX = 8,
+    // Width of the replay multiplier rep (rep >= 1).
+    parameter integer RW = 16
+) (
+    input  wire          clk,
+    input  wire          rst,
+
+    // Request: the pattern (u, v) and its replay count.
+    input  wire          in_valid_i,
+    output wire          in_ready_o,
+    input  wire [UW-1:0] in_u_i,
+    input  wire [UW-1:0] in_v_i,
+    input  wire [KW-1:0] in_k_i,
+    input  wire [RW-1:0] in_rep_i,
+
+    // A refused request: one-clock pulse with the reason (ERR_* below).
+    output wire          err_o,
+    output wire [2:0]    err_code_o,
+
+    // Move stream.
+    output wire          move_valid_o,
+    input  wire          move_ready_i,
+    output wire          move_o,
+    output wire          move_last_o,
+
+    // Debug port: memory write ports and a snapshot after each loop iteration.
+    // All are zero when their strobe is low. Unconnected, they synthesize away.
+    output wire          dbg_we1_o,
+    output wire [AW-1:0] dbg_waddr1_o,
+    output wire          dbg_wbit1_o,
+    output wire          dbg_we2_o,
+    output wire [AW-1:0] dbg_waddr2_o,
+    output wire          dbg_wbit2_o,
+    output wire          dbg_iter_o,
+    output wire [UW-1:0] dbg_x_o,
+    output wire [UW-1:0] dbg_y_o,
+    output wire [AW-1:0] dbg_m1_lo_o,
+    output wire [AW-1:0] dbg_m1_len_o,
+    output wire          dbg_m1_rev_o,
+    output wire [AW-1:0] dbg_m2_lo_o,
+    output wire [AW-1:0] dbg_m2_len_o,
+    output wire          dbg_m2_rev_o
+);
+
+// Memory address width: each register holds at most u/gcd - 1 <= W - 1 bits.
+localparam integer AW = (W > 2) ? $clog2(W) : 1;
+// Width of u, v, x, y: wide enough to express W + 1, so u > W can be refused.
+localparam integer UW = $clog2(W + 2);
+// Width of k: wide enough to express KMAX + 1.
+localparam integer KW = (KMAX > 0) ? $clog2(KMAX + 2) : 1;
+// Width of the inner replay counter x << k (x <= W).
+localparam integer NW = UW + KMAX;
+
+localparam [UW-1:0] W_U = W[UW-1:0];
+localparam [KW-1:0] KMAX_K = KMAX[KW-1:0];
+
+// Refusal reasons, checked in this order.
+localparam [2:0] ERR_NONE      = 3'd0;
+localparam [2:0] ERR_U_ZERO    = 3'd1;
+localparam [2:0] ERR_V_GT_U    = 3'd2;
+localparam [2:0] ERR_U_GT_W    = 3'd3;
+localparam [2:0] ERR_K_GT_KMAX = 3'd4;
+localparam [2:0] ERR_REP_ZERO  = 3'd5;
+
+localparam [1:0] S_IDLE   = 2'd0;
+localparam [1:0] S_BUILD  = 2'd1;
+localparam [1:0] S_REPLAY = 2'd2;
+
+// Elaboration-time parameter checks: an illegal value instantiates a module
+// that does not exist, which both Verilator and yosys report by name.
+generate
+    if (W < 2) begin : g_check_w
+        cp_engine_parameter_W_must_be_at_least_2 u_bad ();
+    end
+    if (KMAX < 0 || KMAX > 24) begin : g_check_kmax
+        cp_engine_parameter_KMAX_must_be_0_to_24 u_bad ();
+    end
+    if (RW < 1 || RW > 32) begin : g_check_rw
+        cp_engine_parameter_RW_must_be_1_to_32 u_bad ();
+    end
+endgenerate
+
+// ---------------------------------------------------------------- storage
+reg mem1 [0:(1<<AW)-1];
+reg mem2 [0:(1<<AW)-1];
+reg rdata1_q;
+reg rdata2_q;
+
+reg          re1, re2;
+reg [AW-1:0] raddr1, raddr2;
+reg          we1, we2;
+reg [AW-1:0] waddr1, waddr2;
+reg          wbit1, wbit2;
+
+always @(posedge clk) begin
+    if (we1) mem1[waddr1] <= wbit1;
+    if (we2) mem2[waddr2] <= wbit2;
+    if (re1) rdata1_q <= mem1[raddr1];
+    if (re2) rdata2_q <= mem2[raddr2];
+end
+
+// ---------------------------------------------------------------- state
+// Control state (reset).
+reg [1:0]    state_q, state_d;
+reg          wp_q, wp_d;            // a build write lands this clock
+reg          move_valid_q, move_valid_d;
+reg          err_q, err_d;
+reg          dbg_iter_q, dbg_iter_d;
+
+// Datapath (loaded on acceptance, no reset).
+reg [UW-1:0] x_q, x_d, y_q, y_d;
+reg [KW-1:0] k_q, k_d;
+reg [RW-1:0] rep_q, rep_d;          // replay multiplier, kept for reloads
+reg          const_q, const_d;      // v == 0 or v == u: a 1-move pattern
+reg          cbit_q, cbit_d;        // its move
+reg [AW-1:0] m1_lo_q, m1_lo_d, m1_len_q, m1_len_d;
+reg [AW-1:0] m2_lo_q, m2_lo_d, m2_len_q, m2_len_d;
+reg          m1_rev_q, m1_rev_d, m2_rev_q, m2_rev_d;
+reg [AW-1:0] rd_cnt_q, rd_cnt_d;    // build: source reads left in this iteration
+reg [AW-1:0] rd_ptr_q, rd_ptr_d;    // build: physical address of the next read
+reg          wp_to2_q, wp_to2_d;    // build: the pending write goes to M2
+reg [AW-1:0] wp_addr_q, wp_addr_d;
+reg          ph_q, ph_d;            // replay: 0 = M2 forward, 1 = M1 backward
+reg [AW-1:0] rp_cnt_q, rp_cnt_d;    // replay: reads left in this phase
+reg [AW-1:0] rp_ptr_q, rp_ptr_d;
+reg [NW-1:0] inner_q, inner_d;      // replays left of x << k
+reg [RW-1:0] outer_q, outer_d;      // rounds of x << k left
+reg          out_ph_q, out_ph_d;    // phase of the move in the output register
+reg          out_last_q, out_last_d;
+reg [2:0]    err_code_q, err_code_d;
+reg [UW-1:0] dbg_x_q, dbg_x_d, dbg_y_q, dbg_y_d;
+reg [AW-1:0] dbg_m1_lo_q, dbg_m1_lo_d, dbg_m1_len_q, dbg_m1_len_d;
+reg [AW-1:0] dbg_m2_lo_q, dbg_m2_lo_d, dbg_m2_len_q, dbg_m2_len_d;
+reg          dbg_m1_rev_q, dbg_m1_rev_d, dbg_m2_rev_q, dbg_m2_rev_d;
+
+// ---------------------------------------------------------------- helpers
+// Physical address of a register's last logical bit, and of its first.
+function [AW-1:0] log_last;
+    input [AW-1:0] lo;
+    input [AW-1:0] len;
+    input          rev;
+    log_last = rev ? lo : lo + len - 1'b1;
+endfunction
+
+function [AW-1:0] log_first;
+    input [AW-1:0] lo;
+    input [AW-1:0] len;
+    input          rev;
+    log_first = rev ? lo + len - 1'b1 : lo;
+endfunction
+
+function [NW-1:0] shifted;
+    input [UW-1:0] x;
+    input [KW-1:0] k;
+    shifted = {{(NW-UW){1'b0}}, x} << k;
+endfunction
+
+wire accept = in_valid_i && in_ready_o;
+wire issue  = state_q == S_REPLAY && !wp_q && (!move_valid_q || move_ready_i);
+
+reg [2:0] refuse_code;
+always @* begin
+    if (in_u_i == {UW{1'b0}})       refuse_code = ERR_U_ZERO;
+    else if (in_v_i > in_u_i)       refuse_code = ERR_V_GT_U;
+    else if (in_u_i > W_U)          refuse_code = ERR_U_GT_W;
+    else if (in_k_i > KMAX_K)       refuse_code = ERR_K_GT_KMAX;
+    else if (in_rep_i == {RW{1'b0}}) refuse_code = ERR_REP_ZERO;
+    else                            refuse_code = ERR_NONE;
+end
+
+// Build: the iteration's target is M2 when x > y (M2 = M1 + reverse(M2)),
+// else M1 (M1 = M2 + reverse(M1)). The target is already reversed.
+wire          to2      = x_q > y_q;
+wire          src_rev  = to2 ? m1_rev_q : m2_rev_q;
+wire          tgt_rev  = to2 ? m2_rev_q : m1_rev_q;
+wire [AW-1:0] tgt_lo   = to2 ? m2_lo_q : m1_lo_q;
+wire [AW-1:0] tgt_len  = to2 ? m2_len_q : m1_len_q;
+wire [AW-1:0] tgt_addr = tgt_rev ? tgt_lo + tgt_len : tgt_lo - 1'b1;
+wire          pat_end  = const_q || (ph_q && rp_cnt_q == 1);
+
+always @* begin
+    state_d      = state_q;
+    wp_d         = 1'b0;
+    move_valid_d = move_valid_q;
+    err_d        = 1'b0;
+    err_code_d   = err_code_q;
+    dbg_iter_d   = 1'b0;
+
+    x_d = x_q;  y_d = y_q;  k_d = k_q;  rep_d = rep_q;
+    const_d = const_q;  cbit_d = cbit_q;
+    m1_lo_d = m1_lo_q;  m1_len_d = m1_len_q;  m1_rev_d = m1_rev_q;
+    m2_lo_d = m2_lo_q;  m2_len_d = m2_len_q;  m2_rev_d = m2_rev_q;
+    rd_cnt_d = rd_cnt_q;  rd_ptr_d = rd_ptr_q;
+    wp_to2_d = wp_to2_q;  wp_addr_d = wp_addr_q;
+    ph_d = ph_q;  rp_cnt_d = rp_cnt_q;  rp_ptr_d = rp_ptr_q;
+    inner_d = inner_q;  outer_d = outer_q;
+    out_ph_d = out_ph_q;  out_last_d = out_last_q;
+    dbg_x_d = dbg_x_q;  dbg_y_d = dbg_y_q;
+    dbg_m1_lo_d = dbg_m1_lo_q;  dbg_m1_len_d = dbg_m1_len_q;  dbg_m1_rev_d = dbg_m1_rev_q;
+    dbg_m2_lo_d = dbg_m2_lo_q;  dbg_m2_len_d = dbg_m2_len_q;  dbg_m2_rev_d = dbg_m2_rev_q;
+
+    re1 = 1'b0;  raddr1 = {AW{1'b0}};
+    re2 = 1'b0;  raddr2 = {AW{1'b0}};
+    // Write port: the pending build write lands in its target.
+    we1 = wp_q && !wp_to2_q;  waddr1 = wp_addr_q;  wbit1 = rdata2_q;
+    we2 = wp_q &&  wp_to2_q;  waddr2 = wp_addr_q;  wbit2 = rdata1_q;
+
+    // A move leaves the output register.
+    if (move_valid_q && move_ready_i) move_valid_d = 1'b0;
+
+    case (state_q)
+    S_IDLE: begin
+        if (accept) begin
+            if (refuse_code != ERR_NONE) begin
+                err_d      = 1'b1;
+                err_code_d = refuse_code;
+            end else begin
+                k_d   = in_k_i;
+                rep_d = in_rep_i;
+                outer_d = in_rep_i;
+                if (in_v_i == {UW{1'b0}} || in_v_i == in_u_i) begin
+                    const_d = 1'b1;
+                    cbit_d  = in_v_i != {UW{1'b0}};
+                    x_d     = in_u_i;
+                    inner_d = shifted(in_u_i, in_k_i);
+                    state_d = S_REPLAY;
+                end else begin
+                    const_d = 1'b0;
+                    x_d = in_u_i - in_v_i;
+                    y_d = in_v_i;
+                    // M1 = "0", M2 = "1".
+                    we1 = 1'b1;  waddr1 = {AW{1'b0}};  wbit1 = 1'b0;
+                    we2 = 1'b1;  waddr2 = {AW{1'b0}};  wbit2 = 1'b1;
+                    m1_lo_d = {AW{1'b0}};  m1_len_d = 1;  m1_rev_d = 1'b0;
+                    m2_lo_d = {AW{1'b0}};  m2_len_d = 1;  m2_rev_d = 1'b0;
+                    if (x_d == y_d) begin
+                        ph_d     = 1'b0;
+                        rp_cnt_d = 1;
+                        rp_ptr_d = {AW{1'b0}};
+                        inner_d  = shifted(x_d, in_k_i);
+                        state_d  = S_REPLAY;
+                    end else begin
+                        // First target reversed; the source is one bit at 0.
+                        if (x_d > y_d) m2_rev_d = 1'b1;
+                        else           m1_rev_d = 1'b1;
+                        rd_cnt_d = 1;
+                        rd_ptr_d = {AW{1'b0}};
+                        state_d  = S_BUILD;
+                    end
+                end
+            end
+        end
+    end
+
+    S_BUILD: begin
+        // Read the source's logical bit rd_cnt-1; its write lands next clock
+        // at the target's logical front.
+        if (to2) begin re1 = 1'b1; raddr1 = rd_ptr_q; end
+        else     begin re2 = 1'b1; raddr2 = rd_ptr_q; end
+        wp_d      = 1'b1;
+        wp_to2_d  = to2;
+        wp_addr_d = tgt_addr;
+        if (to2) begin
+            m2_len_d = m2_len_q + 1'b1;
+            if (!m2_rev_q) m2_lo_d = m2_lo_q - 1'b1;
+        end else begin
+            m1_len_d = m1_len_q + 1'b1;
+            if (!m1_rev_q) m1_lo_d = m1_lo_q - 1'b1;
+        end
+        rd_cnt_d = rd_cnt_q - 1'b1;
+        rd_ptr_d = src_rev ? rd_ptr_q + 1'b1 : rd_ptr_q - 1'b1;
+
+        if (rd_cnt_q == 1) begin
+            // Iteration done: subtract, snapshot, pick the next target.
+            if (to2) x_d = x_q - y_q;
+            else     y_d = y_q - x_q;
+            dbg_iter_d   = 1'b1;
+            dbg_x_d      = x_d;          dbg_y_d      = y_d;
+            dbg_m1_lo_d  = m1_lo_d;      dbg_m1_len_d = m1_len_d;  dbg_m1_rev_d = m1_rev_d;
+            dbg_m2_lo_d  = m2_lo_d;      dbg_m2_len_d = m2_len_d;  dbg_m2_rev_d = m2_rev_d;
+            if (x_d == y_d) begin
+                ph_d     = 1'b0;
+                rp_cnt_d = m2_len_d;
+                rp_ptr_d = log_first(m2_lo_d, m2_len_d, m2_rev_d);
+                inner_d  = shifted(x_d, k_q);
+                state_d  = S_REPLAY;
+            end else if (x_d > y_d) begin
+                m2_rev_d = !m2_rev_d;
+                rd_cnt_d = m1_len_d;
+                rd_ptr_d = log_last(m1_lo_d, m1_len_d, m1_rev_d);
+            end else begin
+                m1_rev_d = !m1_rev_d;
+                rd_cnt_d = m2_len_d;
+                rd_ptr_d = log_last(m2_lo_d, m2_len_d, m2_rev_d);
+            end
+        end
+    end
+
+    S_REPLAY: begin
+        if (issue) begin
+            if (!const_q) begin
+                if (ph_q) begin re1 = 1'b1; raddr1 = rp_ptr_q; end
+                else      begin re2 = 1'b1; raddr2 = rp_ptr_q; end
+            end
+            move_valid_d = 1'b1;
+            out_ph_d     = ph_q;
+            out_last_d   = pat_end && inner_q == 1 && outer_q == 1;
+            if (pat_end) begin
+                ph_d     = 1'b0;
+                rp_cnt_d = m2_len_q;
+                rp_ptr_d = log_first(m2_lo_q, m2_len_q, m2_rev_q);
+                if (inner_q != 1) begin
+                    inner_d = inner_q - 1'b1;
+                end else if (outer_q != 1) begin
+                    outer_d = outer_q - 1'b1;
+                    inner_d = shifted(x_q, k_q);
+                end else begin
+                    state_d = S_IDLE;
+                end
+            end else if (rp_cnt_q == 1) begin
+                // End of M2: continue with reverse(M1), from its logical end.
+                ph_d     = 1'b1;
+                rp_cnt_d = m1_len_q;
+                rp_ptr_d = log_last(m1_lo_q, m1_len_q, m1_rev_q);
+            end else begin
+                rp_cnt_d = rp_cnt_q - 1'b1;
+                if (ph_q) rp_ptr_d = m1_rev_q ? rp_ptr_q + 1'b1 : rp_ptr_q - 1'b1;
+                else      rp_ptr_d = m2_rev_q ? rp_ptr_q - 1'b1 : rp_ptr_q + 1'b1;
+            end
+        end
+    end
+
+    default: state_d = S_IDLE;
+    endcase
+end
+
+always @(posedge clk) begin
+    if (rst) begin
+        state_q      <= S_IDLE;
+        wp_q         <= 1'b0;
+        move_valid_q <= 1'b0;
+        err_q        <= 1'b0;
+        dbg_iter_q   <= 1'b0;
+    end else begin
+        state_q      <= state_d;
+        wp_q         <= wp_d;
+        move_valid_q <= move_valid_d;
+        err_q        <= err_d;
+        dbg_iter_q   <= dbg_iter_d;
+    end
+    x_q <= x_d;  y_q <= y_d;  k_q <= k_d;  rep_q <= rep_d;
+    const_q <= const_d;  cbit_q <= cbit_d;
+    m1_lo_q <= m1_lo_d;  m1_len_q <= m1_len_d;  m1_rev_q <= m1_rev_d;
+    m2_lo_q <= m2_lo_d;  m2_len_q <= m2_len_d;  m2_rev_q <= m2_rev_d;
+    rd_cnt_q <= rd_cnt_d;  rd_ptr_q <= rd_ptr_d;
+    wp_to2_q <= wp_to2_d;  wp_addr_q <= wp_addr_d;
+    ph_q <= ph_d;  rp_cnt_q <= rp_cnt_d;  rp_ptr_q <= rp_ptr_d;
+    inner_q <= inner_d;  outer_q <= outer_d;
+    out_ph_q <= out_ph_d;  out_last_q <= out_last_d;
+    err_code_q <= err_code_d;
+    dbg_x_q <= dbg_x_d;  dbg_y_q <= dbg_y_d;
+    dbg_m1_lo_q <= dbg_m1_lo_d;  dbg_m1_len_q <= dbg_m1_len_d;  dbg_m1_rev_q <= dbg_m1_rev_d;
+    dbg_m2_lo_q <= dbg_m2_lo_d;  dbg_m2_len_q <= dbg_m2_len_d;  dbg_m2_rev_q <= dbg_m2_rev_d;
+end
+
+// ---------------------------------------------------------------- outputs
+wire move_bit = const_q ? cbit_q : (out_ph_q ? rdata1_q : rdata2_q);
+
+assign in_ready_o   = state_q == S_IDLE && !move_valid_q;
+assign err_o        = err_q;
+assign err_code_o   = err_q ? err_code_q : ERR_NONE;
+assign move_valid_o = move_valid_q;
+assign move_o       = move_valid_q && move_bit;
+assign move_last_o  = move_valid_q && out_last_q;
+
+assign dbg_we1_o    = we1;
+assign dbg_waddr1_o = we1 ? waddr1 : {AW{1'b0}};
+assign dbg_wbit1_o  = we1 && wbit1;
+assign dbg_we2_o    = we2;
+assign dbg_waddr2_o = we2 ? waddr2 : {AW{1'b0}};
+assign dbg_wbit2_o  = we2 && wbit2;
+assign dbg_iter_o   = dbg_iter_q;
+assign dbg_x_o      = dbg_iter_q ? dbg_x_q : {UW{1'b0}};
+assign dbg_y_o      = dbg_iter_q ? dbg_y_q : {UW{1'b0}};
+assign dbg_m1_lo_o  = dbg_iter_q ? dbg_m1_lo_q : {AW{1'b0}};
+assign dbg_m1_len_o = dbg_iter_q ? dbg_m1_len_q : {AW{1'b0}};
+assign dbg_m1_rev_o = dbg_iter_q && dbg_m1_rev_q;
+assign dbg_m2_lo_o  = dbg_iter_q ? dbg_m2_lo_q : {AW{1'b0}};
+assign dbg_m2_len_o = dbg_iter_q ? dbg_m2_len_q : {AW{1'b0}};
+assign dbg_m2_rev_o = dbg_iter_q && dbg_m2_rev_q;
+
+endmodule
+
+`resetall
