@@ -138,6 +138,10 @@ TEST(EngineTiming, BuildLinearInReducedLengthAndOneMovePerClock) {
     EXPECT_EQ(run.build_cycles(), (reduced - 2) + 3) << u << "," << v;
     EXPECT_EQ(run.last_move_cycle - run.first_move_cycle + 1, uint64_t(u) << k);
   }
+  // No loop iteration: the first move is valid two cycles after the handshake.
+  for (const sim::EngineRequest req : {sim::EngineRequest{1024, 512, 0, 1}, {1024, 0, 0, 1},
+                                       {1024, 1024, 3, 1}, {1, 1, 0, 1}, {2, 1, 1, 2}})
+    EXPECT_EQ(run_lockstep(ls, req).build_cycles(), 2u) << req.u << "," << req.v;
 }
 
 TEST(EngineReset, ResetAtRandomCyclesThenServesNormally) {
