@@ -12,12 +12,13 @@ uint32_t mask(unsigned bits) { return bits >= 32 ? ~0u : (1u << bits) - 1; }
 }  // namespace
 
 unsigned CpEngineParams::aw() const { return w > 2 ? clog2(w) : 1; }
-unsigned CpEngineParams::uw() const { return clog2(uint64_t(w) + 2); }
+unsigned CpEngineParams::uw() const { return clog2(uint64_t(u_max()) + 2); }
 unsigned CpEngineParams::kw() const { return kmax > 0 ? clog2(uint64_t(kmax) + 2) : 1; }
 
 CpEngine::CpEngine(CpEngineParams params)
     : p_(params), mask_u_(mask(p_.uw())), mask_k_(mask(p_.kw())), mask_rep_(mask(p_.rw)) {
   if (p_.w < 2) throw std::invalid_argument("cp_engine: W must be at least 2");
+  if (p_.u_max() < p_.w) throw std::invalid_argument("cp_engine: UMAX must be at least W");
   if (p_.kmax > 24) throw std::invalid_argument("cp_engine: KMAX must be 0 to 24");
   if (p_.rw < 1 || p_.rw > 32) throw std::invalid_argument("cp_engine: RW must be 1 to 32");
   mem_[0].assign(size_t(1) << p_.aw(), 0);
@@ -41,7 +42,7 @@ EngineError CpEngine::refusal() const {
   const uint32_t u = in.in_u & mask_u_, v = in.in_v & mask_u_;
   if (u == 0) return EngineError::u_zero;
   if (v > u) return EngineError::v_gt_u;
-  if (u > p_.w) return EngineError::u_gt_w;
+  if (u > p_.u_max()) return EngineError::u_gt_umax;
   if ((in.in_k & mask_k_) > p_.kmax) return EngineError::k_gt_kmax;
   if ((in.in_rep & mask_rep_) == 0) return EngineError::rep_zero;
   return EngineError::none;
@@ -112,6 +113,12 @@ CpEngine::Regs CpEngine::next(Cycle& io) const {
     }
 
     case State::build: {
+      if (q.reg[0].len + q.reg[1].len == p_.w) {  // one more bit would not fit
+        d.err = true;
+        d.err_code = uint32_t(EngineError::pattern_gt_w);
+        d.state = State::idle;
+        break;
+      }
       const int target = q.x > q.y ? 1 : 0, source = 1 - target;
       io.re[source] = true;
       io.raddr[source] = q.read_addr;

@@ -14,9 +14,11 @@ struct CpEngineParams {
   unsigned w = 1024;   // pattern capacity W
   unsigned kmax = 8;   // largest doubling exponent
   unsigned rw = 16;    // width of the replay multiplier
+  unsigned umax = 0;   // largest u accepted; 0 means W
 
   unsigned aw() const;  // memory address width, clog2(W)
-  unsigned uw() const;  // width of u and v, clog2(W + 2)
+  unsigned u_max() const { return umax ? umax : w; }
+  unsigned uw() const;  // width of u and v, clog2(UMAX + 2)
   unsigned kw() const;  // width of k, clog2(KMAX + 2)
 };
 
@@ -46,7 +48,15 @@ struct CpEngineOut {
   bool dbg_m2_rev = false;
 };
 
-enum class EngineError : uint32_t { none = 0, u_zero = 1, v_gt_u = 2, u_gt_w = 3, k_gt_kmax = 4, rep_zero = 5 };
+enum class EngineError : uint32_t {
+  none = 0,
+  u_zero = 1,
+  v_gt_u = 2,
+  u_gt_umax = 3,
+  k_gt_kmax = 4,
+  rep_zero = 5,
+  pattern_gt_w = 6,  // found during the build: u/gcd(u, v) > W
+};
 
 class CpEngine {
  public:

@@ -23,8 +23,11 @@
 `default_nettype none
 
 module cp_engine #(
-    // Pattern capacity: the largest reduced major count u accepted (u <= W).
+    // Pattern capacity: the longest pattern u/gcd(u, v) the registers hold.
     parameter integer W = 1024,
+    // Largest u accepted. With UMAX > W, u/gcd(u, v) > W is found during the
+    // build and refused then (ERR_PATTERN_GT_W), before any move.
+    parameter integer UMAX = W,
     // Largest step-doubling exponent k accepted.
     parameter integer KMAX = 8,
     // Width of the replay multiplier rep (rep >= 1).
@@ -72,23 +75,25 @@ module cp_engine #(
 
 // Memory address width: each register holds at most u/gcd - 1 <= W - 1 bits.
 localparam integer AW = (W > 2) ? $clog2(W) : 1;
-// Width of u, v, x, y: wide enough to express W + 1, so u > W can be refused.
-localparam integer UW = $clog2(W + 2);
+// Width of u, v, x, y: wide enough to express UMAX + 1, so u > UMAX can be refused.
+localparam integer UW = $clog2(UMAX + 2);
 // Width of k: wide enough to express KMAX + 1.
 localparam integer KW = (KMAX > 0) ? $clog2(KMAX + 2) : 1;
-// Width of the inner replay counter x << k (x <= W).
+// Width of the inner replay counter x << k (x <= UMAX).
 localparam integer NW = UW + KMAX;
 
-localparam [UW-1:0] W_U = W[UW-1:0];
+localparam [UW-1:0] UMAX_U = UMAX[UW-1:0];
+localparam [AW:0]   W_L = W[AW:0];
 localparam [KW-1:0] KMAX_K = KMAX[KW-1:0];
 
 // Refusal reasons, checked in this order.
 localparam [2:0] ERR_NONE      = 3'd0;
 localparam [2:0] ERR_U_ZERO    = 3'd1;
 localparam [2:0] ERR_V_GT_U    = 3'd2;
-localparam [2:0] ERR_U_GT_W    = 3'd3;
+localparam [2:0] ERR_U_GT_UMAX = 3'd3;
 localparam [2:0] ERR_K_GT_KMAX = 3'd4;
 localparam [2:0] ERR_REP_ZERO  = 3'd5;
+localparam [2:0] ERR_PATTERN_GT_W = 3'd6;
 
 localparam [1:0] S_IDLE   = 2'd0;
 localparam [1:0] S_BUILD  = 2'd1;
@@ -99,6 +104,9 @@ localparam [1:0] S_REPLAY = 2'd2;
 generate
     if (W < 2) begin : g_check_w
         cp_engine_parameter_W_must_be_at_least_2 u_bad ();
+    end
+    if (UMAX < W) begin : g_check_umax
+        cp_engine_parameter_UMAX_must_be_at_least_W u_bad ();
     end
     if (KMAX < 0 || KMAX > 24) begin : g_check_kmax
         cp_engine_parameter_KMAX_must_be_0_to_24 u_bad ();
@@ -190,7 +198,7 @@ reg [2:0] refuse_code;
 always @* begin
     if (in_u_i == {UW{1'b0}})       refuse_code = ERR_U_ZERO;
     else if (in_v_i > in_u_i)       refuse_code = ERR_V_GT_U;
-    else if (in_u_i > W_U)          refuse_code = ERR_U_GT_W;
+    else if (in_u_i > UMAX_U)       refuse_code = ERR_U_GT_UMAX;
     else if (in_k_i > KMAX_K)       refuse_code = ERR_K_GT_KMAX;
     else if (in_rep_i == {RW{1'b0}}) refuse_code = ERR_REP_ZERO;
     else                            refuse_code = ERR_NONE;
@@ -205,6 +213,8 @@ wire [AW-1:0] tgt_lo   = to2 ? m2_lo_q : m1_lo_q;
 wire [AW-1:0] tgt_len  = to2 ? m2_len_q : m1_len_q;
 wire [AW-1:0] tgt_addr = tgt_rev ? tgt_lo + tgt_len : tgt_lo - 1'b1;
 wire          pat_end  = const_q || (ph_q && rp_cnt_q == 1);
+// The pattern's length so far; a bit more than W means u/gcd(u, v) > W.
+wire [AW:0]   pat_len  = {1'b0, m1_len_q} + {1'b0, m2_len_q};
 
 always @* begin
     state_d      = state_q;
@@ -280,7 +290,12 @@ always @* begin
         end
     end
 
-    S_BUILD: begin
+    S_BUILD: if (pat_len == W_L) begin
+        // One more bit would make the pattern longer than the registers hold.
+        err_d      = 1'b1;
+        err_code_d = ERR_PATTERN_GT_W;
+        state_d    = S_IDLE;
+    end else begin
         // Read the source's logical bit rd_cnt-1; its write lands next clock
         // at the target's logical front.
         if (to2) begin re1 = 1'b1; raddr1 = rd_ptr_q; end

@@ -30,9 +30,10 @@ const char* engine_error_text(uint32_t code) {
   switch (model::EngineError(code)) {
     case model::EngineError::u_zero: return "u must be at least 1";
     case model::EngineError::v_gt_u: return "v must not exceed u";
-    case model::EngineError::u_gt_w: return "u exceeds the pattern capacity W";
+    case model::EngineError::u_gt_umax: return "u exceeds the pattern capacity W";
     case model::EngineError::k_gt_kmax: return "k exceeds the largest doubling exponent KMAX";
     case model::EngineError::rep_zero: return "rep must be at least 1";
+    case model::EngineError::pattern_gt_w: return "the pattern u/gcd(u,v) exceeds the capacity W";
     default: return "refused";
   }
 }

@@ -9,14 +9,14 @@
 
 namespace cpstep::sim {
 
-template <class V, unsigned W, unsigned KMAX, unsigned RW>
+template <class V, unsigned W, unsigned KMAX, unsigned RW, unsigned UMAX = W>
 struct EnginePort {
   using Rtl = V;
   using Model = model::CpEngine;
   using In = model::CpEngineIn;
   using Out = model::CpEngineOut;
 
-  static Model::Params model_params() { return {W, KMAX, RW}; }
+  static Model::Params model_params() { return {W, KMAX, RW, UMAX}; }
 
   static void drive(V& r, const In& i) {
     r.rst = i.rst;

@@ -75,7 +75,7 @@ TEST(EngineCorners, RefusedRequestsMakeNoMoveAndLeaveTheEngineUsable) {
   struct Case { sim::EngineRequest req; model::EngineError err; };
   for (const Case c : {Case{{0, 0, 0, 1}, model::EngineError::u_zero},
                        Case{{5, 6, 0, 1}, model::EngineError::v_gt_u},
-                       Case{{1025, 1, 0, 1}, model::EngineError::u_gt_w},
+                       Case{{1025, 1, 0, 1}, model::EngineError::u_gt_umax},
                        Case{{1025, 2000, 0, 1}, model::EngineError::v_gt_u},
                        Case{{10, 3, 9, 1}, model::EngineError::k_gt_kmax},
                        Case{{10, 3, 0, 0}, model::EngineError::rep_zero}}) {
@@ -91,13 +91,36 @@ TEST(EngineCorners, CapacityOfSmallConfigurations) {
   Lockstep<sim::EngineW64> ls64;
   ls64.reset();
   EXPECT_EQ(run_lockstep(ls64, {64, 1, 3, 1}).moves, oracle::doubled(64, 1, 3));
-  EXPECT_EQ(run_lockstep(ls64, {65, 1, 0, 1}).err_code, uint32_t(model::EngineError::u_gt_w));
+  EXPECT_EQ(run_lockstep(ls64, {65, 1, 0, 1}).err_code, uint32_t(model::EngineError::u_gt_umax));
   EXPECT_EQ(run_lockstep(ls64, {64, 1, 4, 1}).err_code, uint32_t(model::EngineError::k_gt_kmax));
   EXPECT_EQ(run_lockstep(ls64, {64, 9, 3, 15}).moves, repeat(oracle::doubled(64, 9, 3), 15));
   Lockstep<sim::EngineW100> ls100;
   ls100.reset();
   EXPECT_EQ(run_lockstep(ls100, {100, 37, 2, 1}).moves, oracle::doubled(100, 37, 2));
-  EXPECT_EQ(run_lockstep(ls100, {101, 37, 0, 1}).err_code, uint32_t(model::EngineError::u_gt_w));
+  EXPECT_EQ(run_lockstep(ls100, {101, 37, 0, 1}).err_code, uint32_t(model::EngineError::u_gt_umax));
+}
+
+// UMAX > W: u need not be reduced; the loop reduces it, and a pattern longer
+// than W is refused during the build, with no move, leaving the engine usable.
+TEST(EngineUnreduced, AllUpTo200AgainstCapacity32) {
+  Lockstep<sim::EngineW32U> ls;
+  ls.reset();
+  unsigned n = 0, refused = 0;
+  for (unsigned u = 1; u <= 200; ++u)
+    for (unsigned v = 0; v <= u; ++v)
+      for (unsigned k = 0; k <= 1; ++k, ++n) {
+        const auto run = run_lockstep(ls, {u, v, k, 1}, {n % 2 ? 100u : 60u, n});
+        if (u / gcd(u, v) > 32) {
+          ++refused;
+          ASSERT_EQ(run.err_code, uint32_t(model::EngineError::pattern_gt_w)) << u << "," << v;
+          ASSERT_TRUE(run.moves.empty());
+        } else {
+          ASSERT_EQ(run.err_code, 0u) << u << "," << v;
+          ASSERT_EQ(run.moves, oracle::doubled(u, v, k)) << u << "," << v << " k=" << k;
+        }
+      }
+  EXPECT_GT(refused, 0u);
+  EXPECT_EQ(run_lockstep(ls, {201, 1, 0, 1}).err_code, uint32_t(model::EngineError::u_gt_umax));
 }
 
 // CP(u·2^j, v·2^j) == CP(u, v) replayed 2^j times, with the same loop.
