@@ -1,0 +1,120 @@
+#include "plan/chunks.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace cpstep::plan {
+
+namespace {
+
+constexpr std::int64_t kMaxDelay = (std::int64_t{1} << 32) - 1;
+
+std::int64_t floor_div(std::int64_t a, std::int64_t b) {  // b > 0
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+std::int64_t ceil_div(std::int64_t a, std::int64_t b) { return -floor_div(-a, b); }
+
+struct Best {
+    std::uint32_t count = 0;
+    std::int64_t interval = 0, add = 0, add2 = 0, last = 0;
+};
+
+// For a fixed interval I and add2 B, extend the count while some integer add
+// keeps every event in its window and every delay in [1, 2^32).
+//   r_j = P + (j+1) I + A j(j+1)/2 + B (j+1) j (j-1)/6
+//   delay_j = I + j A + B j(j-1)/2
+void extend(std::span<const std::int64_t> lo, std::span<const std::int64_t> hi, std::int64_t P,
+            std::int64_t I, std::int64_t B, const ChunkLimits& lim, Best& best) {
+    std::int64_t a_lo = lim.add_min, a_hi = lim.add_max;
+    const std::size_t n = std::min<std::size_t>(lo.size(), lim.max_count);
+    std::uint32_t count = 1;
+    for (std::size_t j = 1; j < n; ++j) {
+        const auto jj = static_cast<std::int64_t>(j);
+        const std::int64_t tri = jj * (jj + 1) / 2;
+        const std::int64_t base = P + (jj + 1) * I + B * (jj + 1) * jj * (jj - 1) / 6;
+        std::int64_t new_lo = std::max(a_lo, ceil_div(lo[j] - base, tri));
+        std::int64_t new_hi = std::min(a_hi, floor_div(hi[j] - base, tri));
+        const std::int64_t dbase = I + B * jj * (jj - 1) / 2;
+        new_lo = std::max(new_lo, ceil_div(1 - dbase, jj));
+        new_hi = std::min(new_hi, floor_div(kMaxDelay - dbase, jj));
+        if (new_lo > new_hi) break;
+        a_lo = new_lo;
+        a_hi = new_hi;
+        count = static_cast<std::uint32_t>(j + 1);
+    }
+    if (count > best.count || (count == best.count && B == 0 && best.add2 != 0)) {
+        const auto c = static_cast<std::int64_t>(count);
+        // The latest feasible add keeps the moves closest to their ideal times.
+        const std::int64_t A = count == 1 ? 0 : a_hi;
+        best = {count, I, A, B,
+                P + c * I + A * (c - 1) * c / 2 + B * c * (c - 1) * (c - 2) / 6};
+    }
+}
+
+}  // namespace
+
+ChunkResult compress(std::span<const double> ideal, std::int64_t prev_event, double tolerance,
+                     const ChunkLimits& limits) {
+    ChunkResult out;
+    std::vector<std::int64_t> lo(ideal.size()), hi(ideal.size());
+    for (std::size_t i = 0; i < ideal.size(); ++i) {
+        hi[i] = static_cast<std::int64_t>(std::floor(ideal[i]));
+        lo[i] = static_cast<std::int64_t>(std::ceil(ideal[i] - tolerance));
+        if (lo[i] > hi[i]) {
+            out.error = fmt::format("no whole cycle within the tolerance of move {} (ideal {:.3f})",
+                                    i, ideal[i]);
+            return out;
+        }
+    }
+    std::int64_t P = prev_event;
+    std::size_t i = 0;
+    while (i < ideal.size()) {
+        const std::span<const std::int64_t> L(lo.data() + i, lo.size() - i);
+        const std::span<const std::int64_t> H(hi.data() + i, hi.size() - i);
+        const std::int64_t i_lo = std::max<std::int64_t>(1, L[0] - P);
+        const std::int64_t i_hi = std::min<std::int64_t>(kMaxDelay, H[0] - P);
+        if (i_lo > i_hi) {
+            out.error = fmt::format("move {} cannot follow the previous event at cycle {}: "
+                                    "its window is [{}, {}]",
+                                    i, P, L[0], H[0]);
+            return out;
+        }
+        // Third difference of the ideal times estimates add2.
+        std::vector<std::int64_t> b_candidates{0};
+        if (limits.enable_add2 && L.size() >= 4) {
+            const double d3 = ideal[i + 3] - 3 * ideal[i + 2] + 3 * ideal[i + 1] - ideal[i];
+            const auto b0 = static_cast<std::int64_t>(std::llround(d3));
+            for (std::int64_t b = b0 - 1; b <= b0 + 1; ++b) {
+                if (b != 0 && b >= limits.add2_min && b <= limits.add2_max) b_candidates.push_back(b);
+            }
+        }
+        Best best;
+        for (std::int64_t I = i_hi; I >= i_lo; --I) {
+            for (std::int64_t B : b_candidates) extend(L, H, P, I, B, limits, best);
+        }
+        out.chunks.push_back({static_cast<std::uint32_t>(best.interval), best.count,
+                              static_cast<std::int32_t>(best.add),
+                              static_cast<std::int32_t>(best.add2)});
+        P = best.last;
+        i += best.count;
+    }
+    out.last_event = P;
+    return out;
+}
+
+std::vector<std::int64_t> expand(std::span<const Chunk> chunks, std::int64_t prev_event) {
+    std::vector<std::int64_t> t;
+    std::int64_t P = prev_event;
+    for (const auto& c : chunks) {
+        for (std::uint32_t j = 0; j < c.count; ++j) {
+            const std::int64_t jj = j;
+            P += static_cast<std::int64_t>(c.interval) + jj * c.add + c.add2 * jj * (jj - 1) / 2;
+            t.push_back(P);
+        }
+    }
+    return t;
+}
+
+}  // namespace cpstep::plan

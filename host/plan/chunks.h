@@ -1,0 +1,45 @@
+// Timing chunks in the card's form, compressed greedily from ideal move
+// times: each realized time lies in [ideal - tolerance, ideal] (never late,
+// at most `tolerance` early, as in Klipper's stepcompress).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace cpstep::plan {
+
+// Move j (0..count-1) of a chunk happens interval + j*add + add2*j*(j-1)/2
+// cycles after the previous move event.
+struct Chunk {
+    std::uint32_t interval = 0;
+    std::uint32_t count = 0;
+    std::int32_t add = 0;
+    std::int32_t add2 = 0;
+    friend bool operator==(const Chunk&, const Chunk&) = default;
+};
+
+struct ChunkLimits {
+    std::uint32_t max_count = 65535;
+    std::int64_t add_min = INT32_MIN, add_max = INT32_MAX;
+    std::int64_t add2_min = INT16_MIN, add2_max = INT16_MAX;
+    bool enable_add2 = true;
+};
+
+struct ChunkResult {
+    std::vector<Chunk> chunks;
+    std::int64_t last_event = 0;   // realized time of the last move, cycles
+    std::string error;             // empty on success
+    [[nodiscard]] bool ok() const { return error.empty(); }
+};
+
+// Compress the moves with ideal absolute times `ideal` (cycles, increasing),
+// the previous move event having happened at `prev_event`.
+ChunkResult compress(std::span<const double> ideal, std::int64_t prev_event, double tolerance,
+                     const ChunkLimits& limits);
+
+// Expand chunks back into absolute event times (the card's arithmetic).
+std::vector<std::int64_t> expand(std::span<const Chunk> chunks, std::int64_t prev_event);
+
+}  // namespace cpstep::plan

@@ -1,0 +1,45 @@
+#include "plan/kinematics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace cpstep::plan {
+
+AxisPeaks realized_peaks(std::span<const double> times, std::span<const int> dirs,
+                         double spm, double h) {
+    AxisPeaks pk;
+    if (times.size() < 2 || h <= 0) return pk;
+    // Cumulative position after each event.
+    std::vector<double> pos(times.size());
+    double p = 0;
+    for (std::size_t k = 0; k < times.size(); ++k) {
+        p += dirs[k] >= 0 ? 1 : -1;
+        pos[k] = p;
+    }
+    const double t0 = times.front(), t1 = times.back();
+    const auto n = static_cast<std::size_t>(std::floor((t1 - t0) / h)) + 1;
+    std::vector<double> g(n);
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double t = t0 + static_cast<double>(i) * h;
+        while (k + 1 < times.size() && times[k + 1] <= t) ++k;
+        if (k + 1 < times.size() && times[k + 1] > times[k]) {
+            const double f = (t - times[k]) / (times[k + 1] - times[k]);
+            g[i] = pos[k] + f * (pos[k + 1] - pos[k]);
+        } else {
+            g[i] = pos[k];
+        }
+    }
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+        pk.v = std::max(pk.v, std::abs(g[i + 1] - g[i - 1]) / (2 * h) / spm);
+        pk.a = std::max(pk.a, std::abs(g[i + 1] - 2 * g[i] + g[i - 1]) / (h * h) / spm);
+    }
+    for (std::size_t i = 2; i + 2 < n; ++i) {
+        pk.j = std::max(pk.j, std::abs(g[i + 2] - 2 * g[i + 1] + 2 * g[i - 1] - g[i - 2]) /
+                                  (2 * h * h * h) / spm);
+    }
+    return pk;
+}
+
+}  // namespace cpstep::plan

@@ -1,0 +1,335 @@
+#include "plan/machine.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+namespace cpstep::plan {
+
+namespace {
+
+// Datasheet minimums. Order in the brief's table is high/low/hold/setup.
+constexpr DriverPreset kPresets[] = {
+    {"DM556", {2500, 2500, 5000, 10000}},
+    {"M542", {1500, 1500, 5000, 8000}},
+    {"DM860T", {5000, 5000, 5000, 5000}},
+    {"TB6600", {5000, 5000, 20000, 20000}},
+    {"A4988", {1000, 1000, 200, 200}},
+    {"DRV8825", {1900, 1900, 650, 650}},
+    {"DRV8884", {970, 970, 200, 200}},
+    {"TMC2209", {100, 100, 20, 20}},
+};
+
+SourceLoc loc_of(const toml::node& n) {
+    const auto& src = n.source();
+    return {static_cast<int>(src.begin.line), static_cast<int>(src.begin.column)};
+}
+
+// Reads typed fields out of a table, recording every problem with its path
+// and position; never stops at the first error.
+class Reader {
+public:
+    explicit Reader(std::string file) : file_(std::move(file)) {}
+
+    void error(SourceLoc loc, std::string msg) { errors_.push_back({file_, loc, std::move(msg)}); }
+
+    const toml::node* field(const toml::table& t, std::string_view path, std::string_view key,
+                            bool required) {
+        const toml::node* n = t.get(key);
+        if (n == nullptr && required) {
+            error(loc_of(t), fmt::format("{}.{}: missing", path, key));
+        }
+        return n;
+    }
+
+    // A number (integer or float) that must satisfy `pred`; `what` says how.
+    std::optional<double> number(const toml::table& t, std::string_view path,
+                                 std::string_view key, bool required, bool (*pred)(double),
+                                 std::string_view what) {
+        const toml::node* n = field(t, path, key, required);
+        if (n == nullptr) return std::nullopt;
+        if (!n->is_number()) {
+            error(loc_of(*n), fmt::format("{}.{}: must be a number", path, key));
+            return std::nullopt;
+        }
+        const double v = n->value<double>().value_or(0.0);
+        if (!std::isfinite(v) || !pred(v)) {
+            error(loc_of(*n), fmt::format("{}.{}: must be {}", path, key, what));
+            return std::nullopt;
+        }
+        return v;
+    }
+
+    std::optional<bool> boolean(const toml::table& t, std::string_view path, std::string_view key) {
+        const toml::node* n = field(t, path, key, false);
+        if (n == nullptr) return std::nullopt;
+        if (!n->is_boolean()) {
+            error(loc_of(*n), fmt::format("{}.{}: must be true or false", path, key));
+            return std::nullopt;
+        }
+        return n->value<bool>();
+    }
+
+    std::optional<std::string> string(const toml::table& t, std::string_view path,
+                                      std::string_view key) {
+        const toml::node* n = field(t, path, key, false);
+        if (n == nullptr) return std::nullopt;
+        if (!n->is_string()) {
+            error(loc_of(*n), fmt::format("{}.{}: must be a string", path, key));
+            return std::nullopt;
+        }
+        return n->value<std::string>();
+    }
+
+    const toml::table* table(const toml::table& t, std::string_view path, std::string_view key,
+                             bool required) {
+        const toml::node* n = t.get(key);
+        if (n == nullptr) {
+            if (required) errors_.push_back({file_, {}, fmt::format("{}: missing table", path)});
+            return nullptr;
+        }
+        if (!n->is_table()) {
+            error(loc_of(*n), fmt::format("{}: must be a table", path));
+            return nullptr;
+        }
+        return n->as_table();
+    }
+
+    // Typos must not silently become defaults.
+    void only_keys(const toml::table& t, std::string_view path,
+                   std::initializer_list<std::string_view> allowed) {
+        for (auto&& [k, v] : t) {
+            if (std::find(allowed.begin(), allowed.end(), k.str()) == allowed.end()) {
+                const auto& src = k.source();
+                SourceLoc loc{static_cast<int>(src.begin.line), static_cast<int>(src.begin.column)};
+                if (loc.line == 0) loc = loc_of(v);
+                error(loc, fmt::format("{}{}{}: unknown key", path, path.empty() ? "" : ".",
+                                       k.str()));
+            }
+        }
+    }
+
+    std::vector<Diagnostic>& errors() { return errors_; }
+    const std::string& file() const { return file_; }
+
+private:
+    std::string file_;
+    std::vector<Diagnostic> errors_;
+};
+
+bool positive(double v) { return v > 0; }
+bool non_negative(double v) { return v >= 0; }
+bool any_value(double) { return true; }
+bool capacity_ok(double v) { return v >= 2 && v <= 65536 && v == std::floor(v); }
+bool doubling_ok(double v) { return v >= 0 && v <= 16 && v == std::floor(v); }
+bool split_eps_ok(double v) { return v >= 0 && v < 0.5; }
+
+std::string upper(std::string_view s) {
+    std::string out(s);
+    for (auto& c : out) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    return out;
+}
+
+void read_axis(Reader& r, const toml::table& t, std::string_view path, AxisConfig& ax) {
+    ax.present = true;
+    ax.loc = loc_of(t);
+    r.only_keys(t, path,
+                {"steps_per_mm", "travel_min_mm", "travel_max_mm", "max_velocity_mm_s",
+                 "max_accel_mm_s2", "max_jerk_mm_s3", "driver", "step_high_ns", "step_low_ns",
+                 "dir_setup_ns", "dir_hold_ns", "step_active_high", "dir_positive_high"});
+    const auto gt0 = "> 0";
+    ax.steps_per_mm = r.number(t, path, "steps_per_mm", true, positive, gt0).value_or(0);
+    auto tmin = r.number(t, path, "travel_min_mm", true, any_value, "finite");
+    auto tmax = r.number(t, path, "travel_max_mm", true, any_value, "finite");
+    if (tmin && tmax && !(*tmax > *tmin)) {
+        r.error(loc_of(*t.get("travel_max_mm")),
+                fmt::format("{}.travel_max_mm: must be > travel_min_mm ({})", path, *tmin));
+    }
+    ax.travel_min_mm = tmin.value_or(0);
+    ax.travel_max_mm = tmax.value_or(0);
+    ax.max_velocity = r.number(t, path, "max_velocity_mm_s", true, positive, gt0).value_or(0);
+    ax.max_accel = r.number(t, path, "max_accel_mm_s2", true, positive, gt0).value_or(0);
+    ax.max_jerk = r.number(t, path, "max_jerk_mm_s3", true, positive, gt0).value_or(0);
+
+    static constexpr std::string_view kTiming[] = {"step_high_ns", "step_low_ns", "dir_setup_ns",
+                                                   "dir_hold_ns"};
+    const bool any_explicit = std::any_of(std::begin(kTiming), std::end(kTiming),
+                                          [&](std::string_view k) { return t.contains(k); });
+    if (auto drv = r.string(t, path, "driver")) {
+        if (any_explicit) {
+            r.error(loc_of(*t.get("driver")),
+                    fmt::format("{}.driver: give either driver or the four *_ns fields, not both",
+                                path));
+        }
+        if (const DriverPreset* p = find_driver(*drv)) {
+            ax.driver = std::string(p->name);
+            ax.pulse_ns = p->timing;
+        } else {
+            std::string names;
+            for (const auto& pr : driver_presets()) {
+                names += names.empty() ? "" : ", ";
+                names += pr.name;
+            }
+            r.error(loc_of(*t.get("driver")),
+                    fmt::format("{}.driver: unknown driver \"{}\" (known: {})", path, *drv, names));
+        }
+    } else if (t.contains("driver")) {
+        // wrong type, already reported
+    } else if (!any_explicit) {
+        r.error(loc_of(t), fmt::format("{}: missing pulse timing: give driver = \"NAME\" or "
+                                       "step_high_ns, step_low_ns, dir_setup_ns, dir_hold_ns",
+                                       path));
+    } else {
+        ax.pulse_ns.step_high = r.number(t, path, "step_high_ns", true, positive, gt0).value_or(0);
+        ax.pulse_ns.step_low = r.number(t, path, "step_low_ns", true, positive, gt0).value_or(0);
+        ax.pulse_ns.dir_setup =
+            r.number(t, path, "dir_setup_ns", true, non_negative, ">= 0").value_or(0);
+        ax.pulse_ns.dir_hold =
+            r.number(t, path, "dir_hold_ns", true, non_negative, ">= 0").value_or(0);
+    }
+    ax.step_active_high = r.boolean(t, path, "step_active_high").value_or(true);
+    ax.dir_positive_high = r.boolean(t, path, "dir_positive_high").value_or(true);
+}
+
+}  // namespace
+
+std::span<const DriverPreset> driver_presets() { return kPresets; }
+
+const DriverPreset* find_driver(std::string_view name) {
+    const std::string want = upper(name);
+    for (const auto& p : kPresets) {
+        if (p.name == want) return &p;
+    }
+    return nullptr;
+}
+
+std::uint32_t ns_to_cycles(double ns, double clock_hz) {
+    const double exact = ns * clock_hz / 1e9;
+    // A product like 2500 ns * 50 MHz = 125.00000000000001 must stay 125.
+    const double rounded = std::round(exact);
+    if (std::abs(exact - rounded) <= 1e-9 * std::max(1.0, rounded)) {
+        return static_cast<std::uint32_t>(rounded);
+    }
+    return static_cast<std::uint32_t>(std::ceil(exact));
+}
+
+PulseTimingCycles to_cycles(const PulseTimingNs& ns, double clock_hz) {
+    return {ns_to_cycles(ns.step_high, clock_hz), ns_to_cycles(ns.step_low, clock_hz),
+            ns_to_cycles(ns.dir_setup, clock_hz), ns_to_cycles(ns.dir_hold, clock_hz)};
+}
+
+double AxisConfig::max_step_rate_hz(double clock_hz) const {
+    const double period = static_cast<double>(pulse.step_high) + static_cast<double>(pulse.step_low);
+    return clock_hz / std::max(1.0, period);
+}
+
+Result<Machine> parse_machine(std::string_view text, std::string_view file) {
+    Result<Machine> result;
+    Reader r{std::string(file)};
+    toml::table root;
+    try {
+        root = toml::parse(text, file);
+    } catch (const toml::parse_error& e) {
+        const auto& b = e.source().begin;
+        result.errors.push_back({std::string(file),
+                                 {static_cast<int>(b.line), static_cast<int>(b.column)},
+                                 std::string(e.description())});
+        return result;
+    }
+
+    Machine m;
+    m.file = std::string(file);
+    r.only_keys(root, "", {"card", "planner", "axes"});
+
+    if (const toml::table* card = r.table(root, "card", "card", true)) {
+        r.only_keys(*card, "card", {"clock_hz", "pattern_capacity", "max_doubling"});
+        m.card.clock_hz = r.number(*card, "card", "clock_hz", true, positive, "> 0").value_or(0);
+        m.card.pattern_capacity = static_cast<std::uint32_t>(
+            r.number(*card, "card", "pattern_capacity", false, capacity_ok,
+                     "an integer in 2..65536")
+                .value_or(m.card.pattern_capacity));
+        m.card.max_doubling = static_cast<std::uint32_t>(
+            r.number(*card, "card", "max_doubling", false, doubling_ok, "an integer in 0..16")
+                .value_or(m.card.max_doubling));
+    }
+
+    if (const toml::table* pl = r.table(root, "planner", "planner", false)) {
+        r.only_keys(*pl, "planner",
+                    {"arc_tolerance_mm", "junction_deviation_mm", "chunk_tolerance_us",
+                     "on_limit", "chunk_add2", "split_epsilon_steps"});
+        auto& p = m.planner;
+        p.arc_tolerance_mm = r.number(*pl, "planner", "arc_tolerance_mm", false, positive, "> 0")
+                                 .value_or(p.arc_tolerance_mm);
+        p.junction_deviation_mm =
+            r.number(*pl, "planner", "junction_deviation_mm", false, non_negative, ">= 0")
+                .value_or(p.junction_deviation_mm);
+        if (auto us = r.number(*pl, "planner", "chunk_tolerance_us", false, positive, "> 0")) {
+            p.chunk_tolerance_s = *us * 1e-6;
+            if (m.card.clock_hz > 0 && p.chunk_tolerance_s * m.card.clock_hz < 1.0) {
+                r.error(loc_of(*pl->get("chunk_tolerance_us")),
+                        fmt::format("planner.chunk_tolerance_us: must be at least one card "
+                                    "clock cycle ({} us)",
+                                    1e6 / m.card.clock_hz));
+            }
+        }
+        if (auto s = r.string(*pl, "planner", "on_limit")) {
+            if (*s == "refuse") {
+                p.on_limit = OnLimit::refuse;
+            } else if (*s == "slow") {
+                p.on_limit = OnLimit::slow;
+            } else {
+                r.error(loc_of(*pl->get("on_limit")),
+                        fmt::format("planner.on_limit: must be \"refuse\" or \"slow\", not \"{}\"",
+                                    *s));
+            }
+        }
+        p.chunk_add2 = r.boolean(*pl, "planner", "chunk_add2").value_or(p.chunk_add2);
+        p.split_epsilon_steps =
+            r.number(*pl, "planner", "split_epsilon_steps", false, split_eps_ok, "in [0, 0.5)")
+                .value_or(p.split_epsilon_steps);
+    }
+
+    if (const toml::table* axes = r.table(root, "axes", "axes", true)) {
+        r.only_keys(*axes, "axes", {"x", "y", "z", "a"});
+        bool any = false;
+        for (int i = 0; i < kAxes; ++i) {
+            const std::string key(1, kAxisLetters[static_cast<std::size_t>(i)]);
+            const std::string path = "axes." + key;
+            if (const toml::table* t = r.table(*axes, path, key, false)) {
+                read_axis(r, *t, path, m.axes[static_cast<std::size_t>(i)]);
+                any = true;
+            }
+        }
+        if (!any && r.errors().empty()) {
+            r.error(loc_of(*axes), "axes: at least one of axes.x, axes.y, axes.z, axes.a is needed");
+        }
+    }
+
+    for (auto& ax : m.axes) {
+        if (ax.present && m.card.clock_hz > 0) ax.pulse = to_cycles(ax.pulse_ns, m.card.clock_hz);
+    }
+
+    result.errors = std::move(r.errors());
+    if (result.errors.empty()) result.value = std::move(m);
+    return result;
+}
+
+Result<Machine> load_machine(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        Result<Machine> r;
+        r.errors.push_back({path.string(), {}, "cannot open file"});
+        return r;
+    }
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return parse_machine(ss.str(), path.string());
+}
+
+}  // namespace cpstep::plan

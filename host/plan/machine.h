@@ -1,0 +1,101 @@
+// The machine file: axes, card and planner settings, read from TOML.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "plan/common.h"
+
+namespace cpstep::plan {
+
+// STEP/DIR timing of one axis in nanoseconds, as a driver datasheet gives it.
+struct PulseTimingNs {
+    double step_high = 0;
+    double step_low = 0;
+    double dir_setup = 0;
+    double dir_hold = 0;
+};
+
+// The same timing in card clock cycles, each rounded up (never shorter than
+// the datasheet minimum).
+struct PulseTimingCycles {
+    std::uint32_t step_high = 0;
+    std::uint32_t step_low = 0;
+    std::uint32_t dir_setup = 0;
+    std::uint32_t dir_hold = 0;
+};
+
+// A named driver's minimum timing (datasheet figures, ns).
+struct DriverPreset {
+    std::string_view name;
+    PulseTimingNs timing;
+};
+
+// The built-in presets (DM556, M542, DM860T, TB6600, A4988, DRV8825,
+// DRV8884, TMC2209).
+std::span<const DriverPreset> driver_presets();
+// Case-insensitive look-up; nullptr when unknown.
+const DriverPreset* find_driver(std::string_view name);
+
+// ceil(ns * clock_hz / 1e9), computed so that an exact product is not bumped
+// up by floating-point noise.
+std::uint32_t ns_to_cycles(double ns, double clock_hz);
+PulseTimingCycles to_cycles(const PulseTimingNs& ns, double clock_hz);
+
+struct AxisConfig {
+    bool present = false;
+    double steps_per_mm = 0;        // card output steps (microsteps) per mm
+    double travel_min_mm = 0;
+    double travel_max_mm = 0;
+    double max_velocity = 0;        // mm/s
+    double max_accel = 0;           // mm/s^2
+    double max_jerk = 0;            // mm/s^3
+    std::string driver;             // preset name, empty when explicit
+    PulseTimingNs pulse_ns;
+    PulseTimingCycles pulse;        // derived from pulse_ns and card.clock_hz
+    bool step_active_high = true;
+    bool dir_positive_high = true;
+    SourceLoc loc;                  // where [axes.X] starts
+
+    // Fastest step rate the card can emit without violating the pulse
+    // timing: one step per (step_high + step_low) cycles.
+    [[nodiscard]] double max_step_rate_hz(double clock_hz) const;
+};
+
+struct CardConfig {
+    double clock_hz = 0;
+    std::uint32_t pattern_capacity = 1024;  // W: longest reduced pattern
+    std::uint32_t max_doubling = 8;         // k: largest step-doubling exponent
+};
+
+enum class OnLimit { refuse, slow };
+
+struct PlannerConfig {
+    double arc_tolerance_mm = 0.002;        // max chord-to-arc distance
+    double junction_deviation_mm = 0.01;    // Grbl-style corner model
+    double chunk_tolerance_s = 1e-6;        // a move may be this much early, never late
+    OnLimit on_limit = OnLimit::refuse;
+    bool chunk_add2 = true;                 // allow the add2 chunk term
+    double split_epsilon_steps = 0.02;      // target extra deviation of GCD splits
+};
+
+struct Machine {
+    std::string file;
+    PerAxis<AxisConfig> axes;
+    CardConfig card;
+    PlannerConfig planner;
+
+    [[nodiscard]] double chunk_tolerance_cycles() const {
+        return planner.chunk_tolerance_s * card.clock_hz;
+    }
+};
+
+// Parse a machine file held in memory; `file` names it in diagnostics.
+Result<Machine> parse_machine(std::string_view text, std::string_view file);
+// Read and parse a machine file from disk.
+Result<Machine> load_machine(const std::filesystem::path& path);
+
+}  // namespace cpstep::plan

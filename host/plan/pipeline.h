@@ -1,0 +1,47 @@
+// The whole core in one call: job + machine -> card segments with chunks.
+// Pure: no I/O, everything it needs is in its arguments.
+#pragma once
+
+#include <vector>
+
+#include "plan/chunks.h"
+#include "plan/gcode.h"
+#include "plan/machine.h"
+#include "plan/planner.h"
+#include "plan/reduce.h"
+#include "plan/segments.h"
+
+namespace cpstep::plan {
+
+struct PlannedCardSegment {
+    CardSegment segment;
+    std::vector<Chunk> chunks;   // their counts sum to segment.moves
+};
+
+struct PlanStats {
+    std::uint64_t moves = 0;
+    std::uint64_t chunks = 0;
+    std::uint64_t step_segments = 0;
+    std::uint64_t card_segments = 0;
+    double worst_split_error = 0;   // steps, beyond half a step
+    double duration_s = 0;
+    [[nodiscard]] double moves_per_chunk() const {
+        return chunks ? static_cast<double>(moves) / static_cast<double>(chunks) : 0;
+    }
+};
+
+struct PlannedJob {
+    std::vector<StepSegment> step_segments;
+    std::vector<PlannedSegment> feeds;       // one per step segment
+    std::vector<PlannedCardSegment> card;    // in execution order
+    PlanStats stats;
+};
+
+struct PlanOptions {
+    ChunkLimits chunk_limits;                // enable_add2 defaults from the machine
+    bool add2_from_machine = true;
+};
+
+Result<PlannedJob> plan_job(const Job& job, const Machine& machine, const PlanOptions& options = {});
+
+}  // namespace cpstep::plan

@@ -1,0 +1,43 @@
+// Card segments: GCD reduction of each axis's pattern against the major axis
+// and, where a reduced pattern exceeds the card's capacity W, a split into
+// sub-segments whose ends are lattice points close to the ideal line.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "plan/common.h"
+
+namespace cpstep::plan {
+
+struct CardSegment {
+    int major = 0;                       // first axis of max |delta|
+    std::uint32_t moves = 0;             // T: moves of this (sub-)segment
+    PerAxis<bool> dir_positive{};        // true for delta >= 0
+    PerAxis<std::uint32_t> u{};          // reduced pattern length; 1 on the major axis
+    PerAxis<std::uint32_t> v{};          // reduced step count; 1 on the major axis
+    PerAxis<std::int64_t> delta{};       // signed steps of this sub-segment (= moves*v/u)
+    std::uint32_t first_move = 0;        // offset of its first move in the parent segment
+    SourceLoc loc;
+    std::size_t step_segment = 0;        // index of the parent step segment
+};
+
+struct SplitResult {
+    std::vector<CardSegment> parts;
+    // Largest |ideal - lattice| over the split points, in steps: the extra
+    // deviation beyond half a step the split may introduce.
+    double endpoint_error = 0;
+};
+
+// Reduce one segment of integer deltas. `capacity` is W; `epsilon` is the
+// split-point error the search accepts before preferring longer parts.
+SplitResult reduce_segment(const PerAxis<std::int64_t>& delta, std::uint32_t capacity,
+                           double epsilon);
+
+// Exact worst distance, in steps over all axes and moves, between what the
+// card emits for `parts` (SPEC section 1 closed form, per part) and the ideal
+// line of the original segment `delta`.
+double max_deviation(const PerAxis<std::int64_t>& delta, std::span<const CardSegment> parts);
+
+}  // namespace cpstep::plan

@@ -1,0 +1,143 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "plan/segments.h"
+
+using namespace cpstep::plan;
+
+namespace {
+
+Machine machine(double spm = 80.3, double tmax = 2000) {
+    const std::string text = fmt::format(R"([card]
+clock_hz = 50e6
+[planner]
+arc_tolerance_mm = 0.01
+[axes.x]
+steps_per_mm = {0}
+travel_min_mm = 0
+travel_max_mm = {1}
+max_velocity_mm_s = 100
+max_accel_mm_s2 = 1000
+max_jerk_mm_s3 = 10000
+driver = "TMC2209"
+[axes.y]
+steps_per_mm = {0}
+travel_min_mm = -50
+travel_max_mm = 100
+max_velocity_mm_s = 100
+max_accel_mm_s2 = 1000
+max_jerk_mm_s3 = 10000
+driver = "TMC2209"
+)", spm, tmax);
+    auto r = parse_machine(text, "m.toml");
+    EXPECT_TRUE(r.ok()) << join(r.errors);
+    return *r;
+}
+
+Result<std::vector<StepSegment>> run(const std::string& gcode, const Machine& m) {
+    auto job = parse_gcode(gcode, "job.ngc");
+    EXPECT_TRUE(job.ok()) << join(job.errors);
+    return make_step_segments(*job, m);
+}
+
+}  // namespace
+
+TEST(Segments, MmToStepsRoundsHalfUp) {
+    EXPECT_EQ(mm_to_steps(0.0, 80), 0);
+    EXPECT_EQ(mm_to_steps(1.0, 80), 80);
+    EXPECT_EQ(mm_to_steps(0.00625, 80), 1);    // exactly half a step
+    EXPECT_EQ(mm_to_steps(-0.00625, 80), 0);   // ties go up
+    EXPECT_EQ(mm_to_steps(-0.0063, 80), -1);
+}
+
+TEST(Segments, NoDriftOver100kSegments) {
+    // 100,000 absolute moves of 0.0123 mm at a non-integer 80.3 steps/mm.
+    const Machine m = machine(80.3);
+    std::string g = "G1 F6000\n";
+    for (int k = 1; k <= 100000; ++k) g += fmt::format("X{:.4f}\n", k * 0.0123);
+    auto r = run(g, m);
+    ASSERT_TRUE(r.ok()) << join(r.errors);
+    std::int64_t sum = 0;
+    std::size_t k_seen = 0;
+    for (const auto& s : *r.value) {
+        sum += s.delta()[0];
+        // Every end is the rounding of its own absolute target (line k+1 holds move k).
+        const int k = s.loc.line - 1;
+        const double target = std::stod(fmt::format("{:.4f}", k * 0.0123));
+        EXPECT_EQ(s.end[0], static_cast<std::int64_t>(std::floor(target * 80.3 + 0.5))) << k;
+        ++k_seen;
+    }
+    // 0.0123 mm is about 0.99 steps: some moves round to nothing and merge.
+    EXPECT_GT(k_seen, 90000u);
+    EXPECT_EQ(sum, static_cast<std::int64_t>(std::floor(1230.0 * 80.3 + 0.5)));
+}
+
+TEST(Segments, ArcChordsStayWithinTolerance) {
+    MotionBlock b;
+    b.kind = MotionKind::arc_ccw;
+    b.start = {20, 10, 0, 0};
+    b.end = {10, 20, 2, 0};  // quarter circle around (10,10), helical in Z
+    b.center_x = 10;
+    b.center_y = 10;
+    for (double tol : {0.001, 0.01, 0.1}) {
+        auto pts = arc_chord_points(b, tol);
+        // Minimum chord count from the sagitta formula r(1 - cos(theta/2)) <= tol.
+        const double max_theta = 2 * std::acos(1 - tol / 10);
+        EXPECT_EQ(pts.size(), static_cast<std::size_t>(std::ceil((M_PI / 2) / max_theta)));
+        PerAxis<double> prev = b.start;
+        for (const auto& p : pts) {
+            EXPECT_NEAR(std::hypot(p[0] - 10, p[1] - 10), 10, 1e-9);
+            const double mx = (p[0] + prev[0]) / 2, my = (p[1] + prev[1]) / 2;
+            EXPECT_LE(10 - std::hypot(mx - 10, my - 10), tol + 1e-12);
+            // Z rises linearly with the angle.
+            const double ang = std::atan2(p[1] - 10, p[0] - 10);
+            EXPECT_NEAR(p[2], 2 * ang / (M_PI / 2), 1e-9);
+            prev = p;
+        }
+        EXPECT_EQ(pts.back(), b.end);
+    }
+}
+
+TEST(Segments, FullCircleAndDirection) {
+    MotionBlock b;
+    b.kind = MotionKind::arc_cw;
+    b.start = b.end = {10, 0, 0, 0};
+    auto pts = arc_chord_points(b, 0.01);
+    ASSERT_GT(pts.size(), 8u);
+    // Clockwise from angle 0: the first point is below the x axis.
+    EXPECT_LT(pts.front()[1], 0);
+    EXPECT_EQ(pts.back(), b.end);
+}
+
+TEST(Segments, ArcSegmentsFromGcode) {
+    const Machine m = machine(100);
+    auto r = run("G0 X20 Y10\nG3 X10 Y20 I-10 F600\nG4 P1\n", m);
+    ASSERT_TRUE(r.ok());
+    const auto& segs = *r.value;
+    EXPECT_EQ(segs.front().kind, MotionKind::rapid);
+    EXPECT_EQ(segs.front().start, (PerAxis<std::int64_t>{0, 0, 0, 0}));
+    EXPECT_EQ(segs.front().end, (PerAxis<std::int64_t>{2000, 1000, 0, 0}));
+    EXPECT_EQ(segs.back().kind, MotionKind::dwell);
+    EXPECT_EQ(segs.back().dwell_s, 1.0);
+    EXPECT_EQ(segs.back().start, segs.back().end);
+    EXPECT_EQ(segs[segs.size() - 2].end, (PerAxis<std::int64_t>{1000, 2000, 0, 0}));
+    for (std::size_t i = 1; i < segs.size(); ++i) EXPECT_EQ(segs[i].start, segs[i - 1].end);
+    // Length of a step segment: hypot of its mm deltas.
+    EXPECT_NEAR(segs.front().length_mm(m), std::hypot(20.0, 10.0), 1e-12);
+}
+
+TEST(Segments, TravelAndAxisErrors) {
+    const Machine m = machine(100, 300);
+    EXPECT_EQ(join(run("G0 X10\nG1 X301 F60\nG0 X0 Y-51\nG0 Y-50 X0\n", m).errors),
+              "job.ngc:2:1: X 301.000 mm is outside the travel 0..300 mm of axis x\n"
+              "job.ngc:3:1: Y -51.000 mm is outside the travel -50..100 mm of axis y");
+    EXPECT_EQ(join(run("G0 Z1\n", m).errors), "job.ngc:1:1: axis Z is not on this machine (m.toml)");
+    // An arc whose end points are inside but whose bulge leaves the travel.
+    auto e = join(run("G0 X5 Y-47\nG3 X15 Y-47 I5 F60\n", m).errors);
+    EXPECT_EQ(e.rfind("job.ngc:2:1: Y -5", 0), 0u) << e;
+    EXPECT_NE(e.find(" mm is outside the travel -50..100 mm of axis y"), std::string::npos) << e;
+}
