@@ -5,7 +5,9 @@
 // (expected) and the RTL's (actual) value, and the waveform's path.
 //
 // Waveforms go to $CPSTEP_WAVE_DIR (default: the working directory), named after
-// the running GoogleTest test when there is one.
+// the running GoogleTest test when there is one. The replay needs every input
+// since construction; past `max_history` cycles the fixture stops recording and a
+// mismatch is reported without a waveform, so long sweeps use a fixture per batch.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -43,11 +45,13 @@ class Lockstep {
   using In = typename P::In;
   using Out = typename P::Out;
 
-  explicit Lockstep(std::string name = "lockstep") : name_(std::move(name)) {}
+  explicit Lockstep(std::string name = "lockstep", size_t max_history = 4'000'000)
+      : name_(std::move(name)), max_history_(max_history) {}
 
   // One clock: same inputs to both, compare, rising edge. Returns the outputs.
   Out step(const In& in) {
-    stimulus_.push_back(in);
+    if (stimulus_.size() < max_history_) stimulus_.push_back(in);
+    else recording_ = false;
     const Out want = model_.step(in);
     const Out got = rtl_.step(in);
     for (const auto& f : P::fields()) {
@@ -70,6 +74,13 @@ class Lockstep {
  private:
   [[noreturn]] void fail(const char* signal, uint64_t expected, uint64_t actual) {
     const uint64_t cycle = rtl_.cycle();
+    std::ostringstream m;
+    m << "lockstep mismatch at cycle " << cycle << ": signal " << signal << " expected (model) "
+      << expected << ", actual (rtl) " << actual;
+    if (!recording_) {
+      m << "; no waveform: more than " << max_history_ << " cycles since the fixture was made";
+      throw LockstepMismatch(m.str());
+    }
     const std::string path = wave_path(name_);
     {
       sim::RtlDut<P> traced(path);
@@ -77,16 +88,15 @@ class Lockstep {
       In idle = stimulus_.back();
       for (int i = 0; i < 4; ++i) traced.step(idle);  // a little context after
     }
-    std::ostringstream m;
-    m << "lockstep mismatch at cycle " << cycle << ": signal " << signal << " expected (model) "
-      << expected << ", actual (rtl) " << actual << "; waveform: " << path << " (cycle n spans "
-      << "time 2n..2n+1)";
+    m << "; waveform: " << path << " (cycle n spans time 2n..2n+1)";
     throw LockstepMismatch(m.str());
   }
 
   std::string name_;
   sim::ModelDut<P> model_;
   sim::RtlDut<P> rtl_;
+  size_t max_history_;
+  bool recording_ = true;
   std::vector<In> stimulus_;
 };
 

@@ -9,13 +9,14 @@ namespace {
 
 // Long label: every u <= 1024 (W), every v, k = 0, in lockstep.
 TEST(EngineLong, AllUpToW) {
-  Lockstep<sim::EngineDefault> ls;
-  ls.reset();
-  for (unsigned u = 1; u <= 1024; ++u)
+  for (unsigned u = 1; u <= 1024; ++u) {
+    Lockstep<sim::EngineDefault> ls;  // one per u keeps the replay history short
+    ls.reset();
     for (unsigned v = 0; v <= u; ++v) {
       const auto run = run_lockstep(ls, {u, v, 0, 1}, {u % 2 ? 100u : 70u, u * 4096ull + v});
       ASSERT_EQ(run.moves, oracle::closed_form(u, v)) << "u=" << u << " v=" << v;
     }
+  }
 }
 
 }  // namespace
