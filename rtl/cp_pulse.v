@@ -82,7 +82,7 @@ wire start = step_i && ready;
 wire dir_change = !active_q && dir_q != dir_i && low_cnt_q >= cfg_dir_hold_i;
 
 always @* begin
-    active_d    = active_q && high_cnt_q > ONE;
+    active_d    = active_q && (high_cnt_q & ~ONE) != {TW{1'b0}};  // high_cnt > 1
     high_cnt_d  = high_cnt_q - 1'b1;
     dir_d       = dir_q;
     setup_cnt_d = sat_inc(setup_cnt_q);
