@@ -1,0 +1,36 @@
+#include "card/protocol.h"
+
+namespace cpstep::card {
+
+void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
+  out.push_back(0x1u << 28 | uint32_t(s.end) << 27 | (s.k & 0xFu) << 23 |
+                uint32_t(s.chunks.size() & 0xFFFF));
+  uint32_t dirs = 0;
+  for (size_t a = 0; a < s.dir_positive.size(); ++a) dirs |= uint32_t(s.dir_positive[a]) << a;
+  out.push_back(dirs << 24 | (s.u & 0xFFFFFF));
+  for (uint32_t v : s.v) out.push_back(v & 0xFFFFFF);
+  for (const WireChunk& c : s.chunks) {
+    out.push_back(c.interval);
+    out.push_back(uint32_t(uint16_t(c.add)) << 16 | c.count);
+  }
+}
+
+void encode_config(unsigned axis, ConfigField field, uint32_t value, std::vector<uint32_t>& out) {
+  out.push_back(0x2u << 28 | (axis & 0xFu) << 24 | uint32_t(field) << 20 | (value & 0xFFFF));
+}
+
+void encode_control(bool start, bool abort, bool clear, std::vector<uint32_t>& out) {
+  out.push_back(0x3u << 28 | uint32_t(clear) << 2 | uint32_t(abort) << 1 | uint32_t(start));
+}
+
+void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out) {
+  const uint32_t reg = uint32_t(r) + (r == Register::position0 ? axis : 0);
+  out.push_back(0x4u << 28 | (reg & 0xFF));
+}
+
+Status decode_status(uint32_t w) {
+  return {bool(w & 1), bool(w >> 1 & 1), bool(w >> 2 & 1), bool(w >> 3 & 1),
+          w >> 8 & 0xFF, w >> 16 & 0xFF, w >> 24 & 0xFF};
+}
+
+}  // namespace cpstep::card

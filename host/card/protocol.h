@@ -1,0 +1,50 @@
+// The card's command words (docs/CORE.md), built from values.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace cpstep::card {
+
+struct WireChunk {
+  uint32_t interval = 0;  // cycles before the chunk's first move (>= 1)
+  uint16_t count = 0;     // moves in the chunk (>= 1)
+  int16_t add = 0;        // interval change per move
+};
+
+struct WireSegment {
+  uint32_t u = 0;                 // U: moves before doubling (1..UMAX)
+  unsigned k = 0;                 // doubling exponent: U * 2^k moves
+  bool end = false;               // the run ends cleanly after this segment
+  std::vector<bool> dir_positive; // per axis
+  std::vector<uint32_t> v;        // per axis, v_i <= U (U on the major axis)
+  std::vector<WireChunk> chunks;  // counts sum to U * 2^k
+};
+
+enum class ConfigField : uint32_t { step_high = 0, step_low = 1, dir_setup = 2, dir_hold = 3, polarity = 4 };
+
+enum class Register : uint32_t {
+  status = 0x00,
+  stretch_count = 0x01,
+  moves_done = 0x02,
+  segments_done = 0x03,
+  position0 = 0x10,
+  id = 0x1F,
+};
+constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
+
+// Appends the words of each command to `out`.
+void encode_segment(const WireSegment& s, std::vector<uint32_t>& out);
+void encode_config(unsigned axis, ConfigField field, uint32_t value, std::vector<uint32_t>& out);
+void encode_control(bool start, bool abort, bool clear, std::vector<uint32_t>& out);
+void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out);
+
+// Status word fields.
+struct Status {
+  bool running, fault, stretched, estop;
+  uint32_t err_code, segments_queued, chunks_queued;
+};
+Status decode_status(uint32_t word);
+
+}  // namespace cpstep::card

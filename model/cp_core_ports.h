@@ -1,0 +1,61 @@
+// Ports of rtl/cp_core.v, shared by its golden model and the simulation adaptors.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+namespace cpstep::model {
+
+constexpr unsigned kCoreMaxAxes = 8;
+
+struct CpCoreParams {
+  unsigned n = 4;           // axes
+  unsigned w = 1024;        // pattern capacity
+  unsigned umax = 1048575;  // largest U
+  unsigned kmax = 8;        // largest k
+  unsigned caw = 6;         // chunk queue address width
+  unsigned saw = 2;         // segment queue address width
+  unsigned tw = 16;         // pulse timing field width
+  unsigned pw = 32;         // position width
+  unsigned step_high_reset = 1, step_low_reset = 1, dir_setup_reset = 1, dir_hold_reset = 1;
+  bool step_pol_reset = true, dir_pol_reset = true;
+};
+
+struct CpCoreIn {
+  bool rst = false;
+  bool cmd_valid = false;
+  uint32_t cmd_data = 0;
+  bool rsp_ready = false;
+  bool estop = false;
+};
+
+struct CpCoreOut {
+  bool cmd_ready = false;
+  bool rsp_valid = false;
+  uint32_t rsp_data = 0;
+  uint32_t step = 0, dir = 0;  // bit i: axis i's pin
+  bool running = false, fault = false, stretched = false;
+  uint32_t err_code = 0;
+  std::array<int64_t, kCoreMaxAxes> position{};  // sign-extended from PW bits
+};
+
+// Fault and refusal codes (docs/CORE.md).
+enum class CoreError : uint32_t {
+  none = 0,
+  seg_u = 1,
+  seg_v_gt_u = 2,
+  seg_k = 3,
+  seg_chunks = 4,
+  seg_chunk_zero = 5,
+  seg_delay = 6,
+  seg_count_sum = 7,
+  seg_pattern = 8,
+  underrun = 9,
+  estop = 10,
+  abort = 11,
+  bad_opcode = 12,
+  config_busy = 13,
+  config_value = 14,
+};
+
+}  // namespace cpstep::model

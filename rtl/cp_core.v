@@ -1,0 +1,632 @@
+// cp_core — the motion core: command port, segment and chunk queues, two lanes
+// of Castle–Pitteway engines (one engine per axis per lane, double buffering),
+// the move-event timer, per-axis pulse timing, status and faults.
+//
+// docs/CORE.md is the contract: the command words, the validation and fault
+// codes, and the cycle behaviour the golden model (model/cp_core.*) follows.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module cp_core #(
+    // Number of axes (x y z a ...).
+    parameter integer N = 4,
+    // Pattern capacity of every engine: the longest pattern U/gcd(U, v).
+    parameter integer W = 1024,
+    // Largest move count U of a segment (before doubling).
+    parameter integer UMAX = 1048575,
+    // Largest step-doubling exponent k.
+    parameter integer KMAX = 8,
+    // Chunk queue address width: it holds 2^CAW chunks plus its head.
+    parameter integer CAW = 6,
+    // Segment queue address width.
+    parameter integer SAW = 2,
+    // Width of the pulse timing fields.
+    parameter integer TW = 16,
+    // Width of the position counters.
+    parameter integer PW = 32,
+    // Pulse timing after reset, in clock cycles (the host configures the real ones).
+    parameter integer STEP_HIGH_RESET = 1,
+    parameter integer STEP_LOW_RESET = 1,
+    parameter integer DIR_SETUP_RESET = 1,
+    parameter integer DIR_HOLD_RESET = 1,
+    // Pin polarity after reset: 1 = STEP active high, 1 = DIR high is positive.
+    parameter [0:0] STEP_POL_RESET = 1'b1,
+    parameter [0:0] DIR_POL_RESET = 1'b1
+) (
+    input  wire          clk,
+    input  wire          rst,
+
+    // Command words (docs/CORE.md).
+    input  wire          cmd_valid_i,
+    output wire          cmd_ready_o,
+    input  wire [31:0]   cmd_data_i,
+    // Replies to READ.
+    output wire          rsp_valid_o,
+    input  wire          rsp_ready_i,
+    output wire [31:0]   rsp_data_o,
+
+    // E-stop, synchronous to clk, active high.
+    input  wire          estop_i,
+
+    // Pins.
+    output wire [N-1:0]  step_o,
+    output wire [N-1:0]  dir_o,
+
+    // Status, also readable over the command port.
+    output wire          running_o,
+    output wire          fault_o,
+    output wire [7:0]    err_code_o,
+    output wire          stretched_o,
+    output wire [N*PW-1:0] position_o
+);
+
+// ---------------------------------------------------------------- constants
+localparam integer UW = $clog2(UMAX + 2);           // engine u/v width
+localparam integer KW = (KMAX > 0) ? $clog2(KMAX + 2) : 1;
+// Segment queue entry: end, k, dir[N], U, v[N] (24 bits each).
+localparam integer SDW = 1 + 4 + N + 24 * (N + 1);
+// Run information of a built segment: end, dir[N], moving[N].
+localparam integer RDW = 1 + 2 * N;
+
+localparam [3:0] OP_SEGMENT = 4'h1;
+localparam [3:0] OP_CONFIG  = 4'h2;
+localparam [3:0] OP_CONTROL = 4'h3;
+localparam [3:0] OP_READ    = 4'h4;
+
+localparam [7:0] E_NONE           = 8'd0;
+localparam [7:0] E_SEG_U          = 8'd1;
+localparam [7:0] E_SEG_V_GT_U     = 8'd2;
+localparam [7:0] E_SEG_K          = 8'd3;
+localparam [7:0] E_SEG_CHUNKS     = 8'd4;
+localparam [7:0] E_SEG_CHUNK_ZERO = 8'd5;
+localparam [7:0] E_SEG_DELAY      = 8'd6;
+localparam [7:0] E_SEG_COUNT_SUM  = 8'd7;
+localparam [7:0] E_SEG_PATTERN    = 8'd8;
+localparam [7:0] E_UNDERRUN       = 8'd9;
+localparam [7:0] E_ESTOP          = 8'd10;
+localparam [7:0] E_ABORT          = 8'd11;
+localparam [7:0] E_BAD_OPCODE     = 8'd12;
+localparam [7:0] E_CONFIG_BUSY    = 8'd13;
+localparam [7:0] E_CONFIG_VALUE   = 8'd14;
+
+localparam [2:0] P_CMD  = 3'd0;   // first word of a command
+localparam [2:0] P_H1   = 3'd1;   // segment: dir and U
+localparam [2:0] P_V    = 3'd2;   // segment: v_i
+localparam [2:0] P_C0   = 3'd3;   // chunk: interval
+localparam [2:0] P_C1   = 3'd4;   // chunk: add and count
+localparam [2:0] P_MUL  = 3'd5;   // chunk: checking its last delay
+localparam [2:0] P_RSP  = 3'd6;   // a reply waits to be taken
+
+generate
+    if (N < 1 || N > 8) begin : g_check_n
+        cp_core_parameter_N_must_be_1_to_8 u_bad ();
+    end
+    if (UMAX < W || UMAX > 16777214) begin : g_check_umax
+        cp_core_parameter_UMAX_must_be_W_to_2pow24_minus_2 u_bad ();
+    end
+    if (KMAX > 10) begin : g_check_kmax
+        cp_core_parameter_KMAX_must_be_at_most_10 u_bad ();
+    end
+    if (PW < 32) begin : g_check_pw
+        cp_core_parameter_PW_must_be_at_least_32 u_bad ();
+    end
+    if (CAW < 1 || CAW > 15) begin : g_check_caw
+        cp_core_parameter_CAW_must_be_1_to_15 u_bad ();
+    end
+endgenerate
+
+// ---------------------------------------------------------------- state
+// Control (reset).
+reg [2:0]    p_state_q, p_state_d;
+reg          discard_q, discard_d;       // the segment being read is dropped
+reg          rsp_valid_q, rsp_valid_d;
+reg          running_q, running_d;
+reg          cur_valid_q, cur_valid_d;   // a segment is loaded for running
+reg          cur_lane_q, cur_lane_d;
+reg          build_lane_q, build_lane_d;
+reg          ch_loaded_q, ch_loaded_d;
+reg          fault_q, fault_d;
+reg [7:0]    err_q, err_d;
+reg          stretched_q, stretched_d;
+reg [31:0]   stretch_cnt_q, stretch_cnt_d;
+reg [31:0]   moves_done_q, moves_done_d;
+reg [31:0]   segs_done_q, segs_done_d;
+reg [TW-1:0] cfg_high_q [0:N-1];
+reg [TW-1:0] cfg_low_q [0:N-1];
+reg [TW-1:0] cfg_setup_q [0:N-1];
+reg [TW-1:0] cfg_hold_q [0:N-1];
+reg [N-1:0]  cfg_step_pol_q, cfg_dir_pol_q;
+reg [N-1:0]  dir_q, dir_d;               // direction each axis is to step in
+
+// Datapath (no reset).
+reg [SDW-1:0] seg_q, seg_d;              // the segment being read
+reg [15:0]   nchunks_q, nchunks_d;       // chunks still to read
+reg [2:0]    v_idx_q, v_idx_d;
+reg [31:0]   interval_q, interval_d;
+reg [15:0]   count_q, count_d;
+reg [15:0]   add_q, add_d;
+reg [33:0]   sum_q, sum_d;               // chunk counts so far
+reg [33:0]   prod_q, prod_d;             // (count-1)*add, built bit by bit
+reg [15:0]   mul_a_q, mul_a_d;           // multiplier bits left (count-1)
+reg [33:0]   mul_b_q, mul_b_d;           // add, shifted
+reg [31:0]   rsp_data_q, rsp_data_d;
+reg          cur_end_q, cur_end_d;
+reg [31:0]   delay_q, delay_d;
+reg [15:0]   left_q, left_d;
+reg [15:0]   tadd_q, tadd_d;
+reg [31:0]   elapsed_q, elapsed_d;
+
+// ---------------------------------------------------------------- queues
+wire          seg_full, seg_head_valid;
+wire [SAW:0]  seg_used, seg_level;
+wire [SDW-1:0] seg_head;
+reg           seg_wr, seg_pop;
+
+wire          run_full, run_head_valid;
+wire [1:0]    run_used, run_level;
+wire [RDW-1:0] run_head;
+reg           run_wr, run_pop;
+reg [RDW-1:0] run_wdata;
+
+wire          ch_full, ch_head_valid;
+wire [CAW:0]  ch_used, ch_level;
+wire [63:0]   ch_head;
+reg           ch_wr, ch_commit, ch_rollback, ch_pop;
+
+reg           flush;
+
+cp_fifo #(.DW(SDW), .AW(SAW)) u_seg_fifo (
+    .clk(clk), .rst(rst), .clear_i(flush),
+    .wr_i(seg_wr), .wr_data_i(seg_d), .commit_i(1'b1), .rollback_i(1'b0),
+    .full_o(seg_full), .used_o(seg_used), .level_o(seg_level),
+    .out_valid_o(seg_head_valid), .out_ready_i(seg_pop), .out_data_o(seg_head));
+
+cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
+    .clk(clk), .rst(rst), .clear_i(flush),
+    .wr_i(run_wr), .wr_data_i(run_wdata), .commit_i(1'b1), .rollback_i(1'b0),
+    .full_o(run_full), .used_o(run_used), .level_o(run_level),
+    .out_valid_o(run_head_valid), .out_ready_i(run_pop), .out_data_o(run_head));
+
+cp_fifo #(.DW(64), .AW(CAW)) u_chunk_fifo (
+    .clk(clk), .rst(rst), .clear_i(flush),
+    .wr_i(ch_wr), .wr_data_i({count_d, add_d, interval_q}), .commit_i(ch_commit),
+    .rollback_i(ch_rollback),
+    .full_o(ch_full), .used_o(ch_used), .level_o(ch_level),
+    .out_valid_o(ch_head_valid), .out_ready_i(ch_pop), .out_data_o(ch_head));
+
+// Segment queue entry fields.
+wire          head_end = seg_head[SDW-1];
+wire [3:0]    head_k   = seg_head[SDW-2 -: 4];
+wire [N-1:0]  head_dir = seg_head[SDW-6 -: N];
+wire [23:0]   head_u   = seg_head[24*N +: 24];
+
+// ---------------------------------------------------------------- engines
+// Lane l, axis a is engine index l*N + a.
+reg  [2*N-1:0] eng_in_valid, eng_move_ready;
+wire [2*N-1:0] eng_in_ready, eng_err, eng_move_valid, eng_move, eng_move_last;
+wire [2*N*3-1:0] eng_err_code;
+reg            eng_rst;
+
+genvar gl, ga;
+generate
+    for (gl = 0; gl < 2; gl = gl + 1) begin : g_lane
+        for (ga = 0; ga < N; ga = ga + 1) begin : g_axis
+            localparam integer E = gl * N + ga;
+            wire [UW-1:0] u_in = head_u[UW-1:0];
+            wire [UW-1:0] v_in = seg_head[24*ga +: UW];
+            wire unused_dbg;
+            wire          dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter;
+            wire          dbg_m1_rev, dbg_m2_rev;
+            wire [$clog2(W)-1:0] dbg_waddr1, dbg_waddr2, dbg_m1_lo, dbg_m1_len, dbg_m2_lo, dbg_m2_len;
+            wire [UW-1:0] dbg_x, dbg_y;
+            cp_engine #(.W(W), .UMAX(UMAX), .KMAX(KMAX), .RW(1)) u_engine (
+                .clk(clk), .rst(rst || eng_rst),
+                .in_valid_i(eng_in_valid[E]), .in_ready_o(eng_in_ready[E]),
+                .in_u_i(u_in), .in_v_i(v_in), .in_k_i(head_k[KW-1:0]), .in_rep_i(1'b1),
+                .err_o(eng_err[E]), .err_code_o(eng_err_code[3*E +: 3]),
+                .move_valid_o(eng_move_valid[E]), .move_ready_i(eng_move_ready[E]),
+                .move_o(eng_move[E]), .move_last_o(eng_move_last[E]),
+                .dbg_we1_o(dbg_we1), .dbg_waddr1_o(dbg_waddr1), .dbg_wbit1_o(dbg_wbit1),
+                .dbg_we2_o(dbg_we2), .dbg_waddr2_o(dbg_waddr2), .dbg_wbit2_o(dbg_wbit2),
+                .dbg_iter_o(dbg_iter), .dbg_x_o(dbg_x), .dbg_y_o(dbg_y),
+                .dbg_m1_lo_o(dbg_m1_lo), .dbg_m1_len_o(dbg_m1_len), .dbg_m1_rev_o(dbg_m1_rev),
+                .dbg_m2_lo_o(dbg_m2_lo), .dbg_m2_len_o(dbg_m2_len), .dbg_m2_rev_o(dbg_m2_rev));
+            // The debug port is for the engine's own bench.
+            assign unused_dbg = &{1'b0, dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter,
+                                  dbg_m1_rev, dbg_m2_rev, dbg_waddr1, dbg_waddr2, dbg_m1_lo,
+                                  dbg_m1_len, dbg_m2_lo, dbg_m2_len, dbg_x, dbg_y};
+        end
+    end
+endgenerate
+
+wire [N-1:0] lane_valid = cur_lane_q ? eng_move_valid[2*N-1:N] : eng_move_valid[N-1:0];
+wire [N-1:0] lane_move  = cur_lane_q ? eng_move[2*N-1:N] : eng_move[N-1:0];
+wire         lane_last  = cur_lane_q ? eng_move_last[N] : eng_move_last[0];
+wire [N-1:0] build_ready = build_lane_q ? eng_in_ready[2*N-1:N] : eng_in_ready[N-1:0];
+wire         build_err  = |eng_err;
+wire unused_err_code = &{1'b0, eng_err_code, seg_used, run_used, ch_used, count_q, add_q,
+                         head_u[23:UW]};
+
+// ---------------------------------------------------------------- pulses
+wire [N-1:0]  pulse_ready, pulse_busy;
+reg  [N-1:0]  pulse_step;
+wire [PW-1:0] pulse_pos [0:N-1];
+
+generate
+    for (ga = 0; ga < N; ga = ga + 1) begin : g_pulse
+        cp_pulse #(.TW(TW), .PW(PW), .STEP_POL_RESET(STEP_POL_RESET),
+                   .DIR_POL_RESET(DIR_POL_RESET)) u_pulse (
+            .clk(clk), .rst(rst),
+            .cfg_step_high_i(cfg_high_q[ga]), .cfg_step_low_i(cfg_low_q[ga]),
+            .cfg_dir_setup_i(cfg_setup_q[ga]), .cfg_dir_hold_i(cfg_hold_q[ga]),
+            .cfg_step_pol_i(cfg_step_pol_q[ga]), .cfg_dir_pol_i(cfg_dir_pol_q[ga]),
+            .dir_i(dir_q[ga]), .step_i(pulse_step[ga]),
+            .ready_o(pulse_ready[ga]), .step_o(step_o[ga]), .dir_o(dir_o[ga]),
+            .position_o(pulse_pos[ga]), .busy_o(pulse_busy[ga]));
+        assign position_o[PW*ga +: PW] = pulse_pos[ga];
+    end
+endgenerate
+wire unused_busy = &{1'b0, pulse_busy};
+
+// ---------------------------------------------------------------- command word fields
+wire [3:0]  op        = cmd_data_i[31:28];
+wire        take      = cmd_valid_i && cmd_ready_o;
+wire [15:0] c1_count  = cmd_data_i[15:0];
+wire [15:0] c1_add    = cmd_data_i[31:16];
+wire [33:0] seg_moves = {10'd0, seg_q[24*N +: 24]} << seg_q[SDW-2 -: 4];
+wire [33:0] last_delay = {2'b00, interval_q} + prod_q;
+
+wire [31:0] ch_level32 = {{(31 - CAW){1'b0}}, ch_level};
+
+// Registers readable by READ.
+reg [31:0] read_value;
+integer    ri;
+always @* begin
+    read_value = 32'd0;
+    case (cmd_data_i[7:0])
+    8'h00: read_value = {ch_level32 > 32'd255 ? 8'd255 : ch_level32[7:0],
+                         {{(8 - SAW - 1){1'b0}}, seg_level} + {6'd0, run_level} + {7'd0, cur_valid_q},
+                         err_q, 4'd0, estop_i, stretched_q, fault_q, running_q};
+    8'h01: read_value = stretch_cnt_q;
+    8'h02: read_value = moves_done_q;
+    8'h03: read_value = segs_done_q;
+    8'h1F: read_value = 32'h43505331;   // "CPS1"
+    default: begin
+        for (ri = 0; ri < N; ri = ri + 1)
+            if (cmd_data_i[7:0] == 8'h10 + ri[7:0]) read_value = pulse_pos[ri][31:0];
+    end
+    endcase
+end
+
+// ---------------------------------------------------------------- next state
+reg        fire, due, seg_done, fault_set, start_cmd, abort_cmd, clear_cmd, cfg_write;
+reg [7:0]  fault_code;
+integer    i;
+
+always @* begin
+    p_state_d   = p_state_q;
+    discard_d   = discard_q;
+    rsp_valid_d = rsp_valid_q && !rsp_ready_i;
+    rsp_data_d  = rsp_data_q;
+    seg_d = seg_q;  nchunks_d = nchunks_q;  v_idx_d = v_idx_q;
+    interval_d = interval_q;  count_d = count_q;  add_d = add_q;  sum_d = sum_q;
+    prod_d = prod_q;  mul_a_d = mul_a_q;  mul_b_d = mul_b_q;
+    running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
+    cur_end_d = cur_end_q;  build_lane_d = build_lane_q;  ch_loaded_d = ch_loaded_q;
+    fault_d = fault_q;  err_d = err_q;  stretched_d = stretched_q;
+    stretch_cnt_d = stretch_cnt_q;  moves_done_d = moves_done_q;  segs_done_d = segs_done_q;
+    delay_d = delay_q;  left_d = left_q;  tadd_d = tadd_q;  dir_d = dir_q;
+    elapsed_d = (elapsed_q == 32'hFFFF_FFFF) ? elapsed_q : elapsed_q + 1'b1;
+
+    seg_wr = 1'b0;  seg_pop = 1'b0;  run_wr = 1'b0;  run_pop = 1'b0;
+    run_wdata = {RDW{1'b0}};
+    ch_wr = 1'b0;  ch_commit = 1'b0;  ch_rollback = 1'b0;  ch_pop = 1'b0;
+    eng_in_valid = {2*N{1'b0}};  eng_move_ready = {2*N{1'b0}};  pulse_step = {N{1'b0}};
+    fault_set = 1'b0;  fault_code = E_NONE;
+    start_cmd = 1'b0;  abort_cmd = 1'b0;  clear_cmd = 1'b0;  cfg_write = 1'b0;
+
+    // ---- command parser
+    case (p_state_q)
+    P_CMD: if (take) begin
+        case (op)
+        OP_SEGMENT: begin
+            seg_d = {SDW{1'b0}};
+            seg_d[SDW-1] = cmd_data_i[27];
+            seg_d[SDW-2 -: 4] = cmd_data_i[26:23];
+            nchunks_d = cmd_data_i[15:0];
+            sum_d     = 34'd0;
+            discard_d = fault_q;
+            if (!fault_q) begin
+                if ({28'd0, cmd_data_i[26:23]} > KMAX) begin
+                    fault_set = 1'b1;  fault_code = E_SEG_K;  discard_d = 1'b1;
+                end else if (cmd_data_i[15:0] == 16'd0 || {16'd0, cmd_data_i[15:0]} > (32'd1 << CAW)) begin
+                    fault_set = 1'b1;  fault_code = E_SEG_CHUNKS;  discard_d = 1'b1;
+                end
+            end
+            p_state_d = P_H1;
+        end
+        OP_CONFIG: begin
+            if (running_q) begin
+                fault_set = 1'b1;  fault_code = E_CONFIG_BUSY;
+            end else if ({28'd0, cmd_data_i[27:24]} >= N || cmd_data_i[23:20] > 4'd4 ||
+                         (cmd_data_i[23:20] <= 4'd1 && cmd_data_i[15:0] == 16'd0)) begin
+                fault_set = 1'b1;  fault_code = E_CONFIG_VALUE;
+            end else begin
+                cfg_write = 1'b1;
+            end
+        end
+        OP_CONTROL: begin
+            start_cmd = cmd_data_i[0];
+            abort_cmd = cmd_data_i[1];
+            clear_cmd = cmd_data_i[2];
+        end
+        OP_READ: begin
+            rsp_valid_d = 1'b1;
+            rsp_data_d  = read_value;
+            p_state_d   = P_RSP;
+        end
+        default: begin
+            fault_set = 1'b1;  fault_code = E_BAD_OPCODE;
+        end
+        endcase
+    end
+
+    P_H1: if (take) begin
+        seg_d[SDW-6 -: N] = cmd_data_i[24 +: N];
+        seg_d[24*N +: 24] = cmd_data_i[23:0];
+        if (!discard_q && !fault_q &&
+            (cmd_data_i[23:0] == 24'd0 || {8'd0, cmd_data_i[23:0]} > UMAX)) begin
+            fault_set = 1'b1;  fault_code = E_SEG_U;  discard_d = 1'b1;
+        end
+        v_idx_d   = 3'd0;
+        p_state_d = P_V;
+    end
+
+    P_V: if (take) begin
+        seg_d[24*v_idx_q +: 24] = cmd_data_i[23:0];
+        if (!discard_q && !fault_q && cmd_data_i[23:0] > seg_q[24*N +: 24]) begin
+            fault_set = 1'b1;  fault_code = E_SEG_V_GT_U;  discard_d = 1'b1;
+        end
+        v_idx_d = v_idx_q + 1'b1;
+        // A segment announced with no chunk was refused at its header; it ends here.
+        if ({29'd0, v_idx_q} == N - 1) p_state_d = (nchunks_q == 16'd0) ? P_CMD : P_C0;
+    end
+
+    P_C0: if (take) begin
+        interval_d = cmd_data_i;
+        p_state_d  = P_C1;
+    end
+
+    P_C1: if (take) begin
+        count_d = c1_count;
+        add_d   = c1_add;
+        sum_d   = sum_q + {18'd0, c1_count};
+        ch_wr   = !discard_q && !fault_q;
+        if (!discard_q && !fault_q && (interval_q == 32'd0 || c1_count == 16'd0)) begin
+            fault_set = 1'b1;  fault_code = E_SEG_CHUNK_ZERO;  discard_d = 1'b1;
+        end
+        prod_d  = 34'd0;
+        mul_a_d = c1_count - 1'b1;
+        mul_b_d = {{18{c1_add[15]}}, c1_add};
+        p_state_d = P_MUL;
+    end
+
+    P_MUL: begin
+        // One bit of (count-1) * add a cycle; done when no bit is left.
+        if (mul_a_q != 16'd0) begin
+            if (mul_a_q[0]) prod_d = prod_q + mul_b_q;
+            mul_a_d = mul_a_q >> 1;
+            mul_b_d = mul_b_q << 1;
+        end else begin
+            if (!discard_q && !fault_q && (last_delay[33] || last_delay[32] || last_delay == 34'd0)) begin
+                fault_set = 1'b1;  fault_code = E_SEG_DELAY;  discard_d = 1'b1;
+            end
+            nchunks_d = nchunks_q - 1'b1;
+            if (nchunks_q != 16'd1) begin
+                p_state_d = P_C0;
+            end else if (discard_q || fault_q || fault_set) begin
+                ch_rollback = 1'b1;
+                p_state_d   = P_CMD;
+            end else if (sum_q != seg_moves) begin
+                fault_set   = 1'b1;  fault_code = E_SEG_COUNT_SUM;
+                ch_rollback = 1'b1;
+                p_state_d   = P_CMD;
+            end else if (!seg_full) begin
+                // The whole segment passed: its entry and its chunks appear together.
+                seg_wr    = 1'b1;
+                ch_commit = 1'b1;
+                p_state_d = P_CMD;
+            end else begin
+                nchunks_d = nchunks_q;   // wait for room in the segment queue
+            end
+        end
+    end
+
+    P_RSP: if (!rsp_valid_q || rsp_ready_i) p_state_d = P_CMD;
+
+    default: p_state_d = P_CMD;
+    endcase
+
+    // ---- builder: the next committed segment into the idle lane
+    if (seg_head_valid && !fault_q && &build_ready && !run_full) begin
+        eng_in_valid = build_lane_q ? {{N{1'b1}}, {N{1'b0}}} : {{N{1'b0}}, {N{1'b1}}};
+        seg_pop   = 1'b1;
+        run_wr    = 1'b1;
+        for (i = 0; i < N; i = i + 1) run_wdata[N + i] = seg_head[24*i +: 24] != 24'd0;
+        run_wdata[N-1:0] = head_dir;
+        run_wdata[RDW-1] = head_end;
+        build_lane_d = !build_lane_q;
+    end
+    if (build_err) begin
+        fault_set = 1'b1;  fault_code = E_SEG_PATTERN;
+    end
+
+    // ---- timer and runner
+    due  = ch_loaded_q && elapsed_q >= delay_q;
+    fire = running_q && cur_valid_q && !estop_i && due && &lane_valid &&
+           &(pulse_ready | ~lane_move);
+    if (running_q && due && elapsed_q == delay_q && !fire) begin
+        stretched_d   = 1'b1;
+        stretch_cnt_d = stretch_cnt_q + 1'b1;
+    end
+    seg_done = fire && lane_last;
+
+    if (!ch_loaded_q && ch_head_valid) begin
+        ch_pop      = 1'b1;
+        ch_loaded_d = 1'b1;
+        delay_d     = ch_head[31:0];
+        tadd_d      = ch_head[47:32];
+        left_d      = ch_head[63:48];
+    end
+    if (fire) begin
+        eng_move_ready = cur_lane_q ? {{N{1'b1}}, {N{1'b0}}} : {{N{1'b0}}, {N{1'b1}}};
+        pulse_step     = lane_move;
+        moves_done_d   = moves_done_q + 1'b1;
+        elapsed_d      = 32'd1;
+        if (left_q != 16'd1) begin
+            left_d  = left_q - 1'b1;
+            delay_d = delay_q + {{16{tadd_q[15]}}, tadd_q};
+        end else if (ch_head_valid) begin
+            ch_pop  = 1'b1;
+            delay_d = ch_head[31:0];
+            tadd_d  = ch_head[47:32];
+            left_d  = ch_head[63:48];
+        end else begin
+            ch_loaded_d = 1'b0;
+        end
+    end
+    if (seg_done) begin
+        segs_done_d = segs_done_q + 1'b1;
+        cur_valid_d = 1'b0;
+        cur_lane_d  = !cur_lane_q;
+        if (cur_end_q) begin
+            running_d = 1'b0;
+        end else if (run_level == 2'd0 && seg_level == {(SAW+1){1'b0}} && !fault_q) begin
+            running_d = 1'b0;
+            fault_set = 1'b1;  fault_code = E_UNDERRUN;
+        end
+    end
+    // Load the next built segment; its moving axes take their directions.
+    if ((!cur_valid_q || seg_done) && run_head_valid && !fault_q) begin
+        run_pop     = 1'b1;
+        cur_valid_d = 1'b1;
+        cur_end_d   = run_head[RDW-1];
+        for (i = 0; i < N; i = i + 1)
+            if (run_head[N + i]) dir_d[i] = run_head[i];
+    end
+
+    if (start_cmd && !fault_q && !running_q) begin
+        running_d = 1'b1;
+        elapsed_d = 32'd1;
+    end
+    if (abort_cmd) begin
+        fault_set = 1'b1;  fault_code = E_ABORT;
+    end
+    if (estop_i) begin
+        fault_set = 1'b1;  fault_code = E_ESTOP;
+    end
+
+    // ---- faults: the first one latches; a segment under way completes
+    if (fault_set && !fault_q) begin
+        fault_d = 1'b1;
+        err_d   = fault_code;
+    end
+    flush = estop_i || abort_cmd || (fault_q && !(running_q && cur_valid_q && !seg_done));
+    if (flush) begin
+        running_d   = 1'b0;
+        cur_valid_d = 1'b0;
+        ch_loaded_d = 1'b0;
+        cur_lane_d  = 1'b0;
+        build_lane_d = 1'b0;
+    end
+    if (clear_cmd && !estop_i) begin
+        fault_d     = 1'b0;
+        err_d       = E_NONE;
+        stretched_d = 1'b0;
+    end
+end
+
+always @* eng_rst = flush;
+
+// ---------------------------------------------------------------- registers
+integer a;
+always @(posedge clk) begin
+    if (rst) begin
+        p_state_q     <= P_CMD;
+        discard_q     <= 1'b0;
+        rsp_valid_q   <= 1'b0;
+        running_q     <= 1'b0;
+        cur_valid_q   <= 1'b0;
+        cur_lane_q    <= 1'b0;
+        build_lane_q  <= 1'b0;
+        ch_loaded_q   <= 1'b0;
+        fault_q       <= 1'b0;
+        err_q         <= E_NONE;
+        stretched_q   <= 1'b0;
+        stretch_cnt_q <= 32'd0;
+        moves_done_q  <= 32'd0;
+        segs_done_q   <= 32'd0;
+        dir_q         <= {N{1'b0}};
+        cfg_step_pol_q <= {N{STEP_POL_RESET}};
+        cfg_dir_pol_q  <= {N{DIR_POL_RESET}};
+        for (a = 0; a < N; a = a + 1) begin
+            cfg_high_q[a]  <= STEP_HIGH_RESET[TW-1:0];
+            cfg_low_q[a]   <= STEP_LOW_RESET[TW-1:0];
+            cfg_setup_q[a] <= DIR_SETUP_RESET[TW-1:0];
+            cfg_hold_q[a]  <= DIR_HOLD_RESET[TW-1:0];
+        end
+    end else begin
+        p_state_q     <= p_state_d;
+        discard_q     <= discard_d;
+        rsp_valid_q   <= rsp_valid_d;
+        running_q     <= running_d;
+        cur_valid_q   <= cur_valid_d;
+        cur_lane_q    <= cur_lane_d;
+        build_lane_q  <= build_lane_d;
+        ch_loaded_q   <= ch_loaded_d;
+        fault_q       <= fault_d;
+        err_q         <= err_d;
+        stretched_q   <= stretched_d;
+        stretch_cnt_q <= stretch_cnt_d;
+        moves_done_q  <= moves_done_d;
+        segs_done_q   <= segs_done_d;
+        dir_q         <= dir_d;
+        if (cfg_write) begin
+            for (a = 0; a < N; a = a + 1) begin
+                if (cmd_data_i[27:24] == a[3:0]) begin
+                    case (cmd_data_i[23:20])
+                    4'd0: cfg_high_q[a]  <= cmd_data_i[TW-1:0];
+                    4'd1: cfg_low_q[a]   <= cmd_data_i[TW-1:0];
+                    4'd2: cfg_setup_q[a] <= cmd_data_i[TW-1:0];
+                    4'd3: cfg_hold_q[a]  <= cmd_data_i[TW-1:0];
+                    default: begin
+                        cfg_step_pol_q[a] <= cmd_data_i[0];
+                        cfg_dir_pol_q[a]  <= cmd_data_i[1];
+                    end
+                    endcase
+                end
+            end
+        end
+    end
+    seg_q <= seg_d;  nchunks_q <= nchunks_d;  v_idx_q <= v_idx_d;
+    interval_q <= interval_d;  count_q <= count_d;  add_q <= add_d;  sum_q <= sum_d;
+    prod_q <= prod_d;  mul_a_q <= mul_a_d;  mul_b_q <= mul_b_d;
+    rsp_data_q <= rsp_data_d;  cur_end_q <= cur_end_d;
+    delay_q <= delay_d;  left_q <= left_d;  tadd_q <= tadd_d;  elapsed_q <= elapsed_d;
+end
+
+// ---------------------------------------------------------------- outputs
+assign cmd_ready_o = (p_state_q == P_CMD) ||
+                     (p_state_q == P_H1) || (p_state_q == P_V) || (p_state_q == P_C0) ||
+                     (p_state_q == P_C1 && (discard_q || fault_q || !ch_full));
+assign rsp_valid_o = rsp_valid_q;
+assign rsp_data_o  = rsp_valid_q ? rsp_data_q : 32'd0;
+assign running_o   = running_q;
+assign fault_o     = fault_q;
+assign err_code_o  = err_q;
+assign stretched_o = stretched_q;
+
+endmodule
+
+`resetall
