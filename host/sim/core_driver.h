@@ -38,15 +38,20 @@ class CoreDriver {
   void idle(uint64_t cycles) {
     for (uint64_t i = 0; i < cycles; ++i) step({});
   }
-  // Sends words in order, holding each until the core takes it.
-  void send(const std::vector<uint32_t>& words, uint64_t max_wait = 1'000'000) {
+  // Sends words in order, holding each until the core takes it. A full queue
+  // waits while motion drains it; `max_idle_wait` bounds the wait while the
+  // core is not running (nothing would drain it).
+  void send(const std::vector<uint32_t>& words, uint64_t max_idle_wait = 1'000'000) {
     for (uint32_t w : words) {
       model::CpCoreIn in;
       in.cmd_valid = true;
       in.cmd_data = w;
-      for (uint64_t n = 0;; ++n) {
-        if (n > max_wait) throw std::runtime_error("cp_core did not take a command word");
-        if (step(in).cmd_ready) break;
+      for (uint64_t idle = 0;;) {
+        const model::CpCoreOut o = step(in);
+        if (o.cmd_ready) break;
+        idle = o.running ? 0 : idle + 1;
+        if (idle > max_idle_wait)
+          throw std::runtime_error("cp_core did not take a command word and is not running");
       }
     }
   }

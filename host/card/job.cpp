@@ -1,0 +1,133 @@
+#include "card/job.h"
+
+#include <fmt/format.h>
+
+#include <bit>
+#include <numeric>
+
+namespace cpstep::card {
+
+plan::ChunkLimits chunk_limits(const CardLimits&) {
+  plan::ChunkLimits l;
+  l.max_count = 0xFFFF;
+  l.add_min = INT16_MIN;
+  l.add_max = INT16_MAX;
+  l.add2_min = l.add2_max = 0;
+  l.enable_add2 = false;
+  return l;
+}
+
+namespace {
+
+plan::Diagnostic error(const std::string& file, const plan::SourceLoc& loc, std::string message) {
+  return {file, loc, std::move(message)};
+}
+
+// Takes `moves` moves off the front of a chunk list, splitting a chunk where
+// the boundary falls inside it (exact: the rest starts at its own next delay).
+std::vector<WireChunk> take_moves(std::vector<plan::Chunk>& chunks, size_t& next, uint64_t moves) {
+  std::vector<WireChunk> out;
+  while (moves > 0) {
+    plan::Chunk& c = chunks[next];
+    const uint32_t n = uint32_t(std::min<uint64_t>(moves, c.count));
+    out.push_back({c.interval, uint16_t(n), int16_t(c.add)});
+    moves -= n;
+    if (n == c.count) {
+      ++next;
+    } else {
+      c.interval = uint32_t(int64_t(c.interval) + int64_t(n) * c.add);
+      c.count -= n;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& file,
+                              const CardLimits& card) {
+  plan::Result<WireJob> r;
+  WireJob& out = r.value.emplace();
+  for (size_t s = 0; s < job.card.size(); ++s) {
+    const plan::CardSegment& seg = job.card[s].segment;
+    std::vector<plan::Chunk> chunks = job.card[s].chunks;
+    for (const plan::Chunk& c : chunks) {
+      if (c.add2 != 0 || c.add < INT16_MIN || c.add > INT16_MAX || c.count > 0xFFFF) {
+        r.errors.push_back(error(file, seg.loc, fmt::format("chunk (interval {}, count {}, add {}, "
+                                                      "add2 {}) is outside the card's chunk form",
+                                                      c.interval, c.count, c.add, c.add2)));
+        return r;
+      }
+    }
+    // The patterns repeat every L = lcm(u_i) moves; pieces of whole periods.
+    const uint64_t T = seg.moves;
+    uint64_t period = 1;
+    for (int a = 0; a < plan::kAxes; ++a) period = std::lcm(period, uint64_t(seg.u[a]));
+    uint64_t piece = T;
+    if (T > card.umax) {
+      if (period > card.umax) {
+        r.errors.push_back(error(file, seg.loc, fmt::format("segment of {} moves is longer than the "
+                                                      "card's {} and its patterns repeat only "
+                                                      "every {} moves",
+                                                      T, card.umax, period)));
+        return r;
+      }
+      piece = card.umax / period * period;
+    }
+    size_t next_chunk = 0;
+    for (uint64_t done = 0; done < T;) {
+      const uint64_t n = std::min(piece, T - done);
+      // Whole periods: axis a makes v_a steps every u_a moves.
+      std::array<uint64_t, plan::kAxes> d{};
+      uint64_t g = 0;
+      for (int a = 0; a < plan::kAxes; ++a) {
+        d[a] = uint64_t(seg.v[a]) * (n / seg.u[a]);
+        g = std::gcd(g, d[a]);
+      }
+      const unsigned k = std::min<unsigned>(card.kmax, unsigned(std::countr_zero(g)));
+      WireSegment w;
+      w.k = k;
+      w.u = uint32_t(n >> k);
+      for (int a = 0; a < plan::kAxes; ++a) {
+        w.dir_positive.push_back(seg.delta[a] >= 0);
+        w.v.push_back(uint32_t(d[a] >> k));
+      }
+      w.chunks = take_moves(chunks, next_chunk, n);
+      out.segments.push_back(std::move(w));
+      out.source.push_back(s);
+      done += n;
+    }
+  }
+  if (!out.segments.empty()) out.segments.back().end = true;
+  // START once the first segments are queued, before they could fill the card.
+  size_t chunks_queued = 0;
+  while (out.start_after < out.segments.size() && out.start_after < 4 &&
+         chunks_queued + out.segments[out.start_after].chunks.size() <= 64) {
+    chunks_queued += out.segments[out.start_after].chunks.size();
+    ++out.start_after;
+  }
+  out.start_after = std::max<size_t>(out.start_after, 1);
+  return r;
+}
+
+std::vector<uint32_t> encode_job(const plan::Machine& m, const WireJob& job) {
+  std::vector<uint32_t> words;
+  for (int a = 0; a < plan::kAxes; ++a) {
+    const plan::AxisConfig& ax = m.axes[a];
+    if (!ax.present) continue;
+    encode_config(a, ConfigField::step_high, ax.pulse.step_high, words);
+    encode_config(a, ConfigField::step_low, ax.pulse.step_low, words);
+    encode_config(a, ConfigField::dir_setup, ax.pulse.dir_setup, words);
+    encode_config(a, ConfigField::dir_hold, ax.pulse.dir_hold, words);
+    encode_config(a, ConfigField::polarity,
+                  uint32_t(ax.step_active_high) | uint32_t(ax.dir_positive_high) << 1, words);
+  }
+  for (size_t s = 0; s < job.segments.size(); ++s) {
+    if (s == job.start_after) encode_control(true, false, false, words);
+    encode_segment(job.segments[s], words);
+  }
+  if (job.start_after >= job.segments.size()) encode_control(true, false, false, words);
+  return words;
+}
+
+}  // namespace cpstep::card

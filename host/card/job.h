@@ -1,0 +1,47 @@
+// From a planned job to the card's command words: choose each segment's
+// doubling exponent, split what exceeds the card's move count, and order the
+// configuration, the segments and START (docs/CORE.md).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "card/protocol.h"
+#include "plan/chunks.h"
+#include "plan/common.h"
+#include "plan/machine.h"
+#include "plan/pipeline.h"
+
+namespace cpstep::card {
+
+// What the card accepts (rtl/cp_core.v parameters).
+struct CardLimits {
+  uint32_t umax = (1u << 20) - 1;  // largest U
+  unsigned kmax = 8;               // largest doubling exponent
+  uint32_t w = 1024;               // pattern capacity
+  unsigned chunk_queue = 64;       // 2^CAW
+  unsigned segment_queue = 4;      // 2^SAW
+};
+
+// The chunk form the card executes: 16-bit count and add, no add2.
+plan::ChunkLimits chunk_limits(const CardLimits& card = {});
+
+struct WireJob {
+  std::vector<WireSegment> segments;
+  std::vector<size_t> source;   // per wire segment: index of its planned card segment
+  size_t start_after = 0;       // START is sent after this many segments
+};
+
+// Converts the planned card segments. A segment whose U exceeds UMAX is split
+// at multiples of its patterns' common period, so every piece replays whole
+// patterns and nothing moves off the planned lattice.
+// `file` names the G-code file in errors.
+plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& file,
+                              const CardLimits& card = {});
+
+// Configuration of every present axis, the segments (the last one ends the run)
+// and START where the first segments fit the card's queues.
+std::vector<uint32_t> encode_job(const plan::Machine& machine, const WireJob& job);
+
+}  // namespace cpstep::card

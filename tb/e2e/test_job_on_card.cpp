@@ -1,0 +1,126 @@
+// G-code -> planner -> command words -> the Verilated core, and back from its pins:
+// the job lands exactly on the planned steps, and every move event happens at
+// the cycle the planned chunks say (timed from START), unless stretched.
+#include <gtest/gtest.h>
+
+#include <numeric>
+
+#include "Vcp_core.h"
+#include "card/job.h"
+#include "plan/gcode.h"
+#include "plan/pipeline.h"
+#include "sim/core_driver.h"
+#include "sim/core_port.h"
+
+namespace cpstep::tb {
+namespace {
+
+struct CoreRtl : sim::CorePortBase<Vcp_core, 4> {};
+
+plan::Machine machine(const char* name) {
+  auto m = plan::load_machine(std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/" + name);
+  EXPECT_TRUE(m.ok()) << plan::join(m.errors);
+  return *m;
+}
+
+plan::PlannedJob plan_text(const std::string& gcode, const plan::Machine& m) {
+  auto job = plan::parse_gcode(gcode, "inline.ngc");
+  EXPECT_TRUE(job.ok()) << plan::join(job.errors);
+  plan::PlanOptions opt;
+  opt.chunk_limits = card::chunk_limits();
+  opt.add2_from_machine = false;
+  auto planned = plan::plan_job(*job, m, opt);
+  EXPECT_TRUE(planned.ok()) << plan::join(planned.errors);
+  return *planned;
+}
+
+TEST(WireJob, SegmentsAreWhatTheCardAccepts) {
+  for (const char* mach : {"plotter.toml", "seed002.toml"}) {
+    const plan::Machine m = machine(mach);
+    const auto planned = plan_text("G21 G90\nG1 X10 Y3 F3000\nG2 X20 Y3 I5 J0\nG1 X0 Y0\n", m);
+    const auto wire = card::to_wire(planned, "inline.ngc");
+    ASSERT_TRUE(wire.ok()) << plan::join(wire.errors);
+    plan::PerAxis<int64_t> pos{};
+    for (const auto& s : wire->segments) {
+      ASSERT_GE(s.u, 1u);
+      ASSERT_LE(s.u, card::CardLimits{}.umax);
+      uint64_t count = 0;
+      for (const auto& c : s.chunks) count += c.count;
+      EXPECT_EQ(count, uint64_t(s.u) << s.k);
+      for (int a = 0; a < 4; ++a) {
+        ASSERT_LE(s.v[a], s.u);
+        pos[a] += (s.dir_positive[a] ? 1 : -1) * (int64_t(s.v[a]) << s.k);
+      }
+    }
+    EXPECT_EQ(pos, planned.step_segments.back().end) << mach;
+    EXPECT_TRUE(wire->segments.back().end);
+  }
+}
+
+TEST(WireJob, LongSegmentSplitsExactlyAtWholePatternPeriods) {
+  plan::PlannedJob job;
+  plan::PlannedCardSegment s;
+  s.segment.moves = 3'000'000;
+  s.segment.delta = {3'000'000, -1'000'000, 0, 0};
+  s.segment.u = {1, 3, 1, 1};
+  s.segment.v = {1, 1, 0, 0};
+  s.chunks = {{100, 65535, 0, 0}};
+  uint64_t left = 3'000'000 - 65535;
+  while (left > 0) {
+    const uint32_t n = uint32_t(std::min<uint64_t>(left, 65535));
+    s.chunks.push_back({7, n, 0, 0});
+    left -= n;
+  }
+  job.card.push_back(s);
+  const auto wire = card::to_wire(job, "long.ngc");
+  ASSERT_TRUE(wire.ok()) << plan::join(wire.errors);
+  ASSERT_GT(wire->segments.size(), 2u);
+  int64_t x = 0, y = 0;
+  std::vector<plan::Chunk> original = s.chunks, pieces;
+  for (const auto& w : wire->segments) {
+    ASSERT_LE(w.u, card::CardLimits{}.umax);
+    EXPECT_EQ((uint64_t(w.u) << w.k) % 3, 0u) << "a piece ends inside a pattern period";
+    x += int64_t(w.v[0]) << w.k;
+    y -= int64_t(w.v[1]) << w.k;
+    for (const auto& c : w.chunks) pieces.push_back({c.interval, c.count, c.add, 0});
+  }
+  EXPECT_EQ(x, 3'000'000);
+  EXPECT_EQ(y, -1'000'000);
+  EXPECT_EQ(plan::expand(pieces, 0), plan::expand(original, 0));
+}
+
+TEST(JobOnCard, LandsOnThePlannedStepsAtThePlannedCycles) {
+  const plan::Machine m = machine("plotter.toml");
+  const auto planned = plan_text("G21 G90\nG1 X2 Y0.5 F3000\nG1 X3 Y2\nG3 X2 Y3 I-1 J0\nG1 X0 Y0\n", m);
+  const auto wire = card::to_wire(planned, "inline.ngc");
+  ASSERT_TRUE(wire.ok()) << plan::join(wire.errors);
+  std::vector<plan::Chunk> all;
+  for (const auto& pc : planned.card) all.insert(all.end(), pc.chunks.begin(), pc.chunks.end());
+  const std::vector<int64_t> expected = plan::expand(all, 0);
+
+  sim::RtlDut<CoreRtl> dut;
+  std::vector<uint64_t> events;
+  uint32_t prev = 0;
+  int64_t start_cycle = -1;
+  sim::CoreDriver<sim::RtlDut<CoreRtl>> drv(
+      dut, [&](uint64_t c, const model::CpCoreIn& in, const model::CpCoreOut& o) {
+        if (in.cmd_valid && o.cmd_ready && in.cmd_data >> 28 == 3 && (in.cmd_data & 1))
+          start_cycle = int64_t(c);
+        if (o.step & ~prev) events.push_back(c);
+        prev = o.step;
+      });
+  drv.reset();
+  drv.send(card::encode_job(m, *wire));
+  drv.run_until_stopped(200'000'000);
+  ASSERT_FALSE(drv.last().fault) << "error code " << drv.last().err_code;
+  for (int a = 0; a < 4; ++a) EXPECT_EQ(drv.last().position[a], planned.step_segments.back().end[a]);
+  ASSERT_EQ(events.size(), expected.size());
+  const uint32_t stretches = drv.read(card::Register::stretch_count);
+  EXPECT_EQ(stretches, 0u);
+  // START is taken in cycle s; move i fires at s + t_i and its pins rise one cycle later.
+  for (size_t i = 0; i < events.size(); ++i)
+    ASSERT_EQ(int64_t(events[i]), start_cycle + expected[i] + 1) << "move " << i;
+}
+
+}  // namespace
+}  // namespace cpstep::tb
