@@ -1,8 +1,10 @@
 // cpstep — command-line front end.
 //
 //   cpstep moves U V [--k K] [--rep R] [--engine rtl|model|oracle] [--stats] [--table]
+//   cpstep sim FILE [--vcd OUT.vcd] [--max-cycles N] [--clock-hz HZ]
 //
-// Exit codes: 0 success, 2 refused input (one line on stderr), 1 internal error.
+// Exit codes: 0 success, 2 refused input (one line on stderr), 1 internal error
+// (moves) or a run that ended with a fault (sim, docs/SIM.md).
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
@@ -10,6 +12,7 @@
 #include <iostream>
 #include <optional>
 
+#include "cli/sim_command.h"
 #include "model/oracle.h"
 #include "sim/engine_configs.h"
 #include "sim/engine_session.h"
@@ -119,6 +122,18 @@ int main(int argc, char** argv) {
   moves->add_flag("--stats", mo.stats, "second line: iterations=N build_cycles=M");
   moves->add_flag("--table", mo.table, "print the register table (x, y, M1, M2) first");
 
+  cli::SimOptions so;
+  auto* simc = app.add_subcommand("sim", "Run a script of raw segments and commands on the Verilated card "
+                                         "(docs/SIM.md)");
+  simc->add_option("FILE", so.file, "the script")->required();
+  simc->add_option("--vcd", so.vcd, "write the STEP/DIR pins (and estop) to this VCD file");
+  simc->add_option("--max-cycles", so.max_cycles, "give up after this many clock cycles")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  simc->add_option("--clock-hz", so.clock_hz, "the card's clock, for the VCD's time axis")
+      ->capture_default_str()
+      ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000'000)));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -127,6 +142,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (*moves) return run_moves(mo);
+    if (*simc) return cli::run_sim(so);
   } catch (const std::exception& e) {
     fmt::print(stderr, "cpstep: internal error: {}\n", e.what());
     return 1;

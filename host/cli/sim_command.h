@@ -1,0 +1,21 @@
+// `cpstep sim`: runs a script of raw segments and commands (docs/SIM.md) on the
+// Verilated motion core and reports its final state.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace cpstep::cli {
+
+struct SimOptions {
+  std::string file;
+  std::string vcd;                      // "" for no waveform
+  uint64_t max_cycles = 100'000'000;    // clock cycles, reset included
+  uint64_t clock_hz = 48'000'000;       // the VCD's time base
+};
+
+// Exit codes: 0 the run ended without a fault; 1 it ended with a fault, or did
+// not end within max_cycles; 2 the script or an option was refused (nothing sent).
+int run_sim(const SimOptions& options);
+
+}  // namespace cpstep::cli
