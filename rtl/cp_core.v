@@ -126,6 +126,8 @@ reg          cur_valid_q, cur_valid_d;   // a segment is loaded for running
 reg          cur_lane_q, cur_lane_d;
 reg          build_lane_q, build_lane_d;
 reg          ch_loaded_q, ch_loaded_d;
+reg          late_q, late_d;             // the pending move has been counted as stretched
+reg [1:0]    bad_lane_q, bad_lane_d;     // lane l holds a segment its engines refused
 reg          fault_q, fault_d;
 reg [7:0]    err_q, err_d;
 reg          stretched_q, stretched_d;
@@ -301,6 +303,7 @@ end
 
 // ---------------------------------------------------------------- next state
 reg        fire, due, seg_done, fault_set, start_cmd, abort_cmd, clear_cmd, cfg_write;
+reg        clearing, stuck, stretch_inc;
 reg [7:0]  fault_code;
 integer    i;
 
@@ -314,6 +317,7 @@ always @* begin
     prod_d = prod_q;  mul_a_d = mul_a_q;  mul_b_d = mul_b_q;
     running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
     cur_end_d = cur_end_q;  build_lane_d = build_lane_q;  ch_loaded_d = ch_loaded_q;
+    late_d = late_q;  bad_lane_d = bad_lane_q;
     fault_d = fault_q;  err_d = err_q;  stretched_d = stretched_q;
     stretch_cnt_d = stretch_cnt_q;  moves_done_d = moves_done_q;  segs_done_d = segs_done_q;
     delay_d = delay_q;  left_d = left_q;  tadd_d = tadd_q;  dir_d = dir_q;
@@ -461,15 +465,22 @@ always @* begin
     if (build_err) begin
         fault_set = 1'b1;  fault_code = E_SEG_PATTERN;
     end
+    bad_lane_d = bad_lane_q | {|eng_err[2*N-1:N], |eng_err[N-1:0]};
 
     // ---- timer and runner
     due  = ch_loaded_q && elapsed_q >= delay_q;
-    fire = running_q && cur_valid_q && !estop_i && due && &lane_valid &&
+    fire = running_q && cur_valid_q && !estop_i && !abort_cmd && due && &lane_valid &&
            &(pulse_ready | ~lane_move);
-    if (running_q && due && elapsed_q == delay_q && !fire) begin
+    // A move is counted late once: in the first cycle it is due and does not fire,
+    // or when it fires after its time without having waited due (its chunk came late).
+    stretch_inc = running_q && due && !late_q && !estop_i && !abort_cmd &&
+                  (!fire || elapsed_q != delay_q);
+    if (stretch_inc) begin
         stretched_d   = 1'b1;
         stretch_cnt_d = stretch_cnt_q + 1'b1;
+        late_d        = 1'b1;
     end
+    if (fire) late_d = 1'b0;
     seg_done = fire && lane_last;
 
     if (!ch_loaded_q && ch_head_valid) begin
@@ -527,23 +538,28 @@ always @* begin
         fault_set = 1'b1;  fault_code = E_ESTOP;
     end
 
-    // ---- faults: the first one latches; a segment under way completes
-    if (fault_set && !fault_q) begin
+    // ---- faults: CLEAR drops what was latched before this cycle; then the first
+    // fault latches; a segment under way completes unless its own lane refused it.
+    clearing = clear_cmd && !estop_i;
+    if (clearing) begin
+        fault_d     = 1'b0;
+        err_d       = E_NONE;
+        stretched_d = stretch_inc;
+    end
+    if (fault_set && (!fault_q || clearing)) begin
         fault_d = 1'b1;
         err_d   = fault_code;
     end
-    flush = estop_i || abort_cmd || (fault_q && !(running_q && cur_valid_q && !seg_done));
+    stuck = cur_valid_q && bad_lane_q[cur_lane_q];
+    flush = estop_i || abort_cmd || stuck || (fault_q && !(running_q && cur_valid_q && !seg_done));
     if (flush) begin
         running_d   = 1'b0;
         cur_valid_d = 1'b0;
         ch_loaded_d = 1'b0;
         cur_lane_d  = 1'b0;
         build_lane_d = 1'b0;
-    end
-    if (clear_cmd && !estop_i) begin
-        fault_d     = 1'b0;
-        err_d       = E_NONE;
-        stretched_d = 1'b0;
+        late_d      = 1'b0;
+        bad_lane_d  = 2'b00;
     end
 end
 
@@ -561,6 +577,8 @@ always @(posedge clk) begin
         cur_lane_q    <= 1'b0;
         build_lane_q  <= 1'b0;
         ch_loaded_q   <= 1'b0;
+        late_q        <= 1'b0;
+        bad_lane_q    <= 2'b00;
         fault_q       <= 1'b0;
         err_q         <= E_NONE;
         stretched_q   <= 1'b0;
@@ -585,6 +603,8 @@ always @(posedge clk) begin
         cur_lane_q    <= cur_lane_d;
         build_lane_q  <= build_lane_d;
         ch_loaded_q   <= ch_loaded_d;
+        late_q        <= late_d;
+        bad_lane_q    <= bad_lane_d;
         fault_q       <= fault_d;
         err_q         <= err_d;
         stretched_q   <= stretched_d;

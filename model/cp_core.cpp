@@ -1,0 +1,526 @@
+#include "cp_core.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace cpstep::model {
+namespace {
+
+constexpr uint32_t kOpSegment = 0x1, kOpConfig = 0x2, kOpControl = 0x3, kOpRead = 0x4;
+constexpr uint64_t kMask34 = (uint64_t(1) << 34) - 1;  // the validator's arithmetic width
+constexpr uint32_t kCardId = 0x43505331;              // "CPS1"
+
+uint32_t mask(unsigned bits) { return bits >= 32 ? ~0u : (1u << bits) - 1; }
+
+void put_bits(FifoWord& w, unsigned lo, unsigned bits, uint64_t value) {
+  for (unsigned b = 0; b < bits; ++b) {
+    const unsigned at = lo + b;
+    const uint64_t bit = uint64_t(1) << (at % 64);
+    if (value >> b & 1) w[at / 64] |= bit;
+    else w[at / 64] &= ~bit;
+  }
+}
+
+uint64_t get_bits(const FifoWord& w, unsigned lo, unsigned bits) {
+  uint64_t v = 0;
+  for (unsigned b = 0; b < bits; ++b) v |= (w[(lo + b) / 64] >> ((lo + b) % 64) & 1) << b;
+  return v;
+}
+
+uint64_t chunk_word(uint32_t interval, uint32_t add, uint32_t count) {
+  return uint64_t(count & 0xFFFF) << 48 | uint64_t(add & 0xFFFF) << 32 | interval;
+}
+
+}  // namespace
+
+CpCore::CpCore(Params params)
+    : p_(params),
+      mask_tw_(mask(params.tw)),
+      seg_fifo_({1 + 4 + params.n + 24 * (params.n + 1), params.saw}),
+      run_fifo_({1 + 2 * params.n, 1}),
+      chunk_fifo_({64, params.caw}) {
+  if (p_.n < 1 || p_.n > kCoreMaxAxes) throw std::invalid_argument("cp_core: N must be 1 to 8");
+  if (p_.umax < p_.w || p_.umax > 16777214)
+    throw std::invalid_argument("cp_core: UMAX must be W to 2^24-2");
+  if (p_.kmax > 10) throw std::invalid_argument("cp_core: KMAX must be at most 10");
+  if (p_.pw < 32) throw std::invalid_argument("cp_core: PW must be at least 32");
+  if (p_.caw < 1 || p_.caw > 15) throw std::invalid_argument("cp_core: CAW must be 1 to 15");
+  const CpEngineParams ep{p_.w, p_.kmax, 1, p_.umax};
+  engines_.assign(2 * p_.n, CpEngine(ep));
+  pulses_.assign(p_.n, CpPulse({p_.tw, p_.pw, p_.step_pol_reset, p_.dir_pol_reset}));
+  reset_control(r_);
+}
+
+// Segment entry: v_i at 24·i, U at 24·N, dir at 24·(N+1), then k (4 bits), then end.
+FifoWord CpCore::pack_segment(const Segment& s) const {
+  FifoWord w{};
+  const unsigned n = p_.n;
+  for (unsigned a = 0; a < n; ++a) put_bits(w, 24 * a, 24, s.v[a]);
+  put_bits(w, 24 * n, 24, s.u);
+  put_bits(w, 24 * (n + 1), n, s.dir);
+  put_bits(w, 24 * (n + 1) + n, 4, s.k);
+  put_bits(w, 24 * (n + 1) + n + 4, 1, s.end);
+  return w;
+}
+
+CpCore::Segment CpCore::unpack_segment(const FifoWord& w) const {
+  Segment s;
+  const unsigned n = p_.n;
+  for (unsigned a = 0; a < n; ++a) s.v[a] = uint32_t(get_bits(w, 24 * a, 24));
+  s.u = uint32_t(get_bits(w, 24 * n, 24));
+  s.dir = uint32_t(get_bits(w, 24 * (n + 1), n));
+  s.k = uint32_t(get_bits(w, 24 * (n + 1) + n, 4));
+  s.end = get_bits(w, 24 * (n + 1) + n + 4, 1) != 0;
+  return s;
+}
+
+// A pulse timer's inputs are the core's configuration and direction registers.
+CpPulseIn CpCore::pulse_in(unsigned a, uint32_t step) const {
+  const AxisConfig& c = r_.cfg[a];
+  CpPulseIn pi;
+  pi.rst = in.rst;
+  pi.cfg_step_high = c.step_high;
+  pi.cfg_step_low = c.step_low;
+  pi.cfg_dir_setup = c.dir_setup;
+  pi.cfg_dir_hold = c.dir_hold;
+  pi.cfg_step_pol = c.step_pol;
+  pi.cfg_dir_pol = c.dir_pol;
+  pi.dir = (r_.dir >> a & 1) != 0;
+  pi.step = (step >> a & 1) != 0;
+  return pi;
+}
+
+CpCore::Out CpCore::outputs() const {
+  const Regs& q = r_;
+  Out o;
+  o.cmd_ready = cmd_ready();
+  o.rsp_valid = q.rsp_valid;
+  o.rsp_data = q.rsp_valid ? q.rsp_data : 0;
+  for (unsigned a = 0; a < p_.n; ++a) {
+    CpPulse pulse = pulses_[a];
+    pulse.in = pulse_in(a, 0);
+    const CpPulseOut po = pulse.outputs();
+    o.step |= uint32_t(po.step) << a;
+    o.dir |= uint32_t(po.dir) << a;
+    // Sign-extend from PW bits.
+    const unsigned shift = 64 - p_.pw;
+    o.position[a] = int64_t(po.position << shift) >> shift;
+  }
+  o.running = q.running;
+  o.fault = q.fault;
+  o.stretched = q.stretched;
+  o.err_code = q.err;
+  return o;
+}
+
+// READ's registers, as they are in the cycle the READ word is taken.
+uint32_t CpCore::read_register(uint32_t reg) const {
+  const Regs& q = r_;
+  switch (reg) {
+    case 0x00: {
+      const uint32_t chunks = std::min<uint32_t>(chunk_fifo_.outputs().level, 255);
+      const uint32_t segments =
+          (seg_fifo_.outputs().level + run_fifo_.outputs().level + q.cur_valid) & 0xFF;
+      return chunks << 24 | segments << 16 | (q.err & 0xFF) << 8 | uint32_t(in.estop) << 3 |
+             uint32_t(q.stretched) << 2 | uint32_t(q.fault) << 1 | uint32_t(q.running);
+    }
+    case 0x01: return q.stretch_count;
+    case 0x02: return q.moves_done;
+    case 0x03: return q.segments_done;
+    case 0x1F: return kCardId;
+    default:
+      if (reg >= 0x10 && reg < 0x10 + p_.n) return uint32_t(pulses_[reg - 0x10].outputs().position);
+      return 0;
+  }
+}
+
+// The command parser and validator: at most one word per cycle.
+void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
+  const Regs& q = r_;
+  const uint32_t word = in.cmd_data;
+  const bool keep = !q.discard && !q.fault;  // the segment being read is still good
+  switch (q.parse) {
+    case Parse::command: {
+      if (!c.take) break;
+      switch (word >> 28) {
+        case kOpSegment: {
+          d.seg = Segment{};
+          d.seg.end = (word >> 27 & 1) != 0;
+          d.seg.k = word >> 23 & 0xF;
+          d.chunks_left = word & 0xFFFF;
+          d.count_sum = 0;
+          d.discard = q.fault;
+          if (!q.fault) {
+            if (d.seg.k > p_.kmax) {
+              c.raise(CoreError::seg_k);
+              d.discard = true;
+            } else if (d.chunks_left == 0 || d.chunks_left > (1u << p_.caw)) {
+              c.raise(CoreError::seg_chunks);
+              d.discard = true;
+            }
+          }
+          d.parse = Parse::seg_h1;
+          break;
+        }
+        case kOpConfig: {
+          const uint32_t axis = word >> 24 & 0xF, field = word >> 20 & 0xF, value = word & 0xFFFF;
+          if (q.running) c.raise(CoreError::config_busy);
+          else if (axis >= p_.n || field > 4 || (field <= 1 && value == 0))
+            c.raise(CoreError::config_value);
+          else c.cfg_write = true;
+          break;
+        }
+        case kOpControl:
+          c.start = (word & 1) != 0;
+          c.abort = (word >> 1 & 1) != 0;
+          c.clear = (word >> 2 & 1) != 0;
+          break;
+        case kOpRead:
+          d.rsp_valid = true;
+          d.rsp_data = read_register(word & 0xFF);
+          d.parse = Parse::reply;
+          break;
+        default: c.raise(CoreError::bad_opcode); break;
+      }
+      break;
+    }
+    case Parse::seg_h1:
+      if (!c.take) break;
+      d.seg.dir = word >> 24 & mask(p_.n);
+      d.seg.u = word & 0xFFFFFF;
+      if (keep && (d.seg.u == 0 || d.seg.u > p_.umax)) {
+        c.raise(CoreError::seg_u);
+        d.discard = true;
+      }
+      d.v_index = 0;
+      d.parse = Parse::seg_v;
+      break;
+    case Parse::seg_v:
+      if (!c.take) break;
+      d.seg.v[q.v_index] = word & 0xFFFFFF;
+      if (keep && d.seg.v[q.v_index] > q.seg.u) {
+        c.raise(CoreError::seg_v_gt_u);
+        d.discard = true;
+      }
+      d.v_index = (q.v_index + 1) & 7;
+      // A segment announced with no chunk was refused at its header; it ends here.
+      if (q.v_index == p_.n - 1) d.parse = q.chunks_left == 0 ? Parse::command : Parse::chunk_interval;
+      break;
+    case Parse::chunk_interval:
+      if (!c.take) break;
+      d.interval = word;
+      d.parse = Parse::chunk_count;
+      break;
+    case Parse::chunk_count: {
+      if (!c.take) break;
+      const uint32_t count = word & 0xFFFF, add = word >> 16;
+      d.count = count;
+      d.add = add;
+      d.count_sum = (q.count_sum + count) & kMask34;
+      c.chunk_wr = keep;
+      if (keep && (q.interval == 0 || count == 0)) {
+        c.raise(CoreError::seg_chunk_zero);
+        d.discard = true;
+      }
+      d.product = 0;
+      d.mul_a = (count - 1) & 0xFFFF;
+      d.mul_b = uint64_t(int64_t(int16_t(add))) & kMask34;
+      d.parse = Parse::chunk_check;
+      break;
+    }
+    case Parse::chunk_check: parse_check_chunk(v, d, c); break;
+    case Parse::reply:
+      if (!q.rsp_valid || in.rsp_ready) d.parse = Parse::command;
+      break;
+  }
+}
+
+// The chunk's last delay interval + (count-1)·add, one multiplier bit per cycle; after
+// the segment's last chunk, the count sum and the commit.
+void CpCore::parse_check_chunk(const View& v, Regs& d, Cycle& c) const {
+  const Regs& q = r_;
+  if (q.mul_a != 0) {
+    if (q.mul_a & 1) d.product = (q.product + q.mul_b) & kMask34;
+    d.mul_a = q.mul_a >> 1;
+    d.mul_b = (q.mul_b << 1) & kMask34;
+    return;
+  }
+  bool raised = false;
+  const uint64_t last_delay = (uint64_t(q.interval) + q.product) & kMask34;
+  if (!q.discard && !q.fault && (last_delay >> 32 != 0 || last_delay == 0)) {
+    c.raise(CoreError::seg_delay);
+    d.discard = true;
+    raised = true;
+  }
+  d.chunks_left = (q.chunks_left - 1) & 0xFFFF;
+  const uint64_t seg_moves = (uint64_t(q.seg.u) << q.seg.k) & kMask34;
+  if (q.chunks_left != 1) {
+    d.parse = Parse::chunk_interval;
+  } else if (q.discard || q.fault || raised) {
+    c.chunk_rollback = true;
+    d.parse = Parse::command;
+  } else if (q.count_sum != seg_moves) {
+    c.raise(CoreError::seg_count_sum);
+    c.chunk_rollback = true;
+    d.parse = Parse::command;
+  } else if (!v.seg.full) {
+    // The whole segment passed: its entry and its chunks appear together.
+    c.seg_wr = true;
+    c.chunk_commit = true;
+    d.parse = Parse::command;
+  } else {
+    d.chunks_left = q.chunks_left;  // wait for room in the segment queue
+  }
+}
+
+// The builder: the segment queue's head into the idle lane's engines.
+void CpCore::build(const View& v, Regs& d, Cycle& c) const {
+  const Regs& q = r_;
+  bool lane_ready = true;
+  for (unsigned a = 0; a < p_.n; ++a) lane_ready = lane_ready && v.engine[q.build_lane * p_.n + a].in_ready;
+  if (v.seg.out_valid && !q.fault && lane_ready && !v.run.full) {
+    const Segment head = unpack_segment(v.seg.out_data);
+    c.build = true;
+    c.seg_pop = true;
+    c.run_wr = true;
+    uint32_t moving = 0;
+    for (unsigned a = 0; a < p_.n; ++a) moving |= uint32_t(head.v[a] != 0) << a;
+    put_bits(c.run_data, 0, p_.n, head.dir);
+    put_bits(c.run_data, p_.n, p_.n, moving);
+    put_bits(c.run_data, 2 * p_.n, 1, head.end);
+    d.build_lane = 1 - q.build_lane;
+  }
+  unsigned refused = 0;
+  for (unsigned l = 0; l < 2; ++l)
+    for (unsigned a = 0; a < p_.n; ++a)
+      if (v.engine[l * p_.n + a].err) refused |= 1u << l;
+  if (refused) c.raise(CoreError::seg_pattern);
+  d.bad_lanes = q.bad_lanes | refused;
+}
+
+// The timer (chunks), the runner (move events, segment ends, loads) and the CONTROL
+// word's start, abort and the E-stop.
+void CpCore::run(const View& v, Regs& d, Cycle& c) const {
+  const Regs& q = r_;
+  const unsigned lane0 = q.cur_lane * p_.n;
+  bool lane_valid = true;
+  uint32_t lane_move = 0, ready = 0;
+  for (unsigned a = 0; a < p_.n; ++a) {
+    lane_valid = lane_valid && v.engine[lane0 + a].move_valid;
+    lane_move |= uint32_t(v.engine[lane0 + a].move) << a;
+    ready |= uint32_t(v.pulse[a].ready) << a;
+  }
+  const bool lane_last = v.engine[lane0].move_last;
+  const bool due = q.chunk_loaded && q.elapsed >= q.delay;
+  const bool stopping = in.estop || c.abort;
+  c.fire = q.running && q.cur_valid && !stopping && due && lane_valid && (lane_move & ~ready) == 0;
+  c.step = c.fire ? lane_move : 0;
+
+  // A move is counted late once: the first cycle it is due and does not fire, or
+  // when it fires after its time without having waited due (its chunk came late).
+  c.stretch = q.running && due && !q.late && !stopping && (!c.fire || q.elapsed != q.delay);
+  if (c.stretch) {
+    d.stretched = true;
+    d.stretch_count = q.stretch_count + 1;
+    d.late = true;
+  }
+  if (c.fire) d.late = false;
+
+  d.elapsed = q.elapsed == ~0u ? q.elapsed : q.elapsed + 1;
+  auto load_chunk = [&] {
+    const uint64_t head = v.chunk.out_data[0];
+    c.chunk_pop = true;
+    d.delay = uint32_t(head);
+    d.timer_add = uint32_t(head >> 32) & 0xFFFF;
+    d.moves_left = uint32_t(head >> 48) & 0xFFFF;
+  };
+  if (!q.chunk_loaded && v.chunk.out_valid) {
+    load_chunk();
+    d.chunk_loaded = true;
+  }
+  const bool seg_done = c.fire && lane_last;
+  if (c.fire) {
+    d.moves_done = q.moves_done + 1;
+    d.elapsed = 1;
+    if (q.moves_left != 1) {
+      d.moves_left = (q.moves_left - 1) & 0xFFFF;
+      d.delay = q.delay + uint32_t(int32_t(int16_t(q.timer_add)));
+    } else if (v.chunk.out_valid) {
+      load_chunk();
+    } else {
+      d.chunk_loaded = false;
+    }
+  }
+  if (seg_done) {
+    d.segments_done = q.segments_done + 1;
+    d.cur_valid = false;
+    d.cur_lane = 1 - q.cur_lane;
+    if (q.cur_end) {
+      d.running = false;
+    } else if (v.run.level == 0 && v.seg.level == 0 && !q.fault) {
+      d.running = false;
+      c.raise(CoreError::underrun);
+    }
+  }
+  // Load the next built segment; its moving axes take their directions.
+  if ((!q.cur_valid || seg_done) && v.run.out_valid && !q.fault) {
+    const FifoWord& head = v.run.out_data;
+    const uint32_t dir = uint32_t(get_bits(head, 0, p_.n));
+    const uint32_t moving = uint32_t(get_bits(head, p_.n, p_.n));
+    c.run_pop = true;
+    d.cur_valid = true;
+    d.cur_end = get_bits(head, 2 * p_.n, 1) != 0;
+    d.dir = (q.dir & ~moving) | (dir & moving);
+  }
+  if (c.start && !q.fault && !q.running) {
+    d.running = true;
+    d.elapsed = 1;
+  }
+  if (c.abort) c.raise(CoreError::abort);
+  if (in.estop) c.raise(CoreError::estop);
+  c.flush = stopping || (q.fault && !(q.running && q.cur_valid && !seg_done));
+}
+
+// CLEAR drops what was latched before this cycle; then the first fault latches. A
+// latched fault lets the running segment complete unless its own lane refused it;
+// otherwise (and at E-stop or abort) everything queued is flushed.
+void CpCore::latch_faults(Regs& d, Cycle& c) const {
+  const Regs& q = r_;
+  const bool clearing = c.clear && !in.estop;
+  if (clearing) {
+    d.fault = false;
+    d.err = 0;
+    d.stretched = c.stretch;  // a stretch in this very cycle stays
+  }
+  if (c.fault_set && (!q.fault || clearing)) {
+    d.fault = true;
+    d.err = c.fault_code;
+  }
+  const bool stuck = q.cur_valid && (q.bad_lanes >> q.cur_lane & 1);
+  c.flush = c.flush || stuck;
+  if (c.flush) {
+    d.running = false;
+    d.cur_valid = false;
+    d.chunk_loaded = false;
+    d.cur_lane = 0;
+    d.build_lane = 0;
+    d.late = false;
+    d.bad_lanes = 0;
+  }
+}
+
+void CpCore::reset_control(Regs& d) const {
+  d.parse = Parse::command;
+  d.discard = d.rsp_valid = d.running = d.cur_valid = false;
+  d.cur_lane = d.build_lane = 0;
+  d.chunk_loaded = d.late = false;
+  d.bad_lanes = 0;
+  d.fault = false;
+  d.err = 0;
+  d.stretched = false;
+  d.stretch_count = d.moves_done = d.segments_done = 0;
+  d.dir = 0;
+  for (AxisConfig& c : d.cfg) {
+    c.step_high = p_.step_high_reset & mask_tw_;
+    c.step_low = p_.step_low_reset & mask_tw_;
+    c.dir_setup = p_.dir_setup_reset & mask_tw_;
+    c.dir_hold = p_.dir_hold_reset & mask_tw_;
+    c.step_pol = p_.step_pol_reset;
+    c.dir_pol = p_.dir_pol_reset;
+  }
+}
+
+bool CpCore::cmd_ready() const {
+  switch (r_.parse) {
+    case Parse::command:
+    case Parse::seg_h1:
+    case Parse::seg_v:
+    case Parse::chunk_interval: return true;
+    case Parse::chunk_count: return r_.discard || r_.fault || !chunk_fifo_.outputs().full;
+    default: return false;  // checking a chunk, or a reply waits
+  }
+}
+
+void CpCore::tick() {
+  const Regs& q = r_;
+  const unsigned n = p_.n;
+
+  View v;
+  v.seg = seg_fifo_.outputs();
+  v.run = run_fifo_.outputs();
+  v.chunk = chunk_fifo_.outputs();
+  for (unsigned e = 0; e < 2 * n; ++e) v.engine[e] = engines_[e].outputs();
+  for (unsigned a = 0; a < n; ++a) {
+    CpPulse pulse = pulses_[a];
+    pulse.in = pulse_in(a, 0);
+    v.pulse[a] = pulse.outputs();
+  }
+
+  Regs d = q;
+  Cycle c;
+  c.take = in.cmd_valid && cmd_ready();
+  d.rsp_valid = q.rsp_valid && !in.rsp_ready;
+  parse(v, d, c);
+  build(v, d, c);
+  run(v, d, c);
+  latch_faults(d, c);
+
+  // The sub-blocks' edge.
+  const Segment head = unpack_segment(v.seg.out_data);
+  for (unsigned l = 0; l < 2; ++l) {
+    for (unsigned a = 0; a < n; ++a) {
+      CpEngine& e = engines_[l * n + a];
+      e.in.rst = in.rst || c.flush;
+      e.in.in_valid = c.build && l == q.build_lane;
+      e.in.in_u = head.u;
+      e.in.in_v = head.v[a];
+      e.in.in_k = head.k;
+      e.in.in_rep = 1;
+      e.in.move_ready = c.fire && l == q.cur_lane;
+      e.tick();
+    }
+  }
+  for (unsigned a = 0; a < n; ++a) {
+    pulses_[a].in = pulse_in(a, c.step);
+    pulses_[a].tick();
+  }
+  auto edge = [&](CpFifo& f, bool wr, const FifoWord& data, bool commit, bool rollback, bool pop) {
+    f.in.rst = in.rst;
+    f.in.clear = c.flush;
+    f.in.wr = wr;
+    f.in.wr_data = data;
+    f.in.commit = commit;
+    f.in.rollback = rollback;
+    f.in.out_ready = pop;
+    f.tick();
+  };
+  edge(seg_fifo_, c.seg_wr, pack_segment(d.seg), true, false, c.seg_pop);
+  edge(run_fifo_, c.run_wr, c.run_data, true, false, c.run_pop);
+  edge(chunk_fifo_, c.chunk_wr, FifoWord{chunk_word(q.interval, d.add, d.count)}, c.chunk_commit,
+       c.chunk_rollback, c.chunk_pop);
+
+  // The core's own registers: reset clears the control state; the datapath loads.
+  if (in.rst) {
+    reset_control(d);
+    r_ = d;
+    return;
+  }
+  if (c.cfg_write) {
+    const uint32_t word = in.cmd_data;
+    AxisConfig& cfg = d.cfg[word >> 24 & 0xF];
+    const uint32_t value = word & mask_tw_;
+    switch (word >> 20 & 0xF) {
+      case 0: cfg.step_high = value; break;
+      case 1: cfg.step_low = value; break;
+      case 2: cfg.dir_setup = value; break;
+      case 3: cfg.dir_hold = value; break;
+      default:
+        cfg.step_pol = (word & 1) != 0;
+        cfg.dir_pol = (word >> 1 & 1) != 0;
+        break;
+    }
+  }
+  r_ = d;
+}
+
+}  // namespace cpstep::model

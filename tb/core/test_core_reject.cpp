@@ -1,0 +1,203 @@
+// cp_core bad input (docs/CORE.md "Validation", codes 1–8 and 12–14): the bad
+// command makes no move, its code latches, nothing after it runs until CLEAR, and
+// what came before it behaves as the doc says — a segment already running completes,
+// queued ones are flushed. RTL vs model in lockstep, the pin checker on.
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <numeric>
+#include <string>
+
+#include "core/core_bench.h"
+#include "sim/core_configs.h"
+
+namespace cpstep::tb {
+namespace {
+
+using Core = sim::CoreDefault;
+using Harness = CoreHarness<Core>;
+
+std::vector<uint32_t> words_of(uint32_t u, unsigned k, std::vector<uint32_t> v,
+                               std::vector<card::WireChunk> chunks) {
+  card::WireSegment s;
+  s.u = u;
+  s.k = k;
+  s.v = std::move(v);
+  s.dir_positive = {true, false, true, false};
+  s.chunks = std::move(chunks);
+  std::vector<uint32_t> w;
+  card::encode_segment(s, w);
+  return w;
+}
+std::vector<uint32_t> config_word(unsigned axis, unsigned field, uint32_t value) {
+  return {0x2u << 28 | axis << 24 | field << 20 | value};
+}
+
+struct BadInput {
+  const char* name;
+  uint32_t code;
+  std::function<std::vector<uint32_t>()> words;
+  bool only_while_running = false;
+  // CONFIG while running is CONFIG_BUSY whatever its value.
+  uint32_t code_while_running() const { return std::string(name).rfind("config", 0) == 0 ? 13 : code; }
+};
+
+std::vector<BadInput> bad_inputs() {
+  const auto p = Core::model_params();
+  std::vector<card::WireChunk> many(65, card::WireChunk{10, 1, 0});
+  return {
+      {"U_zero", 1, [] { return words_of(0, 0, {0, 0, 0, 0}, {{10, 1, 0}}); }},
+      {"U_above_UMAX", 1, [p] { return words_of(p.umax + 1, 0, {p.umax + 1, 0, 0, 0}, {{10, 1, 0}}); }},
+      {"v_above_U", 2, [] { return words_of(10, 0, {10, 0, 11, 0}, {{10, 10, 0}}); }},
+      {"k_above_KMAX", 3, [p] { return words_of(2, p.kmax + 1, {2, 1, 0, 0}, {{10, uint16_t(2u << p.kmax), 0}}); }},
+      {"no_chunks", 4, [] { return words_of(10, 0, {10, 3, 0, 0}, {}); }},
+      {"more_chunks_than_the_queue", 4, [many] { return words_of(65, 0, {65, 3, 0, 0}, many); }},
+      {"interval_zero", 5, [] { return words_of(10, 0, {10, 3, 0, 0}, {{0, 10, 0}}); }},
+      {"count_zero", 5, [] { return words_of(10, 0, {10, 3, 0, 0}, {{10, 10, 0}, {10, 0, 0}}); }},
+      {"delay_negative", 6, [] { return words_of(10, 0, {10, 3, 0, 0}, {{5, 10, -1}}); }},
+      {"delay_reaches_zero", 6, [] { return words_of(10, 0, {10, 3, 0, 0}, {{9, 10, -1}}); }},
+      {"delay_above_2pow32", 6, [] { return words_of(2, 0, {2, 1, 0, 0}, {{0xFFFFFFFFu, 2, 1}}); }},
+      {"counts_short", 7, [] { return words_of(10, 0, {10, 3, 0, 0}, {{10, 9, 0}}); }},
+      {"counts_long", 7, [] { return words_of(10, 0, {10, 3, 0, 0}, {{10, 6, 0}, {10, 5, 0}}); }},
+      {"counts_U_not_U_times_2powk", 7, [] { return words_of(3, 2, {3, 1, 0, 0}, {{10, 3, 0}}); }},
+      {"pattern_above_W", 8,
+       [p] { return words_of(p.w + 1, 0, {p.w + 1, 1, 0, 0}, {{5, uint16_t(p.w + 1), 0}}); }},
+      {"opcode_0", 12, [] { return std::vector<uint32_t>{0x00000000u}; }},
+      {"opcode_5", 12, [] { return std::vector<uint32_t>{0x50000001u}; }},
+      {"opcode_F", 12, [] { return std::vector<uint32_t>{0xF1234567u}; }},
+      {"config_while_running", 13, [] { return config_word(0, 0, 5); }, true},
+      {"config_step_high_0", 14, [] { return config_word(1, 0, 0); }},
+      {"config_step_low_0", 14, [] { return config_word(2, 1, 0); }},
+      {"config_axis_out_of_range", 14, [] { return config_word(4, 0, 3); }},
+      {"config_unknown_field", 14, [] { return config_word(0, 5, 3); }},
+  };
+}
+
+void expect_stopped_with(Harness& h, uint32_t code, const std::string& where) {
+  const card::Status st = h.status();
+  EXPECT_TRUE(st.fault) << where;
+  EXPECT_EQ(st.err_code, code) << where << ": error code";
+  EXPECT_FALSE(st.running) << where;
+  EXPECT_EQ(st.segments_queued, 0u) << where << ": queue not flushed";
+  EXPECT_EQ(st.chunks_queued, 0u) << where << ": chunks not flushed";
+  h.expect_counters(where);
+}
+
+void expect_runs_after_clear(Harness& h, const std::string& where) {
+  h.expecting = true;
+  h.control(false, false, true);
+  ASSERT_FALSE(h.status().fault) << where << ": CLEAR did not clear";
+  JobShape shape;
+  shape.max_moves = 200;
+  h.play(h.gen.job(2, shape));
+  h.expect_consistent(where + ", the job after CLEAR");
+}
+
+// Before START: a good segment, the bad input, a good segment, START. The fault flushes
+// the queue at once; START is refused; no STEP pulse at all.
+TEST(CoreReject, BeforeStartNothingRuns) {
+  for (const BadInput& bad : bad_inputs()) {
+    if (bad.only_while_running) continue;
+    Harness h(std::string("reject_queued_") + bad.name, 1);
+    const std::string where = std::string(bad.name) + " (queued)";
+    JobShape shape;
+    shape.max_moves = 100;
+    h.segment(h.gen.segment(shape, false), false);
+    h.send(bad.words());
+    h.segment(h.gen.segment(shape, true), false);
+    ASSERT_TRUE(h.wait_for([](const model::CpCoreOut& o) { return o.fault; }, 5000))
+        << where << ": no fault latched";
+    h.control(true, false, false);
+    h.idle(300);
+    EXPECT_EQ(h.chk.moves(), 0u) << where;
+    expect_stopped_with(h, bad.code, where);
+    expect_runs_after_clear(h, where);
+    if (HasFailure()) return;
+  }
+}
+
+// While a segment runs: it completes exactly; the bad input, a good segment after it
+// and a second error make no move; the first code stays.
+TEST(CoreReject, WhileRunningTheRunningSegmentCompletes) {
+  for (const BadInput& bad : bad_inputs()) {
+    Harness h(std::string("reject_running_") + bad.name, 2);
+    const std::string where = std::string(bad.name) + " (running)";
+    card::WireSegment a;
+    ASSERT_TRUE(h.gen.from_deltas({400, -130, 0, 57}, a));
+    a.chunks = {{25, 400, 0}};
+    h.segment(a);
+    h.control(true, false, false);
+    h.idle(200);
+    h.expecting = false;
+    h.send(bad.words());
+    // (a pattern is refused during its build, W cycles later)
+    ASSERT_TRUE(h.wait_for([](const model::CpCoreOut& o) { return o.fault; }, 5000))
+        << where << ": no fault latched";
+    JobShape shape;
+    shape.max_moves = 100;
+    h.segment(h.gen.segment(shape, true), false);
+    h.send({0xE0000000u});  // another error: the first code stays
+    h.finish();
+    h.idle(300);
+    EXPECT_EQ(h.chk.segments_done(), 1u) << where << ": the running segment did not complete";
+    EXPECT_EQ(h.chk.position(0), 400) << where;
+    EXPECT_EQ(h.chk.position(1), -130) << where;
+    expect_stopped_with(h, bad.code_while_running(), where);
+    expect_runs_after_clear(h, where);
+    if (HasFailure()) return;
+  }
+}
+
+// A pattern longer than W as the first segment of a run: it is loaded for running
+// before its build refuses it; the run stops without a move (and does not hang).
+TEST(CoreReject, PatternAboveWAsTheRunningSegmentStopsTheRun) {
+  Harness h("reject_pattern_first", 3);
+  const auto p = Core::model_params();
+  h.control(true, false, false);
+  h.send(words_of(p.w + 1, 0, {p.w + 1, 1, 0, 0}, {{5, uint16_t(p.w + 1), 0}}));
+  ASSERT_TRUE(h.wait_for([](const model::CpCoreOut& o) { return o.fault; }, 5000)) << "no fault";
+  h.idle(50);
+  EXPECT_EQ(h.chk.moves(), 0u);
+  h.stretch_slack = 1;  // its first move was due, and counted late, while it built
+  expect_stopped_with(h, 8, "pattern above W, first segment");
+  expect_runs_after_clear(h, "pattern above W, first segment");
+}
+
+// The limits themselves are accepted: U/gcd = W, k = KMAX, 2^CAW chunks (these run),
+// U = UMAX and a last delay of 2^32-1 (queued, then aborted).
+TEST(CoreReject, LimitsAreAccepted) {
+  Harness h("reject_limits", 4);
+  const auto p = Core::model_params();
+  card::WireSegment s;
+  ASSERT_TRUE(h.gen.from_deltas({int64_t(p.w), -1, int64_t(p.w), 0}, s));
+  ASSERT_EQ(s.u / std::gcd(s.u, s.v[1]), p.w);
+  s.chunks = {{1, uint16_t(p.w), 0}};
+  h.segment(s);
+  ASSERT_TRUE(h.gen.from_deltas({int64_t(1) << p.kmax, -(int64_t(1) << p.kmax), 0, 0}, s));
+  ASSERT_EQ(s.k, p.kmax);
+  s.chunks = {{3, uint16_t(1u << p.kmax), 0}};
+  h.segment(s);
+  ASSERT_TRUE(h.gen.from_deltas({64, 0, 0, 13}, s));
+  s.chunks.assign(64, card::WireChunk{2, 1, 0});
+  s.end = true;
+  h.segment(s);
+  h.control(true, false, false);
+  h.finish();
+  h.expect_consistent("limits");
+  // Not run: U = UMAX, and a chunk whose last delay is 2^32 - 1.
+  h.expecting = false;
+  std::vector<card::WireChunk> umax_chunks(p.umax / 65535, card::WireChunk{1, 65535, 0});
+  umax_chunks.push_back({1, uint16_t(p.umax % 65535), 0});
+  h.send(words_of(p.umax, 0, {p.umax, 0, p.umax / 5, 0}, umax_chunks));  // U/g = 5
+  h.send(words_of(2, 0, {2, 1, 0, 0}, {{0xFFFFFFFEu, 2, 1}}));
+  h.idle(100);
+  const card::Status st = h.status();
+  EXPECT_FALSE(st.fault) << "code " << st.err_code;
+  EXPECT_EQ(st.segments_queued, 2u);
+  h.control(false, true, false);
+  h.control(false, false, true);
+  EXPECT_EQ(h.status().segments_queued, 0u);
+}
+
+}  // namespace
+}  // namespace cpstep::tb
