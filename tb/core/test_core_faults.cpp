@@ -3,6 +3,7 @@
 // from the pins and the registers alone.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cstdio>
 
 #include "core/core_bench.h"
@@ -216,6 +217,43 @@ TEST(CoreFaults, Underrun) {
     h.hook = nullptr;
     h.expect_counters(where + " (faulted)");
     expect_recovers(h, where);
+    if (HasFailure()) return;
+  }
+}
+
+// The underrun race, cycle by cycle: the next segment arrives just before or just
+// after the last move of one without the end flag. docs/CORE.md: it is an underrun
+// exactly when the next segment is committed in the cycle of that last move or later
+// (a segment's commit is b + 1 cycles after its last word, b = bit length of count-1),
+// whether or not it has been built yet.
+TEST(CoreFaults, UnderrunDecidedByTheCommitCycle) {
+  for (int offset = -8; offset <= 3; ++offset) {
+    Harness h("underrun_race", 1);
+    h.word_gap = 0;
+    const std::string where = "commit " + std::to_string(offset) + " cycles from the last move";
+    h.segment(seg_of({20, 7, 0, 0}, {{10, 19, 0}, {300, 1, 0}}, false));
+    h.idle(100);  // built before START, so its moves are on time
+    const uint64_t start = h.control(true, false, false);
+    const uint64_t last_fire = start + 19 * 10 + 300;  // leading edge one cycle later
+    const card::WireSegment next = seg_of({5, 0, -2, 0}, {{10, 5, 0}}, true);
+    const uint64_t commit = last_fire + offset;
+    const uint64_t words = 2 + 4 + 2, check = std::bit_width(5u - 1) + 1;
+    h.idle(commit - check - (words - 1) - h.ls.cycle());
+    const bool underrun = commit >= last_fire;
+    uint64_t first_end = 0;
+    h.hook = [&](uint64_t c, const model::CpCoreIn&, const model::CpCoreOut&) {
+      if (!first_end && h.chk.segments_done() == 1) first_end = c;
+    };
+    const uint64_t last_word = h.segment(next, !underrun);
+    ASSERT_EQ(last_word + check, commit) << where << ": bench timing";
+    h.finish(20000);
+    h.idle(20);
+    EXPECT_TRUE(h.chk.errors().empty()) << where << ":\n" << h.chk.report();
+    const card::Status st = h.status();
+    EXPECT_EQ(st.fault, underrun) << where << ": code " << st.err_code;
+    EXPECT_EQ(h.chk.segments_done(), underrun ? 1u : 2u) << where;
+    EXPECT_EQ(first_end, last_fire + 1) << where << ": the first segment's last move not on time";
+    if (underrun) EXPECT_EQ(st.err_code, 9u) << where;
     if (HasFailure()) return;
   }
 }
