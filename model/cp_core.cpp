@@ -43,6 +43,7 @@ CpCore::CpCore(Params params)
   if (p_.umax < p_.w || p_.umax > 16777214)
     throw std::invalid_argument("cp_core: UMAX must be W to 2^24-2");
   if (p_.kmax > 10) throw std::invalid_argument("cp_core: KMAX must be at most 10");
+  if (p_.tw < 1 || p_.tw > 16) throw std::invalid_argument("cp_core: TW must be 1 to 16");
   if (p_.pw < 32) throw std::invalid_argument("cp_core: PW must be at least 32");
   if (p_.caw < 1 || p_.caw > 15) throw std::invalid_argument("cp_core: CAW must be 1 to 15");
   const CpEngineParams ep{p_.w, p_.kmax, 1, p_.umax};
@@ -165,7 +166,8 @@ void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
         case kOpConfig: {
           const uint32_t axis = word >> 24 & 0xF, field = word >> 20 & 0xF, value = word & 0xFFFF;
           if (q.running) c.raise(CoreError::config_busy);
-          else if (axis >= p_.n || field > 4 || (field <= 1 && value == 0))
+          else if (axis >= p_.n || field > 4 || (field <= 1 && value == 0) ||
+                   (field <= 3 && value > mask_tw_))  // must fit the TW-bit timing field
             c.raise(CoreError::config_value);
           else c.cfg_write = true;
           break;

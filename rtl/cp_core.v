@@ -89,6 +89,8 @@ localparam [7:0] E_ABORT          = 8'd11;
 localparam [7:0] E_BAD_OPCODE     = 8'd12;
 localparam [7:0] E_CONFIG_BUSY    = 8'd13;
 localparam [7:0] E_CONFIG_VALUE   = 8'd14;
+// The bits of a 16-bit CONFIG value that a TW-bit timing field holds.
+localparam [15:0] TMASK = (TW >= 16) ? 16'hFFFF : ((16'd1 << TW) - 16'd1);
 
 localparam [2:0] P_CMD  = 3'd0;   // first word of a command
 localparam [2:0] P_H1   = 3'd1;   // segment: dir and U
@@ -107,6 +109,9 @@ generate
     end
     if (KMAX > 10) begin : g_check_kmax
         cp_core_parameter_KMAX_must_be_at_most_10 u_bad ();
+    end
+    if (TW < 1 || TW > 16) begin : g_check_tw
+        cp_core_parameter_TW_must_be_1_to_16 u_bad ();
     end
     if (PW < 32) begin : g_check_pw
         cp_core_parameter_PW_must_be_at_least_32 u_bad ();
@@ -354,7 +359,8 @@ always @* begin
             if (running_q) begin
                 fault_set = 1'b1;  fault_code = E_CONFIG_BUSY;
             end else if ({28'd0, cmd_data_i[27:24]} >= N || cmd_data_i[23:20] > 4'd4 ||
-                         (cmd_data_i[23:20] <= 4'd1 && cmd_data_i[15:0] == 16'd0)) begin
+                         (cmd_data_i[23:20] <= 4'd1 && cmd_data_i[15:0] == 16'd0) ||
+                         (cmd_data_i[23:20] <= 4'd3 && (cmd_data_i[15:0] & ~TMASK) != 16'd0)) begin
                 fault_set = 1'b1;  fault_code = E_CONFIG_VALUE;
             end else begin
                 cfg_write = 1'b1;

@@ -19,6 +19,7 @@ struct CoreSmall : CorePortBase<Vcp_core_small, 2> {
     p.kmax = 3;
     p.caw = 3;
     p.saw = 2;
+    p.tw = 8;
     p.step_pol_reset = false;
     p.dir_pol_reset = false;
     return p;

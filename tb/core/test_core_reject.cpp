@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/core_bench.h"
+#include "core/core_small.h"
 #include "sim/core_configs.h"
 
 namespace cpstep::tb {
@@ -197,6 +198,34 @@ TEST(CoreReject, LimitsAreAccepted) {
   h.control(false, true, false);
   h.control(false, false, true);
   EXPECT_EQ(h.status().segments_queued, 0u);
+}
+
+}  // namespace
+}  // namespace cpstep::tb
+
+namespace cpstep::tb {
+namespace {
+
+// A pulse timing value must fit the TW-bit field; it is refused, not truncated.
+TEST(CoreReject, TimingValueWiderThanTheFieldOnASmallCore) {
+  ASSERT_EQ(sim::CoreSmall::model_params().tw, 8u);
+  Lockstep<sim::CoreSmall> ls("reject_tw");
+  sim::CoreDriver<Lockstep<sim::CoreSmall>> drv(ls);
+  drv.reset();
+  drv.send(config_word(0, 0, 255));  // 255 fits 8 bits
+  drv.idle(2);
+  EXPECT_FALSE(drv.last().fault);
+  for (const unsigned field : {0u, 1u, 2u, 3u}) {
+    drv.send(config_word(1, field, 256));
+    drv.idle(2);
+    EXPECT_TRUE(drv.last().fault) << "field " << field;
+    EXPECT_EQ(drv.last().err_code, uint32_t(model::CoreError::config_value)) << "field " << field;
+    std::vector<uint32_t> clear;
+    card::encode_control(false, false, true, clear);
+    drv.send(clear);
+    drv.idle(2);
+    EXPECT_FALSE(drv.last().fault);
+  }
 }
 
 }  // namespace
