@@ -42,6 +42,13 @@ std::vector<WireChunk> take_moves(std::vector<plan::Chunk>& chunks, size_t& next
   return out;
 }
 
+// Moves covered by at most `limit` chunks from chunks[next] on.
+uint64_t moves_in_chunks(const std::vector<plan::Chunk>& chunks, size_t next, size_t limit) {
+  uint64_t moves = 0;
+  for (size_t c = next; c < chunks.size() && c < next + limit; ++c) moves += chunks[c].count;
+  return moves;
+}
+
 }  // namespace
 
 plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& file,
@@ -76,7 +83,21 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
     }
     size_t next_chunk = 0;
     for (uint64_t done = 0; done < T;) {
-      const uint64_t n = std::min(piece, T - done);
+      uint64_t n = std::min(piece, T - done);
+      // The card takes a segment only when all its chunks fit its chunk queue
+      // at once: cut where the next chunk_queue chunks end, at whole periods.
+      const uint64_t fit = moves_in_chunks(chunks, next_chunk, card.chunk_queue);
+      if (fit < n) {
+        n = fit / period * period;
+        if (n == 0) {
+          r.errors.push_back(error(file, seg.loc, fmt::format("segment of {} moves needs more than the "
+                                                        "card's {} timing chunks within one pattern "
+                                                        "period of {} moves, so it cannot be cut into "
+                                                        "segments the card accepts",
+                                                        T, card.chunk_queue, period)));
+          return r;
+        }
+      }
       // Whole periods: axis a makes v_a steps every u_a moves.
       std::array<uint64_t, plan::kAxes> d{};
       uint64_t g = 0;

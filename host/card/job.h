@@ -33,9 +33,12 @@ struct WireJob {
   size_t start_after = 0;       // START is sent after this many segments
 };
 
-// Converts the planned card segments. A segment whose U exceeds UMAX is split
-// at multiples of its patterns' common period, so every piece replays whole
-// patterns and nothing moves off the planned lattice.
+// Converts the planned card segments. A segment whose U exceeds UMAX, or whose
+// chunks do not fit the card's chunk queue at once, is split at multiples of
+// its patterns' common period, so every piece replays whole patterns and
+// nothing moves off the planned lattice; the chunks are cut with it, so the
+// move times stay exactly the planned ones. A segment that cannot be cut so
+// is an error.
 // `file` names the G-code file in errors.
 plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& file,
                               const CardLimits& card = {});

@@ -1,5 +1,7 @@
 #include "card/protocol.h"
 
+#include <iterator>
+
 namespace cpstep::card {
 
 void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
@@ -31,6 +33,28 @@ void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out) {
 Status decode_status(uint32_t w) {
   return {bool(w & 1), bool(w >> 1 & 1), bool(w >> 2 & 1), bool(w >> 3 & 1),
           w >> 8 & 0xFF, w >> 16 & 0xFF, w >> 24 & 0xFF};
+}
+
+ErrorName error_name(uint32_t code) {
+  static const ErrorName names[] = {
+      {"NONE", "no fault"},
+      {"SEG_U", "U = 0 or U > UMAX"},
+      {"SEG_V_GT_U", "some v_i > U"},
+      {"SEG_K", "k > KMAX"},
+      {"SEG_CHUNKS", "no chunk, or more than the chunk queue holds"},
+      {"SEG_CHUNK_ZERO", "a chunk with interval 0 or count 0"},
+      {"SEG_DELAY", "a chunk's delay interval + j*add outside 1..2^32-1"},
+      {"SEG_COUNT_SUM", "the chunk counts do not sum to U*2^k"},
+      {"SEG_PATTERN", "some U/gcd(U, v_i) exceeds the pattern capacity W"},
+      {"UNDERRUN", "a segment without the end flag ended and no complete segment followed"},
+      {"ESTOP", "the E-stop input"},
+      {"ABORT", "CONTROL abort"},
+      {"BAD_OPCODE", "an unknown command opcode"},
+      {"CONFIG_BUSY", "CONFIG while running"},
+      {"CONFIG_VALUE", "a step high or step low time of 0"},
+  };
+  if (code < std::size(names)) return names[code];
+  return {"UNKNOWN", "an error code this program does not know"};
 }
 
 }  // namespace cpstep::card

@@ -47,4 +47,12 @@ struct Status {
 };
 Status decode_status(uint32_t word);
 
+// The card's error codes (docs/CORE.md, "Validation: whole segments or nothing")
+// by name, e.g. "UNDERRUN", with a one-line meaning; "UNKNOWN" past the table.
+struct ErrorName {
+  const char* name;
+  const char* meaning;
+};
+ErrorName error_name(uint32_t code);
+
 }  // namespace cpstep::card

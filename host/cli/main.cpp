@@ -2,9 +2,12 @@
 //
 //   cpstep moves U V [--k K] [--rep R] [--engine rtl|model|oracle] [--stats] [--table]
 //   cpstep sim FILE [--vcd OUT.vcd] [--max-cycles N] [--clock-hz HZ]
+//   cpstep run JOB.ngc --machine M.toml [--transport sim|file] [--out F] [--vcd F] [--report F] [--plots DIR]
+//   cpstep plan JOB.ngc --machine M.toml [-o OUT.bin]
 //
-// Exit codes: 0 success, 2 refused input (one line on stderr), 1 internal error
-// (moves) or a run that ended with a fault (sim, docs/SIM.md).
+// Exit codes: 0 success, 2 refused input (file:line:col or one line on stderr),
+// 1 internal error (moves) or a run that ended with a fault (sim, docs/SIM.md;
+// run, docs/HOST.md).
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
@@ -12,6 +15,7 @@
 #include <iostream>
 #include <optional>
 
+#include "cli/run_command.h"
 #include "cli/sim_command.h"
 #include "model/oracle.h"
 #include "sim/engine_configs.h"
@@ -134,6 +138,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000'000)));
 
+  cli::RunOptions ro;
+  auto* runc = cli::add_run_command(app, ro);
+  cli::PlanOptions po;
+  auto* planc = cli::add_plan_command(app, po);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -143,6 +152,8 @@ int main(int argc, char** argv) {
   try {
     if (*moves) return run_moves(mo);
     if (*simc) return cli::run_sim(so);
+    if (*runc) return cli::run_job(ro);
+    if (*planc) return cli::plan_only(po);
   } catch (const std::exception& e) {
     fmt::print(stderr, "cpstep: internal error: {}\n", e.what());
     return 1;

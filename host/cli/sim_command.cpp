@@ -25,34 +25,6 @@ constexpr int kExitRefused = 2;
 // given up: far beyond any build, so only full queues with no motion end up here.
 constexpr uint64_t kStoppedStallCycles = 100'000;
 
-struct ErrorName {
-  const char* name;
-  const char* meaning;
-};
-
-// docs/CORE.md, "Validation: whole segments or nothing".
-ErrorName error_name(uint32_t code) {
-  static const ErrorName names[] = {
-      {"NONE", "no fault"},
-      {"SEG_U", "U = 0 or U > UMAX"},
-      {"SEG_V_GT_U", "some v_i > U"},
-      {"SEG_K", "k > KMAX"},
-      {"SEG_CHUNKS", "no chunk, or more than the chunk queue holds"},
-      {"SEG_CHUNK_ZERO", "a chunk with interval 0 or count 0"},
-      {"SEG_DELAY", "a chunk's delay interval + j*add outside 1..2^32-1"},
-      {"SEG_COUNT_SUM", "the chunk counts do not sum to U*2^k"},
-      {"SEG_PATTERN", "some U/gcd(U, v_i) exceeds the pattern capacity W"},
-      {"UNDERRUN", "a segment without the end flag ended and no complete segment followed"},
-      {"ESTOP", "the E-stop input"},
-      {"ABORT", "CONTROL abort"},
-      {"BAD_OPCODE", "an unknown command opcode"},
-      {"CONFIG_BUSY", "CONFIG while running"},
-      {"CONFIG_VALUE", "a step high or step low time of 0"},
-  };
-  if (code < std::size(names)) return names[code];
-  return {"UNKNOWN", "an error code this program does not know"};
-}
-
 // Why a run stopped before the script's end.
 struct Stopped {
   std::string why;
@@ -102,7 +74,7 @@ class SimRun {
     std::string pos = "position";
     for (unsigned a = 0; a < sim::kSimAxes; ++a)
       pos += fmt::format(" {}={}", sim::kSimAxisNames[a], int32_t(drv_.read(card::Register::position0, a)));
-    const ErrorName err = error_name(st.err_code);
+    const card::ErrorName err = card::error_name(st.err_code);
     fmt::print("{}\n", pos);
     fmt::print("status running={:d} fault={:d} error={} stretched={:d} stretch_count={}\n", st.running,
                st.fault, err.name, st.stretched, stretch);
@@ -128,13 +100,7 @@ class SimRun {
       vcd_->set(pins_[sim::kSimAxes + a], out.dir >> a & 1);
     }
     vcd_->set(estop_signal_, in.estop);
-    vcd_->sample(picoseconds(cycle));
-  }
-
-  // Start of clock cycle `cycle` in picoseconds, rounded to the nearest.
-  uint64_t picoseconds(uint64_t cycle) const {
-    __extension__ using u128 = unsigned __int128;
-    return uint64_t((u128(cycle) * 1'000'000'000'000u + o_.clock_hz / 2) / o_.clock_hz);
+    vcd_->sample(sim::cycle_start_ps(cycle, o_.clock_hz));
   }
 
   std::string where() const {

@@ -17,12 +17,15 @@ struct AxisPeaks {
 // their directions (+1/-1). The position is the piecewise-linear curve
 // through (times[k], steps after event k), starting at 0 steps at times[0]
 // minus nothing (the curve starts at the first event), resampled every
-// `window_s` seconds; derivatives are central differences on that grid:
-//   v = (p[i+1] - p[i-1]) / 2h, a = (p[i+1] - 2p[i] + p[i-1]) / h^2,
-//   j = (p[i+2] - 2p[i+1] + 2p[i-1] - p[i-2]) / 2h^3.
+// window_s / evaluations_per_window seconds; the derivatives are central
+// differences over the window h = window_s, evaluated at every sample:
+//   v = (p(t+h) - p(t-h)) / 2h, a = (p(t+h) - 2p(t) + p(t-h)) / h^2,
+//   j = (p(t+2h) - 2p(t+h) + 2p(t-h) - p(t-2h)) / 2h^3.
 // One step of quantization moves them by at most 1/(h spm), 4/(h^2 spm) and
-// 6/(h^3 spm): choose h so those are small against the limits.
+// 6/(h^3 spm): choose h so those are small against the limits. More
+// evaluations per window find a peak that falls between two grid points of
+// spacing h (the default 1 evaluates on that grid only).
 AxisPeaks realized_peaks(std::span<const double> times, std::span<const int> dirs,
-                         double steps_per_mm, double window_s);
+                         double steps_per_mm, double window_s, int evaluations_per_window = 1);
 
 }  // namespace cpstep::plan

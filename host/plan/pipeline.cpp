@@ -59,4 +59,25 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
     return result;
 }
 
+std::vector<double> ideal_times(const PlannedJob& job, double clock_hz) {
+    std::vector<double> out;
+    out.reserve(job.stats.moves);
+    for (std::size_t c = 0; c < job.card.size();) {
+        // The parts of one step segment are consecutive; move i of the whole
+        // segment is timed against its total.
+        const std::size_t step_segment = job.card[c].segment.step_segment;
+        std::size_t end = c;
+        std::uint64_t total = 0;
+        while (end < job.card.size() && job.card[end].segment.step_segment == step_segment)
+            total += job.card[end++].segment.moves;
+        for (; c < end; ++c) {
+            const CardSegment& part = job.card[c].segment;
+            const auto t = ideal_move_times(job.feeds[step_segment], total, part.first_move,
+                                            part.moves, clock_hz);
+            out.insert(out.end(), t.begin(), t.end());
+        }
+    }
+    return out;
+}
+
 }  // namespace cpstep::plan

@@ -44,4 +44,9 @@ struct PlanOptions {
 
 Result<PlannedJob> plan_job(const Job& job, const Machine& machine, const PlanOptions& options = {});
 
+// The ideal time of every move of a planned job, in card clock cycles from the
+// job start, in execution order: what the chunks realize within the chunk
+// tolerance (never late). For measuring the card against the plan itself.
+std::vector<double> ideal_times(const PlannedJob& job, double clock_hz);
+
 }  // namespace cpstep::plan

@@ -74,4 +74,9 @@ void VcdWriter::sample(uint64_t time) {
   last_time_ = time;
 }
 
+uint64_t cycle_start_ps(uint64_t cycle, uint64_t clock_hz) {
+  __extension__ using u128 = unsigned __int128;
+  return uint64_t((u128(cycle) * 1'000'000'000'000u + clock_hz / 2) / clock_hz);
+}
+
 }  // namespace cpstep::sim

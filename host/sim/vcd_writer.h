@@ -38,4 +38,8 @@ class VcdWriter {
   uint64_t last_time_ = 0;
 };
 
+// Start of clock cycle `cycle` at `clock_hz` in picoseconds, rounded to the
+// nearest: the time axis of the pin VCDs (timescale 1ps).
+uint64_t cycle_start_ps(uint64_t cycle, uint64_t clock_hz);
+
 }  // namespace cpstep::sim

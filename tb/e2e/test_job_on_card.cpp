@@ -89,6 +89,56 @@ TEST(WireJob, LongSegmentSplitsExactlyAtWholePatternPeriods) {
   EXPECT_EQ(plan::expand(pieces, 0), plan::expand(original, 0));
 }
 
+// A job of one card segment timed by one chunk per move (intervals 100, 101, ...).
+plan::PlannedJob one_move_chunks(uint32_t moves, plan::PerAxis<int64_t> delta, plan::PerAxis<uint32_t> u,
+                                 plan::PerAxis<uint32_t> v) {
+  plan::PlannedJob job;
+  plan::PlannedCardSegment s;
+  s.segment.moves = moves;
+  s.segment.delta = delta;
+  s.segment.u = u;
+  s.segment.v = v;
+  s.segment.loc = {7, 1};
+  for (uint32_t i = 0; i < moves; ++i) s.chunks.push_back({100 + i, 1, 0, 0});
+  job.card.push_back(s);
+  return job;
+}
+
+// 200 one-move chunks on a segment whose patterns repeat every 5 moves (x
+// steps 4 of 5, y 1 of 5): the card's chunk queue holds 64, so the pieces have
+// at most 64 chunks, end at multiples of 5 moves and keep every move time.
+TEST(WireJob, SegmentWithMoreChunksThanTheQueueSplitsAtWholePeriods) {
+  const plan::PlannedJob job = one_move_chunks(200, {160, 40, 0, 0}, {5, 5, 1, 1}, {4, 1, 0, 0});
+  const auto wire = card::to_wire(job, "many.ngc");
+  ASSERT_TRUE(wire.ok()) << plan::join(wire.errors);
+  const unsigned queue = card::CardLimits{}.chunk_queue;
+  ASSERT_GE(wire->segments.size(), 200u / queue + 1);
+  int64_t x = 0, y = 0;
+  std::vector<plan::Chunk> pieces;
+  for (const auto& w : wire->segments) {
+    EXPECT_LE(w.chunks.size(), queue);
+    EXPECT_EQ((uint64_t(w.u) << w.k) % 5, 0u) << "a piece ends inside a pattern period";
+    x += int64_t(w.v[0]) << w.k;
+    y += int64_t(w.v[1]) << w.k;
+    for (const auto& c : w.chunks) pieces.push_back({c.interval, c.count, c.add, 0});
+  }
+  EXPECT_EQ(x, 160);
+  EXPECT_EQ(y, 40);
+  EXPECT_EQ(plan::expand(pieces, 0), plan::expand(job.card[0].chunks, 0));
+}
+
+// The same with a pattern that repeats only every 199 moves: no cut fits.
+TEST(WireJob, SegmentThatCannotBeCutIsAnError) {
+  const plan::PlannedJob job = one_move_chunks(199, {199, 3, 0, 0}, {1, 199, 1, 1}, {1, 3, 0, 0});
+  const auto wire = card::to_wire(job, "many.ngc");
+  ASSERT_FALSE(wire.ok());
+  EXPECT_EQ(plan::join(wire.errors).rfind("many.ngc:7:1: segment of 199 moves needs more than the card's 64 "
+                                          "timing chunks",
+                                          0),
+            0u)
+      << plan::join(wire.errors);
+}
+
 TEST(JobOnCard, LandsOnThePlannedStepsAtThePlannedCycles) {
   const plan::Machine m = machine("plotter.toml");
   const auto planned = plan_text("G21 G90\nG1 X2 Y0.5 F3000\nG1 X3 Y2\nG3 X2 Y3 I-1 J0\nG1 X0 Y0\n", m);

@@ -21,6 +21,7 @@ void check_plan(const PlannedJob& pj, const Machine& m) {
                                                           : pj.step_segments.front().start;
     std::size_t last_seg = SIZE_MAX;
     std::uint64_t total = 0;
+    std::vector<double> all_ideal;  // every move's ideal time, from each step segment's own T
     for (const auto& c : pj.card) {
         const auto& seg = pj.step_segments[c.segment.step_segment];
         const auto& feed = pj.feeds[c.segment.step_segment];
@@ -30,6 +31,7 @@ void check_plan(const PlannedJob& pj, const Machine& m) {
         for (const auto& ch : c.chunks) sum += ch.count;
         ASSERT_EQ(sum, c.segment.moves);
         const auto ideal = ideal_move_times(feed, T, c.segment.first_move, c.segment.moves, m.card.clock_hz);
+        all_ideal.insert(all_ideal.end(), ideal.begin(), ideal.end());
         const auto real = expand(c.chunks, prev);
         for (std::size_t i = 0; i < real.size(); ++i) {
             ASSERT_GT(real[i], i ? real[i - 1] : prev);
@@ -51,6 +53,7 @@ void check_plan(const PlannedJob& pj, const Machine& m) {
         total += c.segment.moves;
     }
     EXPECT_EQ(total, pj.stats.moves);
+    EXPECT_EQ(ideal_times(pj, m.card.clock_hz), all_ideal);
     if (!pj.step_segments.empty()) { EXPECT_EQ(pos, pj.step_segments.back().end); }
 }
 
@@ -74,7 +77,8 @@ INSTANTIATE_TEST_SUITE_P(
     All, Examples,
     ::testing::Values(std::pair{"seed002.toml", "bracket.ngc"}, std::pair{"seed002.toml", "plasma.ngc"},
                       std::pair{"seed002.toml", "dense.ngc"}, std::pair{"router.toml", "bracket.ngc"},
-                      std::pair{"plotter.toml", "plasma.ngc"}, std::pair{"plotter.toml", "bracket.ngc"}),
+                      std::pair{"plotter.toml", "plasma.ngc"}, std::pair{"plotter.toml", "bracket.ngc"},
+                      std::pair{"seed002.toml", "tab.ngc"}, std::pair{"seed002.toml", "tight_arcs.ngc"}),
     [](const auto& p) {
         std::string n = std::string(p.param.first) + "_" + p.param.second;
         for (auto& ch : n) if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';

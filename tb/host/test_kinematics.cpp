@@ -39,3 +39,26 @@ TEST(Kinematics, ConstantVelocityBothDirections) {
     EXPECT_NEAR(pk.a, 0, 1e-6);
     EXPECT_NEAR(pk.j, 0, 1e-3);
 }
+
+// A velocity step from 10 to 30 mm/s at t = 1 s, half a window from the
+// nearest point of the grid that starts at the first event (t = 0.05 s, h =
+// 0.1 s). The acceleration estimate centred on the kink is dv/h = 200 mm/s^2;
+// a stencil centred d away sees dv (h - d) / h^2, so the grid of spacing h
+// finds only half of it and 8 evaluations per window nearly all of it.
+TEST(Kinematics, MoreEvaluationsPerWindowFindPeaksBetweenGridPoints) {
+    const double spm = 100, h = 0.1, dv = 20;
+    std::vector<double> t;
+    std::vector<int> dir;
+    for (int k = 0; k <= 950; ++k) t.push_back(0.05 + k * 0.001);       // 10 mm/s up to t = 1
+    for (int k = 1; k <= 3000; ++k) t.push_back(1.0 + k / 3000.0);      // then 30 mm/s
+    dir.assign(t.size(), 1);
+    const double quant = 4.0 / (h * h * spm);
+    const auto coarse = realized_peaks(t, dir, spm, h);
+    const auto fine = realized_peaks(t, dir, spm, h, 8);
+    EXPECT_NEAR(coarse.a, dv / (2 * h), quant);
+    EXPECT_NEAR(fine.a, dv / h, dv / h / 16 + quant);
+    // The fine grid holds every point of the coarse one: it never finds less.
+    EXPECT_GE(fine.v + 1e-9, coarse.v);
+    EXPECT_GE(fine.a + 1e-9, coarse.a);
+    EXPECT_GE(fine.j + 1e-9, coarse.j);
+}

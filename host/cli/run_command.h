@@ -1,0 +1,36 @@
+// `cpstep run` and `cpstep plan`: a G-code job planned for the card, then run
+// on a transport (the simulated card, or a file of command words), with a
+// summary, a JSON report, a pin VCD and plots (docs/HOST.md).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+namespace cpstep::cli {
+
+struct RunOptions {
+  std::string job, machine;
+  std::string transport = "sim";   // sim | file
+  std::string out;                 // file transport: the command stream
+  std::string vcd, report, plots;  // sim transport: optional outputs
+  uint64_t max_cycles = 0;         // 0: twice the planned time plus 10^7 cycles
+  bool no_progress = false;
+};
+
+struct PlanOptions {
+  std::string job, machine, out;
+};
+
+// Registers the subcommands on `app`; the options are filled when they parse.
+CLI::App* add_run_command(CLI::App& app, RunOptions& options);
+CLI::App* add_plan_command(CLI::App& app, PlanOptions& options);
+
+// Exit codes: 0 success; 1 the card faulted or a check against the plan failed
+// (or an output could not be written); 2 the job, the machine or an option was
+// refused: nothing was sent and no output written.
+int run_job(const RunOptions& options);
+int plan_only(const PlanOptions& options);
+
+}  // namespace cpstep::cli

@@ -1,0 +1,77 @@
+#include "run/card_job.h"
+
+#include <fstream>
+
+namespace cpstep::run {
+
+uint64_t CardJob::wire_chunks() const {
+  uint64_t n = 0;
+  for (const card::WireSegment& s : wire.segments) n += s.chunks.size();
+  return n;
+}
+
+plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode,
+                                  const std::filesystem::path& machine_file) {
+  plan::Result<CardJob> r;
+  auto machine = plan::load_machine(machine_file);
+  r.warnings = machine.warnings;
+  if (!machine.ok()) {
+    r.errors = machine.errors;
+    return r;
+  }
+  auto job = plan::load_gcode(gcode);
+  r.warnings.insert(r.warnings.end(), job.warnings.begin(), job.warnings.end());
+  if (!job.ok()) {
+    r.errors = job.errors;
+    return r;
+  }
+  plan::PlanOptions options;
+  options.chunk_limits = card::chunk_limits();
+  options.add2_from_machine = false;
+  auto planned = plan::plan_job(*job, *machine, options);
+  r.warnings.insert(r.warnings.end(), planned.warnings.begin(), planned.warnings.end());
+  if (!planned.ok()) {
+    r.errors = planned.errors;
+    return r;
+  }
+  auto wire = card::to_wire(*planned, job->file);
+  if (!wire.ok()) {
+    r.errors = wire.errors;
+    return r;
+  }
+
+  CardJob& cj = r.value.emplace();
+  cj.job_file = job->file;
+  cj.machine = *machine;
+  cj.planned = std::move(*planned.value);
+  cj.wire = std::move(*wire.value);
+  cj.words = card::encode_job(cj.machine, cj.wire);
+  cj.ideal_cycles = plan::ideal_times(cj.planned, cj.clock_hz());
+
+  std::vector<plan::Chunk> chunks;
+  plan::PerAxis<int64_t> pos{};
+  if (!cj.planned.step_segments.empty()) pos = cj.planned.step_segments.front().start;
+  uint64_t moves = 0;
+  for (const plan::PlannedCardSegment& c : cj.planned.card) {
+    chunks.insert(chunks.end(), c.chunks.begin(), c.chunks.end());
+    moves += c.segment.moves;
+    for (int a = 0; a < plan::kAxes; ++a) pos[a] += c.segment.delta[a];
+    cj.checkpoints.push_back({moves, pos, c.segment.loc});
+  }
+  cj.chunk_cycles = plan::expand(chunks, 0);
+  return r;
+}
+
+bool write_words(const std::filesystem::path& path, const std::vector<uint32_t>& words) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) return false;
+  for (uint32_t w : words) {
+    const char bytes[4] = {char(w & 0xFF), char(w >> 8 & 0xFF), char(w >> 16 & 0xFF),
+                           char(w >> 24 & 0xFF)};
+    out.write(bytes, 4);
+  }
+  out.close();
+  return bool(out);
+}
+
+}  // namespace cpstep::run

@@ -1,0 +1,51 @@
+// A G-code job made ready for the card: planned with the card's chunk form,
+// converted to wire segments and encoded as command words, with what a run
+// needs to check the card against the plan (ideal move times, the position
+// after every card segment).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "card/job.h"
+#include "plan/common.h"
+#include "plan/machine.h"
+#include "plan/pipeline.h"
+
+namespace cpstep::run {
+
+// Where the card must be after a planned card segment.
+struct Checkpoint {
+  uint64_t moves = 0;                    // move events from START to its last move
+  plan::PerAxis<int64_t> position{};     // absolute steps after it
+  plan::SourceLoc loc;                   // the G-code block it came from
+};
+
+struct CardJob {
+  std::string job_file;
+  plan::Machine machine;
+  plan::PlannedJob planned;
+  card::WireJob wire;
+  std::vector<uint32_t> words;           // the command stream: CONFIG, segments, START
+  std::vector<double> ideal_cycles;      // per move: the planner's ideal time from START
+  std::vector<int64_t> chunk_cycles;     // per move: the time its chunks realize
+  std::vector<Checkpoint> checkpoints;   // one per planned card segment
+
+  [[nodiscard]] uint64_t moves() const { return planned.stats.moves; }
+  [[nodiscard]] uint64_t wire_chunks() const;
+  [[nodiscard]] double clock_hz() const { return machine.card.clock_hz; }
+};
+
+// Loads the machine and the G-code, plans the job in the card's chunk form
+// (card::chunk_limits(), no add2) and encodes it. Every error refuses the job;
+// warnings travel with the result.
+plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode,
+                                  const std::filesystem::path& machine);
+
+// The command stream as little-endian 32-bit words (the `file` transport and
+// `cpstep plan -o`). Returns false when the file cannot be written.
+bool write_words(const std::filesystem::path& path, const std::vector<uint32_t>& words);
+
+}  // namespace cpstep::run

@@ -1,0 +1,64 @@
+// What a card run amounts to, measured from its pins against the plan:
+// timing errors, per-axis realized velocity / acceleration / jerk peaks
+// (plan::realized_peaks on the STEP edge times) and the series the plots show.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "plan/common.h"
+#include "plan/kinematics.h"
+#include "run/card_job.h"
+#include "run/sim_run.h"
+
+namespace cpstep::run {
+
+// Difference windows h (s) for velocity, acceleration and jerk.
+struct Windows {
+  double v = 0, a = 0, j = 0;
+};
+
+struct AxisMeasure {
+  bool present = false;
+  uint64_t pulses = 0;            // leading STEP edges
+  Windows window;                 // h of realized_peaks, per quantity
+  plan::AxisPeaks peak;           // realized, mm/s, mm/s^2, mm/s^3
+  plan::AxisPeaks tolerance;      // one step of quantization: 1/(h_v spm), 4/(h_a^2 spm), 6/(h_j^3 spm)
+  bool within_limits = false;     // every peak <= its machine limit + its tolerance
+};
+
+struct RunMeasure {
+  uint64_t moves = 0;                  // move events seen
+  double job_time_s = 0;               // START to the last move event
+  uint64_t job_time_cycles = 0;
+  double max_timing_error_cycles = 0;  // max |event - (START + ideal time)|
+  uint64_t max_timing_error_move = 0;  // 1-based move where it occurs
+  int64_t max_chunk_error_cycles = 0;  // max |event - (START + chunk time)|: 0 unless stretched
+  uint64_t moves_off_chunk_time = 0;
+  plan::PerAxis<AxisMeasure> axes;
+};
+
+// The windows for an axis: each as short as it can be while one step of
+// quantization moves the estimate by at most a fixed share of the axis's
+// limit: 2 % of vmax, 5 % of amax, 10 % of jmax, i.e.
+//   h_v = 1 / (0.02 vmax spm), h_a = sqrt(4 / (0.05 amax spm)), h_j = cbrt(6 / (0.1 jmax spm)).
+Windows peak_windows(const plan::AxisConfig& axis);
+// realized_peaks evaluates its differences this many times per window.
+inline constexpr int kEvaluationsPerWindow = 8;
+
+RunMeasure measure_run(const CardJob& job, const CardRun& run);
+
+// Time series for the plots, on a common grid of times from START (s).
+struct KinematicSeries {
+  Windows window;                               // difference spacing h per quantity
+  std::vector<double> t;
+  plan::PerAxis<std::vector<double>> v, a, j;   // per axis, mm/s, mm/s^2, mm/s^3
+  std::vector<double> path_v, path_a, path_j;   // measured along the path (speed and its derivatives)
+  std::vector<double> plan_v, plan_a, plan_j;   // the planner's profile along the path
+};
+KinematicSeries kinematic_series(const CardJob& job, const CardRun& run, const RunMeasure& m);
+
+// The card's position in mm after every move event (x, y for the path plot).
+std::vector<plan::PerAxis<double>> card_path(const CardJob& job, const CardRun& run);
+
+}  // namespace cpstep::run

@@ -1,0 +1,309 @@
+// `cpstep run` and `cpstep plan` as a user runs them: the program runs as a
+// process and its outputs are read back here with independent readers: the
+// JSON report, the VCD through tb/cli/vcd_count, PNG signatures, and the
+// command words decoded from docs/CORE.md's layout. Every expected value is
+// derived in this file from the test's own G-code and the example machine.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace cpstep::tb {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const fs::path kDir = fs::path(CPSTEP_TEST_DIR) / "cli_run";
+const std::string kMachine = std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/plotter.toml";
+
+struct Outcome {
+  int rc = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Shell quoting for the paths of this test (none holds a single quote). Built
+// by append: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string&&.
+std::string quote(const std::string& s) {
+  std::string q = "'";
+  q.append(s).append("'");
+  return q;
+}
+
+// Runs `program args...` with stdout and stderr captured in files of kDir.
+Outcome run(const std::string& program, const std::vector<std::string>& args, const std::string& tag) {
+  std::string cmd = quote(program);
+  for (const std::string& a : args) cmd.append(" ").append(quote(a));
+  const fs::path out = kDir / (tag + ".stdout"), err = kDir / (tag + ".stderr");
+  cmd.append(" >").append(quote(out.string())).append(" 2>").append(quote(err.string()));
+  const int status = std::system(cmd.c_str());
+  Outcome o;
+  o.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  o.out = slurp(out);
+  o.err = slurp(err);
+  return o;
+}
+Outcome cpstep(const std::vector<std::string>& args, const std::string& tag) {
+  return run(CPSTEP_BIN, args, tag);
+}
+
+fs::path write_job(const std::string& name, const std::string& text) {
+  fs::create_directories(kDir);
+  const fs::path p = kDir / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+// floor(mm * spm + 0.5): the rounding docs/PLANNING.md gives for segment ends.
+int64_t steps(double mm, double spm) { return int64_t(std::floor(mm * spm + 0.5)); }
+
+// The test job: x, y and z each move one way only (the arc is the quarter
+// from the bottom to the right of its circle), so each axis's STEP edges
+// number |final steps| and each DIR pin changes at most once.
+const char* kJob =
+    "G21 G90\n"
+    "G1 X1 Y0.2 Z-0.1 F900\n"
+    "G3 X2 Y1.2 I0 J1\n"
+    "G1 X2.2 Y1.8\n"
+    "M2\n";
+// examples/machines/plotter.toml: 80 steps/mm on x and y, 400 on z.
+const double kSpm[3] = {80, 80, 400};
+const double kFinalMm[3] = {2.2, 1.8, -0.1};
+
+// The command stream decoded by docs/CORE.md's word layout (4 axes).
+struct Decoded {
+  size_t configs = 0, starts = 0, segments = 0, chunks = 0, ends = 0;
+  uint64_t moves = 0;
+  int64_t delta[4] = {0, 0, 0, 0};
+  bool counts_add_up = true;
+  std::string error;
+};
+Decoded decode(const std::string& bytes) {
+  Decoded d;
+  if (bytes.size() % 4 != 0) {
+    d.error = "size is not a multiple of 4";
+    return d;
+  }
+  std::vector<uint32_t> w(bytes.size() / 4);
+  for (size_t i = 0; i < w.size(); ++i)
+    for (int b = 0; b < 4; ++b) w[i] |= uint32_t(uint8_t(bytes[4 * i + b])) << (8 * b);
+  for (size_t i = 0; i < w.size();) {
+    const uint32_t op = w[i] >> 28;
+    if (op == 0x2) {
+      ++d.configs, ++i;
+    } else if (op == 0x3) {
+      d.starts += (w[i] & 1), ++i;
+    } else if (op == 0x1) {
+      const uint32_t h0 = w[i], h1 = w[i + 1];
+      const unsigned k = h0 >> 23 & 0xF, nchunks = h0 & 0xFFFF;
+      const uint64_t u = h1 & 0xFFFFFF;
+      d.ends += h0 >> 27 & 1;
+      for (int a = 0; a < 4; ++a) {
+        const int64_t v = int64_t(w[i + 2 + a] & 0xFFFFFF) << k;
+        d.delta[a] += (h1 >> (24 + a) & 1) ? v : -v;
+      }
+      uint64_t count = 0;
+      for (unsigned c = 0; c < nchunks; ++c) count += w[i + 6 + 2 * c + 1] & 0xFFFF;
+      d.counts_add_up = d.counts_add_up && count == u << k;
+      d.moves += u << k;
+      ++d.segments;
+      d.chunks += nchunks;
+      i += 6 + 2 * nchunks;
+    } else {
+      d.error = "unexpected opcode at word " + std::to_string(i);
+      return d;
+    }
+  }
+  return d;
+}
+
+// "label   <number> ..." on a line of the plan summary.
+uint64_t summary_number(const std::string& text, const std::string& label) {
+  std::smatch m;
+  if (!std::regex_search(text, m, std::regex("(^|\n)" + label + " +([0-9]+)"))) return UINT64_MAX;
+  return std::stoull(m[2]);
+}
+
+bool is_png(const fs::path& p) {
+  const std::string head = slurp(p).substr(0, 8);
+  return head == std::string("\x89PNG\r\n\x1a\n", 8);
+}
+
+TEST(CliRun, SmallJobOnTheSimulatedCard) {
+  const fs::path job = write_job("small.ngc", kJob);
+  const fs::path report = kDir / "small.json", vcd = kDir / "small.vcd", plots = kDir / "plots",
+                 bin = kDir / "small.bin";
+  fs::remove_all(plots);
+  fs::remove(report);
+  fs::remove(vcd);
+  const Outcome r = cpstep({"run", job.string(), "--machine", kMachine, "--report", report.string(),
+                            "--vcd", vcd.string(), "--plots", plots.string()},
+                           "small_run");
+  ASSERT_EQ(r.rc, 0) << r.out << r.err;
+  EXPECT_EQ(r.err, "") << "progress must be off when stderr is not a terminal";
+
+  // The plan of the same job, and its command stream decoded here.
+  const Outcome p = cpstep({"plan", job.string(), "--machine", kMachine, "-o", bin.string()}, "small_plan");
+  ASSERT_EQ(p.rc, 0) << p.err;
+  const Decoded d = decode(slurp(bin));
+  ASSERT_EQ(d.error, "");
+  EXPECT_EQ(d.configs, 3u * 5u) << "five CONFIG words per present axis";
+  EXPECT_EQ(d.starts, 1u);
+  EXPECT_EQ(d.ends, 1u);
+  EXPECT_TRUE(d.counts_add_up);
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(d.delta[a], steps(kFinalMm[a], kSpm[a])) << "axis " << a;
+  EXPECT_EQ(d.delta[3], 0);
+
+  const json rep = json::parse(slurp(report));
+  for (const char* key : {"clock_hz", "segments", "chunks", "moves", "max_timing_error_cycles", "faults",
+                          "stretches", "job_time_s", "axes"})
+    EXPECT_TRUE(rep.contains(key)) << key;
+  EXPECT_EQ(rep["clock_hz"].get<double>(), 48e6);  // plotter.toml: clock_hz = 48_000_000
+  EXPECT_EQ(rep["faults"], json::array());
+  EXPECT_EQ(rep["stretches"].get<int>(), 0);
+  EXPECT_EQ(rep["segments"].get<uint64_t>(), d.segments);
+  EXPECT_EQ(rep["chunks"].get<uint64_t>(), d.chunks);
+  EXPECT_EQ(rep["moves"].get<uint64_t>(), d.moves);
+  EXPECT_EQ(summary_number(p.out, "segments"), d.segments);
+  EXPECT_EQ(summary_number(p.out, "chunks"), d.chunks);
+  EXPECT_EQ(summary_number(r.out, "segments"), d.segments);
+  EXPECT_EQ(summary_number(r.out, "chunks"), d.chunks);
+  // Never late, at most the chunk tolerance (1 us = 48 cycles) early, plus the
+  // rounding of an ideal time to a whole cycle.
+  EXPECT_LE(rep["max_timing_error_cycles"].get<double>(), 48 + 1);
+  EXPECT_GT(rep["job_time_s"].get<double>(), 0.1);
+
+  // Per axis: positions, pulse timing from the driver presets (docs/PLANNING.md,
+  // TMC2209 100/100/20/20 ns on x and y, A4988 1000/1000/200/200 ns on z, ns
+  // rounded up to 48 MHz cycles) and the realized peaks against the limits.
+  const json& axes = rep["axes"];
+  ASSERT_EQ(axes.size(), 3u);
+  const char* names[3] = {"x", "y", "z"};
+  const int high[3] = {5, 5, 48}, hold[3] = {1, 1, 10};
+  const double vmax[3] = {100, 100, 20}, amax[3] = {2000, 2000, 500}, jmax[3] = {50000, 50000, 10000};
+  for (int a = 0; a < 3; ++a) {
+    SCOPED_TRACE(names[a]);
+    const json& ax = axes.at(names[a]);
+    const int64_t expected = steps(kFinalMm[a], kSpm[a]);
+    EXPECT_EQ(ax.at("steps_per_mm").get<double>(), kSpm[a]);
+    EXPECT_EQ(ax.at("final_steps").get<int64_t>(), expected);
+    EXPECT_DOUBLE_EQ(ax.at("final_mm").get<double>(), double(expected) / kSpm[a]);
+    EXPECT_EQ(ax.at("pulses").get<int64_t>(), std::abs(expected));
+    EXPECT_EQ(ax.at("step_high_cycles").get<int>(), high[a]);
+    EXPECT_EQ(ax.at("step_low_cycles").get<int>(), high[a]);
+    EXPECT_EQ(ax.at("dir_setup_cycles").get<int>(), hold[a]);
+    EXPECT_EQ(ax.at("dir_hold_cycles").get<int>(), hold[a]);
+    EXPECT_TRUE(ax.at("step_active_high").get<bool>());
+    EXPECT_TRUE(ax.at("dir_positive_high").get<bool>());
+    EXPECT_EQ(ax.at("max_velocity").get<double>(), vmax[a]);
+    EXPECT_EQ(ax.at("max_accel").get<double>(), amax[a]);
+    EXPECT_EQ(ax.at("max_jerk").get<double>(), jmax[a]);
+    // realized_peaks' quantization bounds for the windows the report used.
+    const double hv = ax.at("velocity_window_s").get<double>(), ha = ax.at("accel_window_s").get<double>(),
+                 hj = ax.at("jerk_window_s").get<double>();
+    EXPECT_NEAR(ax.at("velocity_tolerance").get<double>(), 1 / (hv * kSpm[a]), 1e-9);
+    EXPECT_NEAR(ax.at("accel_tolerance").get<double>(), 4 / (ha * ha * kSpm[a]), 1e-6);
+    EXPECT_NEAR(ax.at("jerk_tolerance").get<double>(), 6 / (hj * hj * hj * kSpm[a]), 1e-3);
+    EXPECT_GT(ax.at("peak_velocity").get<double>(), 0);
+    EXPECT_LE(ax.at("peak_velocity").get<double>(), vmax[a] + 1 / (hv * kSpm[a]));
+    EXPECT_LE(ax.at("peak_accel").get<double>(), amax[a] + 4 / (ha * ha * kSpm[a]));
+    EXPECT_LE(ax.at("peak_jerk").get<double>(), jmax[a] + 6 / (hj * hj * hj * kSpm[a]));
+    EXPECT_TRUE(ax.at("within_limits").get<bool>());
+  }
+
+  // The pins: 8 signals, one leading STEP edge per step; DIR rises once on x
+  // and y (reset leaves DIR low, the negative side, and both move +), z moves
+  // - so its DIR stays low; a is not on this machine.
+  const Outcome v = run(VCD_COUNT_BIN, {vcd.string()}, "small_vcd");
+  ASSERT_EQ(v.rc, 0) << v.err;
+  EXPECT_NE(v.out.find("signals step_x step_y step_z step_a dir_x dir_y dir_z dir_a\n"), std::string::npos)
+      << v.out;
+  for (int a = 0; a < 3; ++a) {
+    const int64_t n = std::abs(steps(kFinalMm[a], kSpm[a]));
+    const std::string line = "step_" + std::string(names[a]) + " width=1 rises=" + std::to_string(n) +
+                             " falls=" + std::to_string(n) + " final=0\n";
+    EXPECT_NE(v.out.find(line), std::string::npos) << line << v.out;
+  }
+  for (const char* line : {"step_a width=1 rises=0 falls=0 final=0\n", "dir_x width=1 rises=1 falls=0 final=1\n",
+                           "dir_y width=1 rises=1 falls=0 final=1\n", "dir_z width=1 rises=0 falls=0 final=0\n",
+                           "dir_a width=1 rises=0 falls=0 final=0\n"})
+    EXPECT_NE(v.out.find(line), std::string::npos) << line << v.out;
+
+  for (const char* png : {"path.png", "speed.png", "accel.png", "jerk.png"}) {
+    EXPECT_TRUE(fs::exists(plots / png)) << png;
+    EXPECT_TRUE(is_png(plots / png)) << png;
+    EXPECT_GT(fs::file_size(plots / png), 1000u) << png;
+  }
+}
+
+TEST(CliRun, PlanWritesExactlyTheWordsRunSends) {
+  const fs::path job = write_job("small.ngc", kJob);
+  const fs::path planned = kDir / "words_plan.bin", sent = kDir / "words_run.bin";
+  fs::remove(planned);
+  fs::remove(sent);
+  const Outcome p = cpstep({"plan", job.string(), "--machine", kMachine, "-o", planned.string()}, "words_plan");
+  ASSERT_EQ(p.rc, 0) << p.err;
+  const Outcome r = cpstep({"run", job.string(), "--machine", kMachine, "--transport", "file", "--out",
+                            sent.string()},
+                           "words_run");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::string a = slurp(planned), b = slurp(sent);
+  EXPECT_FALSE(a.empty());
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(decode(b).error, "");
+}
+
+// A refused job: exit 2, the file:line:col on stderr, nothing on stdout and
+// no output file of any kind.
+void expect_refused(const std::string& name, const std::string& text, const std::string& where,
+                    const std::string& words) {
+  const fs::path job = write_job(name, text);
+  const fs::path report = kDir / (name + ".json"), vcd = kDir / (name + ".vcd"), plots = kDir / (name + ".plots"),
+                 bin = kDir / (name + ".bin");
+  for (const fs::path& f : {report, vcd, plots, bin}) fs::remove_all(f);
+  const Outcome r = cpstep({"run", job.string(), "--machine", kMachine, "--report", report.string(), "--vcd",
+                            vcd.string(), "--plots", plots.string()},
+                           name + "_run");
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.err.find(job.string() + ":" + where + ": "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
+  const Outcome p = cpstep({"plan", job.string(), "--machine", kMachine, "-o", bin.string()}, name + "_plan");
+  EXPECT_EQ(p.rc, 2);
+  EXPECT_NE(p.err.find(job.string() + ":" + where + ": "), std::string::npos) << p.err;
+  const Outcome f = cpstep({"run", job.string(), "--machine", kMachine, "--transport", "file", "--out",
+                            bin.string()},
+                           name + "_file");
+  EXPECT_EQ(f.rc, 2);
+  for (const fs::path& out : {report, vcd, plots, bin}) EXPECT_FALSE(fs::exists(out)) << out;
+}
+
+TEST(CliRun, MalformedGcodeIsRefusedWithItsPosition) {
+  // Line 3, column 7: a B word (a rotary axis the subset does not have).
+  expect_refused("malformed.ngc", "G21 G90\nG1 X1 F600\nG1 X2 B5\n", "3:7", "B5");
+}
+
+TEST(CliRun, MoveOutsideTheTravelIsRefusedNamingItsLine) {
+  // plotter.toml: x travels 0..200 mm; the block on line 3 goes to 250.
+  expect_refused("far.ngc", "G21 G90\nG1 X10 F600\nG1 X250\n", "3:1", "outside the travel");
+}
+
+}  // namespace
+}  // namespace cpstep::tb
