@@ -59,6 +59,7 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode,
     cj.checkpoints.push_back({moves, pos, c.segment.loc});
   }
   cj.chunk_cycles = plan::expand(chunks, 0);
+  cj.warnings = r.warnings;
   return r;
 }
 

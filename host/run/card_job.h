@@ -32,6 +32,7 @@ struct CardJob {
   std::vector<double> ideal_cycles;      // per move: the planner's ideal time from START
   std::vector<int64_t> chunk_cycles;     // per move: the time its chunks realize
   std::vector<Checkpoint> checkpoints;   // one per planned card segment
+  std::vector<plan::Diagnostic> warnings;  // the planner's (also in the Result)
 
   [[nodiscard]] uint64_t moves() const { return planned.stats.moves; }
   [[nodiscard]] uint64_t wire_chunks() const;

@@ -41,6 +41,9 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
   json faults = json::array();
   for (const Fault& f : run.faults) faults.push_back({{"code", f.code}, {"name", f.name}, {"message", f.message}});
   r["faults"] = faults;
+  json warnings = json::array();
+  for (const plan::Diagnostic& w : job.warnings) warnings.push_back(w.str());
+  r["warnings"] = warnings;
 
   json axes = json::object();
   for (int a = 0; a < plan::kAxes; ++a) {

@@ -177,6 +177,7 @@ TEST(CliRun, SmallJobOnTheSimulatedCard) {
     EXPECT_TRUE(rep.contains(key)) << key;
   EXPECT_EQ(rep["clock_hz"].get<double>(), 48e6);  // plotter.toml: clock_hz = 48_000_000
   EXPECT_EQ(rep["faults"], json::array());
+  EXPECT_EQ(rep["warnings"], json::array());
   EXPECT_EQ(rep["stretches"].get<int>(), 0);
   EXPECT_EQ(rep["segments"].get<uint64_t>(), d.segments);
   EXPECT_EQ(rep["chunks"].get<uint64_t>(), d.chunks);
