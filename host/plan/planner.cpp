@@ -57,6 +57,19 @@ double card_speed_limit(const PerAxis<std::int64_t>& delta, const Machine& m) {
     return v;
 }
 
+double curvature_speed(double r, double a, double j) {
+    if (!(r < std::numeric_limits<double>::infinity())) return std::numeric_limits<double>::infinity();
+    return std::min(std::sqrt(a * r), std::cbrt(j * r * r));
+}
+
+double polyline_radius(const PerAxis<double>& in, const PerAxis<double>& out, double chord) {
+    double dot = 0;
+    for (std::size_t i = 0; i < kAxes; ++i) dot += in[i] * out[i];
+    const double half_sin = std::sqrt(std::max(0.0, (1 - std::clamp(dot, -1.0, 1.0)) / 2));
+    if (half_sin < 1e-12) return std::numeric_limits<double>::infinity();
+    return chord / (2 * half_sin);
+}
+
 double junction_speed(const PerAxis<double>& in, const PerAxis<double>& out, double a,
                       double deviation) {
     double dot = 0;
@@ -115,6 +128,22 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
     }
     if (!result.errors.empty()) return result;
 
+    // Curvature: a chain of short chords (an arc) bends the path with the radius
+    // its chords and turns imply; junction deviation alone would not see it.
+    const double inf = std::numeric_limits<double>::infinity();
+    std::vector<double> bend(n + 1, inf);  // curvature speed at the start of segment i
+    for (std::size_t i = 1; i < n; ++i) {
+        const StepSegment& a = segs[i - 1];
+        const StepSegment& b = segs[i];
+        if (a.kind == MotionKind::dwell || b.kind == MotionKind::dwell) continue;
+        const double r = polyline_radius(direction(a.delta(), m), direction(b.delta(), m),
+                                         std::min(out[i - 1].length, out[i].length));
+        bend[i] = curvature_speed(r, std::min(out[i - 1].limits.a, out[i].limits.a),
+                                  std::min(out[i - 1].limits.j, out[i].limits.j));
+    }
+    // A segment inside a bend (both ends limited) cruises no faster than its ends.
+    for (std::size_t i = 0; i < n; ++i) out[i].cruise = std::min(out[i].cruise, std::max(bend[i], bend[i + 1]));
+
     // Junction limits; zero at the ends, around dwells and where the spindle switches.
     for (std::size_t i = 1; i < n; ++i) {
         const StepSegment& a = segs[i - 1];
@@ -126,7 +155,7 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
         const double jv = junction_speed(direction(a.delta(), m), direction(b.delta(), m),
                                          std::min(out[i - 1].limits.a, out[i].limits.a),
                                          m.planner.junction_deviation_mm);
-        junction[i] = std::min({jv, out[i - 1].cruise, out[i].cruise});
+        junction[i] = std::min({jv, bend[i], out[i - 1].cruise, out[i].cruise});
     }
     // Backward pass: each entry no faster than the segment can shed before its exit.
     std::vector<double> entry(n + 1, 0.0);

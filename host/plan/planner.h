@@ -24,6 +24,13 @@ SegmentLimits project_limits(const PerAxis<std::int64_t>& delta, const Machine& 
 // chunk tolerance as margin (a move may be that much early).
 double card_speed_limit(const PerAxis<std::int64_t>& delta, const Machine& m);
 
+// Speed at which a path bending with radius r (mm) keeps its centripetal
+// acceleration v^2/r within a and its jerk v^3/r^2 within j: a polyline's
+// radius at a junction is r = L / (2 sin(theta/2)) for chords of length L
+// turning by theta (exact for the equal chords of an arc).
+double curvature_speed(double r, double a, double j);
+double polyline_radius(const PerAxis<double>& in, const PerAxis<double>& out, double chord);
+
 // Grbl's junction-deviation speed for a corner between unit directions
 // `in` and `out` (mm space), with acceleration a and deviation delta.
 double junction_speed(const PerAxis<double>& in, const PerAxis<double>& out, double a,

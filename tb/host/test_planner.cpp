@@ -148,3 +148,41 @@ TEST(Planner, DwellAndSpindleStopTheMotion) {
     EXPECT_EQ(p[3].profile.v_entry, 0);
     EXPECT_NEAR(p[2].t_start, p[1].t_start + 0.25, 1e-12);
 }
+
+// A long line at full feed into a tangent quarter arc of radius 3 mm, and out
+// of it on a tangent line: every junction is tangent, so junction deviation
+// alone would let the feed (30 mm/s) run through the arc. Moving on a circle of
+// radius r keeps v^2/r <= a and v^3/r^2 <= j; each chord is held to that with
+// its own direction's limits (x-ward chords 26.2 mm/s, y-ward ones 20.8).
+TEST(Planner, ArcsAreSlowedToTheirCurvature) {
+    const Machine m = machine();
+    const double r = 3.0;
+    std::vector<StepSegment> segs;
+    auto res = plan("G1 F1800 X0 Y60\nG1 X60\nG2 X63 Y57 I0 J-3\nG1 Y0\n", m, &segs);
+    ASSERT_TRUE(res.ok()) << join(res.errors);
+    const auto& p = *res.value;
+    size_t arc_chords = 0;
+    double slowest_peak = 1e9;
+    for (size_t i = 0; i < p.size(); ++i) {
+        if (segs[i].kind != MotionKind::arc_cw) continue;
+        ++arc_chords;
+        const double a = p[i].limits.a, j = p[i].limits.j;
+        const double v_bend = std::min(std::sqrt(a * r), std::cbrt(j * r * r));
+        EXPECT_LE(p[i].profile.v_peak, v_bend * 1.01) << "chord " << i;
+        slowest_peak = std::min(slowest_peak, p[i].profile.v_peak);
+    }
+    EXPECT_GT(arc_chords, 10u);
+    EXPECT_GT(slowest_peak, 10.0);  // slowed for the bend, not stopped
+    // The lines before and after reach the feed.
+    EXPECT_GT(p[1].profile.v_peak, 29.9);
+    EXPECT_GT(p.back().profile.v_peak, 29.9);
+}
+
+TEST(Planner, PolylineRadiusOfEqualChords) {
+    // Chords of a circle of radius 5 turning by 10 degrees: L = 2 r sin(5 deg).
+    const double th = 10 * M_PI / 180, L = 2 * 5 * std::sin(th / 2);
+    const PerAxis<double> in{1, 0, 0, 0}, out{std::cos(th), std::sin(th), 0, 0};
+    EXPECT_NEAR(polyline_radius(in, out, L), 5.0, 1e-9);
+    EXPECT_EQ(polyline_radius(in, in, L), std::numeric_limits<double>::infinity());
+    EXPECT_NEAR(curvature_speed(8, 500, 2000), std::min(std::sqrt(4000.0), std::cbrt(128000.0)), 1e-9);
+}
