@@ -253,7 +253,9 @@ TEST(CoreFaults, UnderrunDecidedByTheCommitCycle) {
     EXPECT_EQ(st.fault, underrun) << where << ": code " << st.err_code;
     EXPECT_EQ(h.chk.segments_done(), underrun ? 1u : 2u) << where;
     EXPECT_EQ(first_end, last_fire + 1) << where << ": the first segment's last move not on time";
-    if (underrun) EXPECT_EQ(st.err_code, 9u) << where;
+    if (underrun) {
+      EXPECT_EQ(st.err_code, 9u) << where;
+    }
     if (HasFailure()) return;
   }
 }
