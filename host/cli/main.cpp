@@ -15,6 +15,7 @@
 #include <iostream>
 #include <optional>
 
+#include "cli/accuracy_command.h"
 #include "cli/run_command.h"
 #include "cli/sim_command.h"
 #include "model/oracle.h"
@@ -142,6 +143,8 @@ int main(int argc, char** argv) {
   auto* runc = cli::add_run_command(app, ro);
   cli::PlanOptions po;
   auto* planc = cli::add_plan_command(app, po);
+  cli::AccuracyOptions ao;
+  auto* accc = cli::add_accuracy_command(app, ao);
 
   try {
     app.parse(argc, argv);
@@ -154,6 +157,7 @@ int main(int argc, char** argv) {
     if (*simc) return cli::run_sim(so);
     if (*runc) return cli::run_job(ro);
     if (*planc) return cli::plan_only(po);
+    if (*accc) return cli::run_accuracy(ao);
   } catch (const std::exception& e) {
     fmt::print(stderr, "cpstep: internal error: {}\n", e.what());
     return 1;
