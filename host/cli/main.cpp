@@ -17,6 +17,7 @@
 
 #include "cli/accuracy_command.h"
 #include "cli/run_command.h"
+#include "cli/vectors_command.h"
 #include "cli/sim_command.h"
 #include "model/oracle.h"
 #include "sim/engine_configs.h"
@@ -145,6 +146,8 @@ int main(int argc, char** argv) {
   auto* planc = cli::add_plan_command(app, po);
   cli::AccuracyOptions ao;
   auto* accc = cli::add_accuracy_command(app, ao);
+  cli::VectorsOptions vo;
+  auto* vecc = cli::add_vectors_command(app, vo);
 
   try {
     app.parse(argc, argv);
@@ -158,6 +161,7 @@ int main(int argc, char** argv) {
     if (*runc) return cli::run_job(ro);
     if (*planc) return cli::plan_only(po);
     if (*accc) return cli::run_accuracy(ao);
+    if (*vecc) return cli::run_vectors(vo);
   } catch (const std::exception& e) {
     fmt::print(stderr, "cpstep: internal error: {}\n", e.what());
     return 1;
