@@ -27,9 +27,13 @@ uint64_t get_bits(const FifoWord& w, unsigned lo, unsigned bits) {
   return v;
 }
 
-uint64_t chunk_word(uint32_t interval, uint32_t add, uint32_t count) {
-  return uint64_t(count & 0xFFFF) << 48 | uint64_t(add & 0xFFFF) << 32 | interval;
+// Chunk queue entry (80 bits, as in the RTL): interval, add, count, add2.
+FifoWord chunk_word(uint32_t interval, uint32_t add, uint32_t count, uint32_t add2) {
+  return {uint64_t(count & 0xFFFF) << 48 | uint64_t(add & 0xFFFF) << 32 | interval,
+          uint64_t(add2 & 0xFFFF), 0, 0};
 }
+
+int64_t sext16(uint32_t x) { return int64_t(int16_t(uint16_t(x))); }
 
 }  // namespace
 
@@ -38,7 +42,7 @@ CpCore::CpCore(Params params)
       mask_tw_(mask(params.tw)),
       seg_fifo_({1 + 4 + params.n + 24 * (params.n + 1), params.saw}),
       run_fifo_({1 + 2 * params.n, 1}),
-      chunk_fifo_({64, params.caw}) {
+      chunk_fifo_({80, params.caw}) {
   if (p_.n < 1 || p_.n > kCoreMaxAxes) throw std::invalid_argument("cp_core: N must be 1 to 8");
   if (p_.umax < p_.w || p_.umax > 16777214)
     throw std::invalid_argument("cp_core: UMAX must be W to 2^24-2");
@@ -149,6 +153,7 @@ void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
           d.seg.end = (word >> 27 & 1) != 0;
           d.seg.k = word >> 23 & 0xF;
           d.chunks_left = word & 0xFFFF;
+          d.seg_add2 = (word >> 22 & 1) != 0;
           d.count_sum = 0;
           d.discard = q.fault;
           if (!q.fault) {
@@ -219,17 +224,42 @@ void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
       d.count = count;
       d.add = add;
       d.count_sum = (q.count_sum + count) & kMask34;
-      c.chunk_wr = keep;
       if (keep && (q.interval == 0 || count == 0)) {
         c.raise(CoreError::seg_chunk_zero);
         d.discard = true;
       }
       d.product = 0;
-      d.mul_a = (count - 1) & 0xFFFF;
-      d.mul_b = uint64_t(int64_t(int16_t(add))) & kMask34;
-      d.parse = Parse::chunk_check;
+      if (q.seg_add2) {
+        d.parse = Parse::chunk_add2;
+      } else {
+        // The chunk's last word: add2 = 0, straight to pass 2 with 2·add.
+        d.add2 = 0;
+        c.chunk_wr = keep;
+        d.mul_a = (count - 1) & 0xFFFF;
+        d.mul_b = 2 * sext16(add);
+        d.parse = Parse::chunk_check;
+      }
       break;
     }
+    case Parse::chunk_add2: {
+      if (!c.take) break;
+      const uint32_t add2 = word & 0xFFFF;
+      d.add2 = add2;
+      c.chunk_wr = keep;
+      d.product = 0;
+      if (add2 == 0) {
+        d.mul_a = (q.count - 1) & 0xFFFF;
+        d.mul_b = 2 * sext16(q.add);
+        d.parse = Parse::chunk_check;
+      } else {
+        // Pass 1: (count-2)·add2, no multiplier bit when count < 2.
+        d.mul_a = q.count < 2 ? 0 : q.count - 2;
+        d.mul_b = sext16(add2);
+        d.parse = Parse::chunk_inc;
+      }
+      break;
+    }
+    case Parse::chunk_inc: parse_check_increment(d, c); break;
     case Parse::chunk_check: parse_check_chunk(v, d, c); break;
     case Parse::reply:
       if (!q.rsp_valid || in.rsp_ready) d.parse = Parse::command;
@@ -237,19 +267,42 @@ void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
   }
 }
 
-// The chunk's last delay interval + (count-1)·add, one multiplier bit per cycle; after
-// the segment's last chunk, the count sum and the commit.
+// The chunk check's bit-serial multiplier: one bit of mul_a a cycle; false when
+// no bit is left (the product is complete).
+bool CpCore::multiply_step(Regs& d) const {
+  const Regs& q = r_;
+  if (q.mul_a == 0) return false;
+  if (q.mul_a & 1) d.product = q.product + q.mul_b;
+  d.mul_a = q.mul_a >> 1;
+  d.mul_b = q.mul_b * 2;
+  return true;
+}
+
+// Pass 1 of a chunk with add2 ≠ 0: its last increment add + (count-2)·add2, one
+// multiplier bit per cycle; then the sign rule (no increment of the opposite sign
+// to add) and pass 2's multiplicand add + last increment.
+void CpCore::parse_check_increment(Regs& d, Cycle& c) const {
+  const Regs& q = r_;
+  if (multiply_step(d)) return;
+  const int64_t add = sext16(q.add), last_inc = add + q.product;
+  if (!q.discard && !q.fault && ((add > 0 && last_inc < 0) || (add < 0 && last_inc > 0))) {
+    c.raise(CoreError::seg_add2);
+    d.discard = true;
+  }
+  d.product = 0;
+  d.mul_a = (q.count - 1) & 0xFFFF;
+  d.mul_b = add + last_inc;
+  d.parse = Parse::chunk_check;
+}
+
+// Pass 2: the chunk's last delay interval + (count-1)·(add + last increment)/2, one
+// multiplier bit per cycle; after the segment's last chunk, the count sum and the commit.
 void CpCore::parse_check_chunk(const View& v, Regs& d, Cycle& c) const {
   const Regs& q = r_;
-  if (q.mul_a != 0) {
-    if (q.mul_a & 1) d.product = (q.product + q.mul_b) & kMask34;
-    d.mul_a = q.mul_a >> 1;
-    d.mul_b = (q.mul_b << 1) & kMask34;
-    return;
-  }
+  if (multiply_step(d)) return;
   bool raised = false;
-  const uint64_t last_delay = (uint64_t(q.interval) + q.product) & kMask34;
-  if (!q.discard && !q.fault && (last_delay >> 32 != 0 || last_delay == 0)) {
+  const int64_t last_delay = int64_t(q.interval) + (q.product >> 1);  // product is even
+  if (!q.discard && !q.fault && (last_delay <= 0 || last_delay > int64_t(0xFFFFFFFF))) {
     c.raise(CoreError::seg_delay);
     d.discard = true;
     raised = true;
@@ -333,8 +386,9 @@ void CpCore::run(const View& v, Regs& d, Cycle& c) const {
     const uint64_t head = v.chunk.out_data[0];
     c.chunk_pop = true;
     d.delay = uint32_t(head);
-    d.timer_add = uint32_t(head >> 32) & 0xFFFF;
+    d.timer_inc = uint32_t(sext16(uint32_t(head >> 32)));
     d.moves_left = uint32_t(head >> 48) & 0xFFFF;
+    d.timer_add2 = uint32_t(v.chunk.out_data[1]) & 0xFFFF;
   };
   if (!q.chunk_loaded && v.chunk.out_valid) {
     load_chunk();
@@ -346,7 +400,8 @@ void CpCore::run(const View& v, Regs& d, Cycle& c) const {
     d.elapsed = 1;
     if (q.moves_left != 1) {
       d.moves_left = (q.moves_left - 1) & 0xFFFF;
-      d.delay = q.delay + uint32_t(int32_t(int16_t(q.timer_add)));
+      d.delay = q.delay + q.timer_inc;
+      d.timer_inc = q.timer_inc + uint32_t(sext16(q.timer_add2));
     } else if (v.chunk.out_valid) {
       load_chunk();
     } else {
@@ -438,7 +493,9 @@ bool CpCore::cmd_ready() const {
     case Parse::seg_h1:
     case Parse::seg_v:
     case Parse::chunk_interval: return true;
-    case Parse::chunk_count: return r_.discard || r_.fault || !chunk_fifo_.outputs().full;
+    case Parse::chunk_count:
+      return r_.seg_add2 || r_.discard || r_.fault || !chunk_fifo_.outputs().full;
+    case Parse::chunk_add2: return r_.discard || r_.fault || !chunk_fifo_.outputs().full;
     default: return false;  // checking a chunk, or a reply waits
   }
 }
@@ -498,7 +555,7 @@ void CpCore::tick() {
   };
   edge(seg_fifo_, c.seg_wr, pack_segment(d.seg), true, false, c.seg_pop);
   edge(run_fifo_, c.run_wr, c.run_data, true, false, c.run_pop);
-  edge(chunk_fifo_, c.chunk_wr, FifoWord{chunk_word(q.interval, d.add, d.count)}, c.chunk_commit,
+  edge(chunk_fifo_, c.chunk_wr, chunk_word(q.interval, d.add, d.count, d.add2), c.chunk_commit,
        c.chunk_rollback, c.chunk_pop);
 
   // The core's own registers: reset clears the control state; the datapath loads.

@@ -37,7 +37,9 @@ class CpCore {
 
  private:
   // The command parser's position in a command (docs/CORE.md, "Cycle behaviour").
-  enum class Parse { command, seg_h1, seg_v, chunk_interval, chunk_count, chunk_check, reply };
+  enum class Parse {
+    command, seg_h1, seg_v, chunk_interval, chunk_count, chunk_add2, chunk_inc, chunk_check, reply
+  };
 
   struct AxisConfig {
     uint32_t step_high = 1, step_low = 1, dir_setup = 1, dir_hold = 1;
@@ -72,13 +74,19 @@ class CpCore {
     std::array<AxisConfig, kCoreMaxAxes> cfg{};
     // Datapath (not reset).
     Segment seg;                // the segment being read
+    bool seg_add2 = false;      // its chunks carry add2 (three words)
     uint32_t chunks_left = 0, v_index = 0;
-    uint32_t interval = 0, count = 0, add = 0;
+    uint32_t interval = 0, count = 0, add = 0, add2 = 0;
     uint64_t count_sum = 0;
-    uint64_t product = 0, mul_a = 0, mul_b = 0;  // (count-1)·add, bit-serial
+    // The chunk check's bit-serial products (docs/CORE.md): pass 1 (count-2)·add2,
+    // pass 2 (count-1)·(add + last increment); both fit 49 bits, never wrap.
+    int64_t product = 0, mul_b = 0;
+    uint32_t mul_a = 0;
     uint32_t rsp_data = 0;
     bool cur_end = false;
-    uint32_t delay = 0, moves_left = 0, timer_add = 0, elapsed = 0;
+    uint32_t delay = 0, moves_left = 0, elapsed = 0;
+    uint32_t timer_inc = 0;   // the running increment, 32 bits (signed, mod 2^32)
+    uint32_t timer_add2 = 0;  // 16 bits
   };
 
   // Everything one clock decides besides the next register values: the sub-blocks'
@@ -121,6 +129,8 @@ class CpCore {
 
   void parse(const View& v, Regs& d, Cycle& c) const;
   void parse_check_chunk(const View& v, Regs& d, Cycle& c) const;
+  void parse_check_increment(Regs& d, Cycle& c) const;
+  bool multiply_step(Regs& d) const;
   void build(const View& v, Regs& d, Cycle& c) const;
   void run(const View& v, Regs& d, Cycle& c) const;
   void latch_faults(Regs& d, Cycle& c) const;

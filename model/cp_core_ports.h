@@ -56,6 +56,7 @@ enum class CoreError : uint32_t {
   bad_opcode = 12,
   config_busy = 13,
   config_value = 14,
+  seg_add2 = 15,
 };
 
 }  // namespace cpstep::model

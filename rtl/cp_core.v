@@ -89,16 +89,21 @@ localparam [7:0] E_ABORT          = 8'd11;
 localparam [7:0] E_BAD_OPCODE     = 8'd12;
 localparam [7:0] E_CONFIG_BUSY    = 8'd13;
 localparam [7:0] E_CONFIG_VALUE   = 8'd14;
+localparam [7:0] E_SEG_ADD2       = 8'd15;
 // The bits of a 16-bit CONFIG value that a TW-bit timing field holds.
 localparam [15:0] TMASK = (TW >= 16) ? 16'hFFFF : ((16'd1 << TW) - 16'd1);
 
-localparam [2:0] P_CMD  = 3'd0;   // first word of a command
-localparam [2:0] P_H1   = 3'd1;   // segment: dir and U
-localparam [2:0] P_V    = 3'd2;   // segment: v_i
-localparam [2:0] P_C0   = 3'd3;   // chunk: interval
-localparam [2:0] P_C1   = 3'd4;   // chunk: add and count
-localparam [2:0] P_MUL  = 3'd5;   // chunk: checking its last delay
-localparam [2:0] P_RSP  = 3'd6;   // a reply waits to be taken
+localparam [3:0] P_CMD  = 4'd0;   // first word of a command
+localparam [3:0] P_H1   = 4'd1;   // segment: dir and U
+localparam [3:0] P_V    = 4'd2;   // segment: v_i
+localparam [3:0] P_C0   = 4'd3;   // chunk: interval
+localparam [3:0] P_C1   = 4'd4;   // chunk: add and count
+localparam [3:0] P_MUL  = 4'd5;   // chunk: checking its last delay
+localparam [3:0] P_RSP  = 4'd6;   // a reply waits to be taken
+localparam [3:0] P_C2   = 4'd7;   // chunk: add2 (segments whose chunks carry it)
+localparam [3:0] P_INC  = 4'd8;   // chunk: its last increment add + (count-2)*add2
+// Width of the validator's products: |(count-1)*(add + last increment)| < 2^47.
+localparam integer MW = 49;
 
 generate
     if (N < 1 || N > 8) begin : g_check_n
@@ -123,7 +128,7 @@ endgenerate
 
 // ---------------------------------------------------------------- state
 // Control (reset).
-reg [2:0]    p_state_q, p_state_d;
+reg [3:0]    p_state_q, p_state_d;
 reg          discard_q, discard_d;       // the segment being read is dropped
 reg          rsp_valid_q, rsp_valid_d;
 reg          running_q, running_d;
@@ -148,20 +153,23 @@ reg [N-1:0]  dir_q, dir_d;               // direction each axis is to step in
 
 // Datapath (no reset).
 reg [SDW-1:0] seg_q, seg_d;              // the segment being read
+reg          seg_add2_q, seg_add2_d;     // its chunks carry add2 (three words)
 reg [15:0]   nchunks_q, nchunks_d;       // chunks still to read
 reg [2:0]    v_idx_q, v_idx_d;
 reg [31:0]   interval_q, interval_d;
 reg [15:0]   count_q, count_d;
 reg [15:0]   add_q, add_d;
+reg [15:0]   add2_q, add2_d;
 reg [33:0]   sum_q, sum_d;               // chunk counts so far
-reg [33:0]   prod_q, prod_d;             // (count-1)*add, built bit by bit
-reg [15:0]   mul_a_q, mul_a_d;           // multiplier bits left (count-1)
-reg [33:0]   mul_b_q, mul_b_d;           // add, shifted
+reg [MW-1:0] prod_q, prod_d;             // a product, built bit by bit
+reg [15:0]   mul_a_q, mul_a_d;           // multiplier bits left
+reg [MW-1:0] mul_b_q, mul_b_d;           // multiplicand, shifted
 reg [31:0]   rsp_data_q, rsp_data_d;
 reg          cur_end_q, cur_end_d;
 reg [31:0]   delay_q, delay_d;
 reg [15:0]   left_q, left_d;
-reg [15:0]   tadd_q, tadd_d;
+reg [31:0]   tinc_q, tinc_d;             // the running increment (signed)
+reg [15:0]   tadd2_q, tadd2_d;
 reg [31:0]   elapsed_q, elapsed_d;
 
 // ---------------------------------------------------------------- queues
@@ -178,7 +186,7 @@ reg [RDW-1:0] run_wdata;
 
 wire          ch_full, ch_head_valid;
 wire [CAW:0]  ch_used, ch_level;
-wire [63:0]   ch_head;
+wire [79:0]   ch_head;
 reg           ch_wr, ch_commit, ch_rollback, ch_pop;
 
 reg           flush;
@@ -195,9 +203,9 @@ cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
     .full_o(run_full), .used_o(run_used), .level_o(run_level),
     .out_valid_o(run_head_valid), .out_ready_i(run_pop), .out_data_o(run_head));
 
-cp_fifo #(.DW(64), .AW(CAW)) u_chunk_fifo (
+cp_fifo #(.DW(80), .AW(CAW)) u_chunk_fifo (
     .clk(clk), .rst(rst), .clear_i(flush),
-    .wr_i(ch_wr), .wr_data_i({count_d, add_d, interval_q}), .commit_i(ch_commit),
+    .wr_i(ch_wr), .wr_data_i({add2_d, count_d, add_d, interval_q}), .commit_i(ch_commit),
     .rollback_i(ch_rollback),
     .full_o(ch_full), .used_o(ch_used), .level_o(ch_level),
     .out_valid_o(ch_head_valid), .out_ready_i(ch_pop), .out_data_o(ch_head));
@@ -252,8 +260,7 @@ wire [N-1:0] lane_move  = cur_lane_q ? eng_move[2*N-1:N] : eng_move[N-1:0];
 wire         lane_last  = cur_lane_q ? eng_move_last[N] : eng_move_last[0];
 wire [N-1:0] build_ready = build_lane_q ? eng_in_ready[2*N-1:N] : eng_in_ready[N-1:0];
 wire         build_err  = |eng_err;
-wire unused_err_code = &{1'b0, eng_err_code, seg_used, run_used, ch_used, count_q, add_q,
-                         head_u[23:UW]};
+wire unused_err_code = &{1'b0, eng_err_code, seg_used, run_used, ch_used, head_u[23:UW], head_k};
 
 // ---------------------------------------------------------------- pulses
 wire [N-1:0]  pulse_ready, pulse_busy;
@@ -281,8 +288,16 @@ wire [3:0]  op        = cmd_data_i[31:28];
 wire        take      = cmd_valid_i && cmd_ready_o;
 wire [15:0] c1_count  = cmd_data_i[15:0];
 wire [15:0] c1_add    = cmd_data_i[31:16];
+wire [15:0] c2_add2   = cmd_data_i[15:0];
 wire [33:0] seg_moves = {10'd0, seg_q[24*N +: 24]} << seg_q[SDW-2 -: 4];
-wire [33:0] last_delay = {2'b00, interval_q} + prod_q;
+// Pass 2 of a chunk's check: prod = (count-1)*(add + last increment), even, so the
+// last delay is interval + prod/2.
+wire [MW:0]   last_delay = {{(MW-31){1'b0}}, interval_q} + {{2{prod_q[MW-1]}}, prod_q[MW-1:1]};
+wire [MW-1:0] add_sx   = {{(MW-16){add_q[15]}}, add_q};
+// Pass 1: prod = (count-2)*add2; the last increment add + prod.
+wire [MW-1:0] last_inc = add_sx + prod_q;
+wire          inc_flip = (!add_q[15] && add_q != 16'd0 && last_inc[MW-1]) ||
+                         (add_q[15] && !last_inc[MW-1] && last_inc != {MW{1'b0}});
 
 wire [31:0] ch_level32 = {{(31 - CAW){1'b0}}, ch_level};
 
@@ -318,14 +333,15 @@ always @* begin
     rsp_valid_d = rsp_valid_q && !rsp_ready_i;
     rsp_data_d  = rsp_data_q;
     seg_d = seg_q;  nchunks_d = nchunks_q;  v_idx_d = v_idx_q;
-    interval_d = interval_q;  count_d = count_q;  add_d = add_q;  sum_d = sum_q;
+    interval_d = interval_q;  count_d = count_q;  add_d = add_q;  add2_d = add2_q;  sum_d = sum_q;
+    seg_add2_d = seg_add2_q;
     prod_d = prod_q;  mul_a_d = mul_a_q;  mul_b_d = mul_b_q;
     running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
     cur_end_d = cur_end_q;  build_lane_d = build_lane_q;  ch_loaded_d = ch_loaded_q;
     late_d = late_q;  bad_lane_d = bad_lane_q;
     fault_d = fault_q;  err_d = err_q;  stretched_d = stretched_q;
     stretch_cnt_d = stretch_cnt_q;  moves_done_d = moves_done_q;  segs_done_d = segs_done_q;
-    delay_d = delay_q;  left_d = left_q;  tadd_d = tadd_q;  dir_d = dir_q;
+    delay_d = delay_q;  left_d = left_q;  tinc_d = tinc_q;  tadd2_d = tadd2_q;  dir_d = dir_q;
     elapsed_d = (elapsed_q == 32'hFFFF_FFFF) ? elapsed_q : elapsed_q + 1'b1;
 
     seg_wr = 1'b0;  seg_pop = 1'b0;  run_wr = 1'b0;  run_pop = 1'b0;
@@ -344,6 +360,7 @@ always @* begin
             seg_d[SDW-1] = cmd_data_i[27];
             seg_d[SDW-2 -: 4] = cmd_data_i[26:23];
             nchunks_d = cmd_data_i[15:0];
+            seg_add2_d = cmd_data_i[22];
             sum_d     = 34'd0;
             discard_d = fault_q;
             if (!fault_q) begin
@@ -412,24 +429,56 @@ always @* begin
         count_d = c1_count;
         add_d   = c1_add;
         sum_d   = sum_q + {18'd0, c1_count};
-        ch_wr   = !discard_q && !fault_q;
         if (!discard_q && !fault_q && (interval_q == 32'd0 || c1_count == 16'd0)) begin
             fault_set = 1'b1;  fault_code = E_SEG_CHUNK_ZERO;  discard_d = 1'b1;
         end
-        prod_d  = 34'd0;
-        mul_a_d = c1_count - 1'b1;
-        mul_b_d = {{18{c1_add[15]}}, c1_add};
-        p_state_d = P_MUL;
+        prod_d  = {MW{1'b0}};
+        if (seg_add2_q) begin
+            p_state_d = P_C2;
+        end else begin
+            // The chunk's last word: add2 = 0, straight to pass 2 with 2*add.
+            add2_d  = 16'd0;
+            ch_wr   = !discard_q && !fault_q;
+            mul_a_d = c1_count - 1'b1;
+            mul_b_d = {{(MW-17){c1_add[15]}}, c1_add, 1'b0};
+            p_state_d = P_MUL;
+        end
+    end
+
+    P_C2: if (take) begin
+        add2_d = c2_add2;
+        ch_wr  = !discard_q && !fault_q;
+        prod_d = {MW{1'b0}};
+        if (c2_add2 == 16'd0) begin
+            mul_a_d = count_q - 1'b1;
+            mul_b_d = {add_sx[MW-2:0], 1'b0};
+            p_state_d = P_MUL;
+        end else begin
+            // Pass 1: (count-2)*add2, no multiplier bit when count < 2.
+            mul_a_d = (count_q < 16'd2) ? 16'd0 : count_q - 16'd2;
+            mul_b_d = {{(MW-16){c2_add2[15]}}, c2_add2};
+            p_state_d = P_INC;
+        end
+    end
+
+    P_INC: begin
+        // (count-2) * add2 (the multiplier below); then the sign rule and pass 2.
+        if (mul_a_q == 16'd0) begin
+            if (!discard_q && !fault_q && inc_flip) begin
+                fault_set = 1'b1;  fault_code = E_SEG_ADD2;  discard_d = 1'b1;
+            end
+            prod_d  = {MW{1'b0}};
+            mul_a_d = count_q - 1'b1;
+            mul_b_d = add_sx + last_inc;
+            p_state_d = P_MUL;
+        end
     end
 
     P_MUL: begin
-        // One bit of (count-1) * add a cycle; done when no bit is left.
-        if (mul_a_q != 16'd0) begin
-            if (mul_a_q[0]) prod_d = prod_q + mul_b_q;
-            mul_a_d = mul_a_q >> 1;
-            mul_b_d = mul_b_q << 1;
-        end else begin
-            if (!discard_q && !fault_q && (last_delay[33] || last_delay[32] || last_delay == 34'd0)) begin
+        // (count-1) * (add + last increment) (the multiplier below); then the last delay.
+        if (mul_a_q == 16'd0) begin
+            if (!discard_q && !fault_q && (last_delay[MW] || last_delay[MW-1:32] != {(MW-32){1'b0}} ||
+                                           last_delay == {(MW+1){1'b0}})) begin
                 fault_set = 1'b1;  fault_code = E_SEG_DELAY;  discard_d = 1'b1;
             end
             nchunks_d = nchunks_q - 1'b1;
@@ -457,6 +506,13 @@ always @* begin
 
     default: p_state_d = P_CMD;
     endcase
+
+    // The chunk check's bit-serial multiplier: one bit of mul_a a cycle while any is left.
+    if ((p_state_q == P_INC || p_state_q == P_MUL) && mul_a_q != 16'd0) begin
+        if (mul_a_q[0]) prod_d = prod_q + mul_b_q;
+        mul_a_d = mul_a_q >> 1;
+        mul_b_d = mul_b_q << 1;
+    end
 
     // ---- builder: the next committed segment into the idle lane
     if (seg_head_valid && !fault_q && &build_ready && !run_full) begin
@@ -493,8 +549,9 @@ always @* begin
         ch_pop      = 1'b1;
         ch_loaded_d = 1'b1;
         delay_d     = ch_head[31:0];
-        tadd_d      = ch_head[47:32];
+        tinc_d      = {{16{ch_head[47]}}, ch_head[47:32]};
         left_d      = ch_head[63:48];
+        tadd2_d     = ch_head[79:64];
     end
     if (fire) begin
         eng_move_ready = cur_lane_q ? {{N{1'b1}}, {N{1'b0}}} : {{N{1'b0}}, {N{1'b1}}};
@@ -503,12 +560,14 @@ always @* begin
         elapsed_d      = 32'd1;
         if (left_q != 16'd1) begin
             left_d  = left_q - 1'b1;
-            delay_d = delay_q + {{16{tadd_q[15]}}, tadd_q};
+            delay_d = delay_q + tinc_q;
+            tinc_d  = tinc_q + {{16{tadd2_q[15]}}, tadd2_q};
         end else if (ch_head_valid) begin
             ch_pop  = 1'b1;
             delay_d = ch_head[31:0];
-            tadd_d  = ch_head[47:32];
+            tinc_d  = {{16{ch_head[47]}}, ch_head[47:32]};
             left_d  = ch_head[63:48];
+            tadd2_d = ch_head[79:64];
         end else begin
             ch_loaded_d = 1'b0;
         end
@@ -636,16 +695,19 @@ always @(posedge clk) begin
         end
     end
     seg_q <= seg_d;  nchunks_q <= nchunks_d;  v_idx_q <= v_idx_d;
-    interval_q <= interval_d;  count_q <= count_d;  add_q <= add_d;  sum_q <= sum_d;
+    interval_q <= interval_d;  count_q <= count_d;  add_q <= add_d;  add2_q <= add2_d;
+    sum_q <= sum_d;  seg_add2_q <= seg_add2_d;
     prod_q <= prod_d;  mul_a_q <= mul_a_d;  mul_b_q <= mul_b_d;
     rsp_data_q <= rsp_data_d;  cur_end_q <= cur_end_d;
-    delay_q <= delay_d;  left_q <= left_d;  tadd_q <= tadd_d;  elapsed_q <= elapsed_d;
+    delay_q <= delay_d;  left_q <= left_d;  tinc_q <= tinc_d;  tadd2_q <= tadd2_d;
+    elapsed_q <= elapsed_d;
 end
 
 // ---------------------------------------------------------------- outputs
 assign cmd_ready_o = (p_state_q == P_CMD) ||
                      (p_state_q == P_H1) || (p_state_q == P_V) || (p_state_q == P_C0) ||
-                     (p_state_q == P_C1 && (discard_q || fault_q || !ch_full));
+                     (p_state_q == P_C1 && (seg_add2_q || discard_q || fault_q || !ch_full)) ||
+                     (p_state_q == P_C2 && (discard_q || fault_q || !ch_full));
 assign rsp_valid_o = rsp_valid_q;
 assign rsp_data_o  = rsp_valid_q ? rsp_data_q : 32'd0;
 assign running_o   = running_q;

@@ -12,9 +12,19 @@ plan::ChunkLimits chunk_limits(const CardLimits&) {
   l.max_count = 0xFFFF;
   l.add_min = INT16_MIN;
   l.add_max = INT16_MAX;
-  l.add2_min = l.add2_max = 0;
-  l.enable_add2 = false;
+  l.add2_min = INT16_MIN;
+  l.add2_max = INT16_MAX;
+  l.enable_add2 = true;
+  l.monotone = true;
   return l;
+}
+
+bool in_card_form(const plan::Chunk& c) {
+  auto int16 = [](int64_t x) { return x >= INT16_MIN && x <= INT16_MAX; };
+  if (c.count < 1 || c.count > 0xFFFF || !int16(c.add) || !int16(c.add2)) return false;
+  if (c.count < 3) return true;
+  const int64_t last = int64_t(c.add) + int64_t(c.count - 2) * c.add2;
+  return int16(last) && !(c.add > 0 && last < 0) && !(c.add < 0 && last > 0);
 }
 
 namespace {
@@ -24,19 +34,26 @@ plan::Diagnostic error(const std::string& file, const plan::SourceLoc& loc, std:
 }
 
 // Takes `moves` moves off the front of a chunk list, splitting a chunk where
-// the boundary falls inside it (exact: the rest starts at its own next delay).
+// the boundary falls inside it (exact: the rest starts at its own next delay,
+// interval + n add + add2 n(n-1)/2, with add + n add2: an increment of the chunk,
+// so within int16 by in_card_form(); a rest of one move needs neither add).
 std::vector<WireChunk> take_moves(std::vector<plan::Chunk>& chunks, size_t& next, uint64_t moves) {
   std::vector<WireChunk> out;
   while (moves > 0) {
     plan::Chunk& c = chunks[next];
     const uint32_t n = uint32_t(std::min<uint64_t>(moves, c.count));
-    out.push_back({c.interval, uint16_t(n), int16_t(c.add)});
+    // (add2 matters from a chunk's third move on, add from its second)
+    out.push_back({c.interval, uint16_t(n), int16_t(n > 1 ? c.add : 0), int16_t(n > 2 ? c.add2 : 0)});
     moves -= n;
     if (n == c.count) {
       ++next;
     } else {
-      c.interval = uint32_t(int64_t(c.interval) + int64_t(n) * c.add);
+      const int64_t nn = n;
+      c.interval = uint32_t(int64_t(c.interval) + nn * c.add + int64_t(c.add2) * nn * (nn - 1) / 2);
+      c.add = int32_t(int64_t(c.add) + nn * c.add2);
       c.count -= n;
+      if (c.count <= 2) c.add2 = 0;
+      if (c.count == 1) c.add = 0;
     }
   }
   return out;
@@ -59,9 +76,12 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
     const plan::CardSegment& seg = job.card[s].segment;
     std::vector<plan::Chunk> chunks = job.card[s].chunks;
     for (const plan::Chunk& c : chunks) {
-      if (c.add2 != 0 || c.add < INT16_MIN || c.add > INT16_MAX || c.count > 0xFFFF) {
+      if (!in_card_form(c)) {
         r.errors.push_back(error(file, seg.loc, fmt::format("chunk (interval {}, count {}, add {}, "
-                                                      "add2 {}) is outside the card's chunk form",
+                                                      "add2 {}) is outside the card's chunk form "
+                                                      "(count 1..65535; add, add2 and every "
+                                                      "increment add + j*add2 within 16 bits "
+                                                      "and of one sign)",
                                                       c.interval, c.count, c.add, c.add2)));
         return r;
       }

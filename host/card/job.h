@@ -24,8 +24,12 @@ struct CardLimits {
   unsigned segment_queue = 4;      // 2^SAW
 };
 
-// The chunk form the card executes: 16-bit count and add, no add2.
+// The chunk form the card executes: 16-bit count, add and add2; the increments
+// add + j*add2 within 16 bits and of one sign (docs/CORE.md, SEG_ADD2).
 plan::ChunkLimits chunk_limits(const CardLimits& card = {});
+
+// A chunk the card takes as it is and that to_wire() can split anywhere.
+bool in_card_form(const plan::Chunk& c);
 
 struct WireJob {
   std::vector<WireSegment> segments;

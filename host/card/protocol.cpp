@@ -5,7 +5,9 @@
 namespace cpstep::card {
 
 void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
-  out.push_back(0x1u << 28 | uint32_t(s.end) << 27 | (s.k & 0xFu) << 23 |
+  bool add2 = false;
+  for (const WireChunk& c : s.chunks) add2 = add2 || c.add2 != 0;
+  out.push_back(0x1u << 28 | uint32_t(s.end) << 27 | (s.k & 0xFu) << 23 | uint32_t(add2) << 22 |
                 uint32_t(s.chunks.size() & 0xFFFF));
   uint32_t dirs = 0;
   for (size_t a = 0; a < s.dir_positive.size(); ++a) dirs |= uint32_t(s.dir_positive[a]) << a;
@@ -14,6 +16,7 @@ void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
   for (const WireChunk& c : s.chunks) {
     out.push_back(c.interval);
     out.push_back(uint32_t(uint16_t(c.add)) << 16 | c.count);
+    if (add2) out.push_back(uint16_t(c.add2));
   }
 }
 
@@ -30,6 +33,11 @@ void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out) {
   out.push_back(0x4u << 28 | (reg & 0xFF));
 }
 
+size_t command_words(uint32_t first, unsigned axes) {
+  if (first >> 28 != 0x1) return 1;
+  return 2 + axes + ((first >> 22 & 1) ? 3 : 2) * size_t(first & 0xFFFF);
+}
+
 Status decode_status(uint32_t w) {
   return {bool(w & 1), bool(w >> 1 & 1), bool(w >> 2 & 1), bool(w >> 3 & 1),
           w >> 8 & 0xFF, w >> 16 & 0xFF, w >> 24 & 0xFF};
@@ -43,7 +51,7 @@ ErrorName error_name(uint32_t code) {
       {"SEG_K", "k > KMAX"},
       {"SEG_CHUNKS", "no chunk, or more than the chunk queue holds"},
       {"SEG_CHUNK_ZERO", "a chunk with interval 0 or count 0"},
-      {"SEG_DELAY", "a chunk's delay interval + j*add outside 1..2^32-1"},
+      {"SEG_DELAY", "a chunk's delay interval + j*add + add2*j*(j-1)/2 outside 1..2^32-1"},
       {"SEG_COUNT_SUM", "the chunk counts do not sum to U*2^k"},
       {"SEG_PATTERN", "some U/gcd(U, v_i) exceeds the pattern capacity W"},
       {"UNDERRUN", "a segment without the end flag ended and no complete segment followed"},
@@ -52,6 +60,7 @@ ErrorName error_name(uint32_t code) {
       {"BAD_OPCODE", "an unknown command opcode"},
       {"CONFIG_BUSY", "CONFIG while running"},
       {"CONFIG_VALUE", "a step high or step low time of 0"},
+      {"SEG_ADD2", "a chunk whose increment add + j*add2 changes sign"},
   };
   if (code < std::size(names)) return names[code];
   return {"UNKNOWN", "an error code this program does not know"};

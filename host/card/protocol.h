@@ -1,6 +1,7 @@
 // The card's command words (docs/CORE.md), built from values.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -11,6 +12,9 @@ struct WireChunk {
   uint32_t interval = 0;  // cycles before the chunk's first move (>= 1)
   uint16_t count = 0;     // moves in the chunk (>= 1)
   int16_t add = 0;        // interval change per move
+  int16_t add2 = 0;       // change of add per move: move j comes interval + j*add +
+                          // add2*j*(j-1)/2 cycles after the previous one
+  friend bool operator==(const WireChunk&, const WireChunk&) = default;
 };
 
 struct WireSegment {
@@ -34,11 +38,16 @@ enum class Register : uint32_t {
 };
 constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
 
-// Appends the words of each command to `out`.
+// Appends the words of each command to `out`. A segment's chunks are two words
+// each, or three (with add2, header bit 22) when some chunk has add2 != 0.
 void encode_segment(const WireSegment& s, std::vector<uint32_t>& out);
 void encode_config(unsigned axis, ConfigField field, uint32_t value, std::vector<uint32_t>& out);
 void encode_control(bool start, bool abort, bool clear, std::vector<uint32_t>& out);
 void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out);
+
+// How many words the command whose first word is `first` has, on a card of
+// `axes` axes (a SEGMENT: 2 + axes + 2 or 3 words per chunk; others one).
+size_t command_words(uint32_t first, unsigned axes);
 
 // Status word fields.
 struct Status {

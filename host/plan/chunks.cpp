@@ -25,8 +25,11 @@ struct Best {
 // keeps every event in its window and every delay in [1, 2^32).
 //   r_j = P + (j+1) I + A j(j+1)/2 + B (j+1) j (j-1)/6
 //   delay_j = I + j A + B j(j-1)/2
+// With lim.monotone and B != 0, `sign` (+1 or -1) is the sign every increment
+// A + i B (i = 0..count-2) must have or be 0, each also within [add_min, add_max];
+// the two signs are tried separately (each keeps the feasible adds an interval).
 void extend(std::span<const std::int64_t> lo, std::span<const std::int64_t> hi, std::int64_t P,
-            std::int64_t I, std::int64_t B, const ChunkLimits& lim, Best& best) {
+            std::int64_t I, std::int64_t B, const ChunkLimits& lim, Best& best, int sign = 0) {
     std::int64_t a_lo = lim.add_min, a_hi = lim.add_max;
     const std::size_t n = std::min<std::size_t>(lo.size(), lim.max_count);
     std::uint32_t count = 1;
@@ -39,6 +42,14 @@ void extend(std::span<const std::int64_t> lo, std::span<const std::int64_t> hi, 
         const std::int64_t dbase = I + B * jj * (jj - 1) / 2;
         new_lo = std::max(new_lo, ceil_div(1 - dbase, jj));
         new_hi = std::min(new_hi, floor_div(kMaxDelay - dbase, jj));
+        if (sign != 0) {
+            // The last increment A + (j-1) B, and the sign of all of them.
+            const std::int64_t shift = (jj - 1) * B;
+            new_lo = std::max(new_lo, lim.add_min - shift);
+            new_hi = std::min(new_hi, lim.add_max - shift);
+            if (sign > 0) new_lo = std::max({new_lo, std::int64_t{0}, -shift});
+            else new_hi = std::min({new_hi, std::int64_t{0}, -shift});
+        }
         if (new_lo > new_hi) break;
         a_lo = new_lo;
         a_hi = new_hi;
@@ -92,7 +103,14 @@ ChunkResult compress(std::span<const double> ideal, std::int64_t prev_event, dou
         }
         Best best;
         for (std::int64_t I = i_hi; I >= i_lo; --I) {
-            for (std::int64_t B : b_candidates) extend(L, H, P, I, B, limits, best);
+            for (std::int64_t B : b_candidates) {
+                if (limits.monotone && B != 0) {
+                    extend(L, H, P, I, B, limits, best, +1);
+                    extend(L, H, P, I, B, limits, best, -1);
+                } else {
+                    extend(L, H, P, I, B, limits, best);
+                }
+            }
         }
         out.chunks.push_back({static_cast<std::uint32_t>(best.interval), best.count,
                               static_cast<std::int32_t>(best.add),

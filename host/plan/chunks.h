@@ -25,6 +25,10 @@ struct ChunkLimits {
     std::int64_t add_min = INT32_MIN, add_max = INT32_MAX;
     std::int64_t add2_min = INT16_MIN, add2_max = INT16_MAX;
     bool enable_add2 = true;
+    // The card's rule for add2 (docs/CORE.md, SEG_ADD2): within a chunk the
+    // increments add + j*add2 (j = 0..count-2) all lie in [add_min, add_max] and
+    // none has the opposite sign of another, so the delays are monotone.
+    bool monotone = false;
 };
 
 struct ChunkResult {

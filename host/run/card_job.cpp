@@ -26,8 +26,7 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode,
     return r;
   }
   plan::PlanOptions options;
-  options.chunk_limits = card::chunk_limits();
-  options.add2_from_machine = false;
+  options.chunk_limits = card::chunk_limits();  // add2 as the machine's planner.chunk_add2 says
   auto planned = plan::plan_job(*job, *machine, options);
   r.warnings.insert(r.warnings.end(), planned.warnings.begin(), planned.warnings.end());
   if (!planned.ok()) {

@@ -40,7 +40,8 @@ struct CardJob {
 };
 
 // Loads the machine and the G-code, plans the job in the card's chunk form
-// (card::chunk_limits(), no add2) and encodes it. Every error refuses the job;
+// (card::chunk_limits(): add2 unless the machine's planner.chunk_add2 is false)
+// and encodes it. Every error refuses the job;
 // warnings travel with the result.
 plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode,
                                   const std::filesystem::path& machine);

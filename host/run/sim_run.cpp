@@ -70,7 +70,7 @@ SendEnd send_words(Driver& drv, const Stepper& dut, const std::vector<uint32_t>&
 // SEGMENT is 2 + N + 2 nchunks words, every other command one word).
 size_t command_end(const std::vector<uint32_t>& words, size_t i) {
   for (size_t c = 0; c < words.size();) {
-    const size_t len = words[c] >> 28 == 0x1 ? 2 + plan::kAxes + 2 * (words[c] & 0xFFFF) : 1;
+    const size_t len = card::command_words(words[c], plan::kAxes);
     if (i < c + len) return std::min(words.size(), c + len);
     c += len;
   }

@@ -239,8 +239,10 @@ class Parser {
         have_count = true;
       } else if (f.key == "add") {
         c.add = int16_t(parse_signed(f.value, f.value_col, -32768, 32767, "add"));
+      } else if (f.key == "add2") {
+        c.add2 = int16_t(parse_signed(f.value, f.value_col, -32768, 32767, "add2"));
       } else {
-        fail(f.key_col, "unknown chunk field '" + f.key + "' (interval, count, add)");
+        fail(f.key_col, "unknown chunk field '" + f.key + "' (interval, count, add, add2)");
       }
     }
     const unsigned after = toks.back().col + unsigned(toks.back().text.size());

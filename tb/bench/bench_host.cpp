@@ -1,6 +1,7 @@
 // bench_host — host planner figures for docs/BENCHMARKS.md (run by scripts/bench):
 // G-code lines planned per second, moves per chunk in the card's chunk form at the
-// machine's tolerance, and the time of one 7-phase S-curve solve.
+// machine's tolerance (with add2, and without for comparison), and the time of one
+// 7-phase S-curve solve.
 #include <fmt/core.h>
 
 #include <chrono>
@@ -36,13 +37,16 @@ int main(int argc, char** argv) {
   plan::PlanOptions card_form;
   card_form.chunk_limits = card::chunk_limits();
   card_form.add2_from_machine = false;
+  plan::PlanOptions no_add2 = card_form;  // the card's form before add2, for comparison
+  no_add2.chunk_limits.enable_add2 = false;
 
-  fmt::print("### Planning speed and chunks (card chunk form: 16-bit add, no add2)\n\n");
+  fmt::print("### Planning speed and chunks (card chunk form: 16-bit add and add2, increments of one sign)\n\n");
   fmt::print("Each job planned whole (parse, segments, reduction, lookahead, S-curves, move times,\n"
-             "chunks) and encoded to command words, best of 3 runs.\n\n");
+             "chunks) and encoded to command words, best of 3 runs. *Without add2*: moves per chunk\n"
+             "of the same job planned with add2 disabled (the card's form before add2).\n\n");
   fmt::print("| machine | job | G-code lines | card segments | moves | chunks | moves per chunk | "
-             "chunk tolerance | planning time | lines per second |\n");
-  fmt::print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+             "without add2 | chunk tolerance | planning time | lines per second |\n");
+  fmt::print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   const std::pair<const char*, const char*> jobs[] = {
       {"seed002", "dense"}, {"seed002", "bracket"}, {"seed002", "plasma"}, {"router", "bracket"},
       {"plotter", "plasma"}, {"seed002", "tab"}};
@@ -66,10 +70,13 @@ int main(int argc, char** argv) {
       stats = p->stats;
       segments = w->segments.size();
     }
+    const auto before = plan::plan_job(*plan::load_gcode(jpath), *m, no_add2);
+    if (!before.ok()) { fmt::print(stderr, "{}\n", plan::join(before.errors)); return 1; }
     const size_t lines = count_lines(jpath);
-    fmt::print("| {} | {} | {} | {} | {} | {} | {:.2f} | {:.0f} cycles ({:.2g} s) | {:.3f} s | {:.0f} |\n",
+    fmt::print("| {} | {} | {} | {} | {} | {} | {:.2f} | {:.2f} | {:.0f} cycles ({:.2g} s) | {:.3f} s | {:.0f} |\n",
                mach, job, lines, segments, stats.moves, stats.chunks, stats.moves_per_chunk(),
-               m->chunk_tolerance_cycles(), m->planner.chunk_tolerance_s, best, lines / best);
+               before->stats.moves_per_chunk(), m->chunk_tolerance_cycles(), m->planner.chunk_tolerance_s,
+               best, lines / best);
   }
 
   fmt::print("\n### One S-curve solve\n\n");

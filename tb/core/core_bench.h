@@ -37,6 +37,7 @@ struct JobShape {
   uint32_t max_delay = 40;    // typical delays are 1..max_delay
   uint32_t max_timing = 50;   // pulse timing fields up to this
   unsigned max_chunks = 16;   // chunks per segment
+  double add2 = 0.4;          // chance a segment's chunks carry add2 (three words each)
 };
 
 // Random jobs the way a host makes them (docs/CORE.md, "Command port").
@@ -71,7 +72,7 @@ class JobGen {
       card::WireSegment s;
       if (!from_deltas(d, s)) continue;
       s.end = end;
-      s.chunks = chunks(uint64_t(s.u) << s.k, shape);
+      s.chunks = chunks(uint64_t(s.u) << s.k, shape, chance(shape.add2));
       return s;
     }
   }
@@ -128,10 +129,12 @@ class JobGen {
   }
 
   // Chunks whose counts sum to `moves`, every delay in 1..2^32-1: constant runs,
-  // ramps either way, runs of delay 1 (stretches), now and then long waits.
-  std::vector<card::WireChunk> chunks(uint64_t moves, const JobShape& shape) {
+  // ramps either way, runs of delay 1 (stretches), now and then long waits; with
+  // `add2`, also curved runs (quadratic_chunk) and some add2 where it changes nothing.
+  std::vector<card::WireChunk> chunks(uint64_t moves, const JobShape& shape, bool add2 = false) {
     const unsigned most = unsigned(std::min<uint64_t>(shape.max_chunks, moves));
     unsigned n = chance(0.5) ? 1 : uniform(1, most);
+    if (add2 && moves >= 8 && chance(0.5)) n = std::max(n, unsigned(std::min<uint64_t>(most, moves / 40 + 1)));
     n = std::max<unsigned>(n, unsigned((moves + 65534) / 65535));
     std::vector<uint64_t> cut = {0, moves};
     while (cut.size() < n + 1) {
@@ -151,21 +154,55 @@ class JobGen {
       if (first + int64_t(c.count - 1) * add < 1) add = 0;
       c.interval = uint32_t(first);
       c.add = int16_t(add);
+      // add2 on a chunk of 1 or 2 moves changes no delay (only a third move would see it).
+      if (add2 && c.count <= 2 && chance(0.3)) c.add2 = int16_t(int32_t(uniform(0, 65535)) - 32768);
+      if (add2 && c.count >= 3 && c.count <= 48 && chance(0.7)) c = quadratic_chunk(c.count, shape);
       out.push_back(c);
     }
     return out;
   }
 
-  // Cycles the parser needs for a segment (docs/CORE.md, "Cycle behaviour").
+  // A chunk of `count` >= 3 moves with add2 != 0 and every increment
+  // add + i·add2 (i = 0..count-2) of one sign (or 0): delays rising or falling,
+  // the increments' magnitudes growing or shrinking, the smallest delay often 1.
+  card::WireChunk quadratic_chunk(uint32_t count, const JobShape& shape) {
+    const int64_t s = chance(0.5) ? 1 : -1;             // the increments' sign
+    const bool grows = chance(0.5);                     // |increment| grows along the chunk
+    const int64_t b = count <= 6 && chance(0.3) ? uniform(1, 500) : uniform(1, 2);
+    const int64_t e = chance(0.5) ? 0 : uniform(0, 5);  // the smallest |increment|
+    const int64_t m = count - 1;                        // increments
+    auto inc = [&](int64_t i) { return s * (e + b * (grows ? i : m - 1 - i)); };
+    const int64_t total = s * (m * e + b * m * (m - 1) / 2);  // sum of the increments
+    const int64_t smallest = chance(0.4) ? 1 : uniform(1, shape.max_delay);
+    card::WireChunk c;
+    c.count = uint16_t(count);
+    c.interval = uint32_t(s > 0 ? smallest : smallest - total);  // delay 0 or the last delay
+    c.add = int16_t(inc(0));
+    c.add2 = int16_t(inc(1) - inc(0));
+    return c;
+  }
+
+  // Cycles the parser takes after a chunk's last word before it takes the next word
+  // (docs/CORE.md, "Cycle behaviour"): add2 != 0: b1 + 1 + b2 + 1, else b2 + 1, with
+  // b1 = bit length of count-2 (0 when count < 2), b2 = bit length of (count-1) mod 2^16.
+  static uint64_t check_cycles(const card::WireChunk& ch) {
+    const uint64_t b2 = std::bit_width(uint32_t(ch.count - 1) & 0xFFFF);
+    const uint64_t b1 = ch.count < 2 ? 0 : std::bit_width(uint32_t(ch.count - 2));
+    return b2 + 1 + (ch.add2 != 0 ? b1 + 1 : 0);
+  }
+  // Cycles the parser needs for a segment.
   uint64_t parse_cycles(const card::WireSegment& s) const {
+    bool three = false;
+    for (const auto& ch : s.chunks) three = three || ch.add2 != 0;
     uint64_t c = 2 + p_.n;
-    for (const auto& ch : s.chunks) c += 3 + std::bit_width(uint32_t(ch.count - 1));
+    for (const auto& ch : s.chunks) c += (three ? 3 : 2) + check_cycles(ch);
     return c;
   }
   static uint64_t programmed_cycles(const card::WireSegment& s) {
     uint64_t t = 0;
     for (const auto& c : s.chunks)
-      for (uint32_t j = 0; j < c.count; ++j) t += uint64_t(int64_t(c.interval) + int64_t(j) * c.add);
+      for (int64_t j = 0; j < c.count; ++j)
+        t += uint64_t(int64_t(c.interval) + j * c.add + int64_t(c.add2) * j * (j - 1) / 2);
     return t;
   }
 

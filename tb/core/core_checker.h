@@ -8,7 +8,7 @@
 //   up; the same for every doubling 2^k), so within half a step of the ideal line,
 //   and on its delta at the segment's end;
 // - each move happens no earlier than its programmed time (its chunk's
-//   interval + j·add after the previous move's leading edge, the first after START
+//   interval + j·add + add2·j(j−1)/2 after the previous move's leading edge, the first after START
 //   from the START cycle), and is either exactly on time or counted late;
 // - every axis's pins obey its pulse timing and position_o counts its pulses
 //   (tb/pulse/pin_checker.h, one per axis);
@@ -217,7 +217,8 @@ class CoreChecker {
       return;
     }
     const card::WireChunk& c = g.chunks[cursor_.chunk];
-    const int64_t delay = int64_t(c.interval) + int64_t(cursor_.in_chunk) * c.add;
+    const int64_t j = cursor_.in_chunk;
+    const int64_t delay = int64_t(c.interval) + j * c.add + int64_t(c.add2) * j * (j - 1) / 2;
     if (++cursor_.in_chunk == c.count) {
       ++cursor_.chunk;
       cursor_.in_chunk = 0;
@@ -249,7 +250,7 @@ class CoreChecker {
       return;
     }
     switch (w >> 28) {
-      case 0x1: words_left_ = 1 + p_.n + 2 * (w & 0xFFFF); break;
+      case 0x1: words_left_ = 1 + p_.n + ((w >> 22 & 1) ? 3 : 2) * (w & 0xFFFF); break;
       case 0x2: {
         const uint32_t axis = w >> 24 & 0xF, field = w >> 20 & 0xF, value = w & 0xFFFF;
         if (out.running || axis >= p_.n || field > 4 || (field <= 1 && value == 0)) break;

@@ -1,4 +1,4 @@
-// cp_core bad input (docs/CORE.md "Validation", codes 1–8 and 12–14): the bad
+// cp_core bad input (docs/CORE.md "Validation", codes 1–8 and 12–15): the bad
 // command makes no move, its code latches, nothing after it runs until CLEAR, and
 // what came before it behaves as the doc says — a segment already running completes,
 // queued ones are flushed. RTL vs model in lockstep, the pin checker on.
@@ -58,6 +58,26 @@ std::vector<BadInput> bad_inputs() {
       {"delay_negative", 6, [] { return words_of(10, 0, {10, 3, 0, 0}, {{5, 10, -1}}); }},
       {"delay_reaches_zero", 6, [] { return words_of(10, 0, {10, 3, 0, 0}, {{9, 10, -1}}); }},
       {"delay_above_2pow32", 6, [] { return words_of(2, 0, {2, 1, 0, 0}, {{0xFFFFFFFFu, 2, 1}}); }},
+      // add2 (three-word chunks). Increments -5 + 2i: -5, -3, -1, 1, ... change sign
+      // though every delay (50, 45, 42, 41, 42, ...) is positive.
+      {"add2_increments_change_sign", 15, [] { return words_of(10, 0, {10, 3, 0, 0}, {{50, 10, -5, 2}}); }},
+      // Increments 4, 2, 0, -2 (delays 20, 24, 26, 26, 24).
+      {"add2_increments_cross_zero", 15, [] { return words_of(5, 0, {5, 1, 0, 0}, {{20, 5, 4, -2}}); }},
+      // Increments -1, -2, -3, -4: delays 10, 9, 7, 4, then 0.
+      {"add2_last_delay_zero", 6, [] { return words_of(5, 0, {5, 1, 0, 0}, {{10, 5, -1, -1}}); }},
+      // Delays 100 - j(j-1)/2: the 20th is 100 - 171 = -71.
+      {"add2_last_delay_negative", 6, [] { return words_of(20, 0, {20, 1, 0, 0}, {{100, 20, 0, -1}}); }},
+      // Increments 1, 2: the last delay 2^32 - 3 + 3 = 2^32.
+      {"add2_last_delay_2pow32", 6,
+       [] { return words_of(3, 0, {3, 1, 0, 0}, {{0xFFFFFFFDu, 3, 1, 1}}); }},
+      // 1 + 3·65534·65533/2 = 6,441,959,434 > 2^32 - 1 (a 49-bit product).
+      {"add2_last_delay_far_above_2pow32", 6,
+       [] { return words_of(65535, 0, {65535, 0, 0, 0}, {{1, 65535, 0, 3}}); }},
+      // 2^32 - 1 + 65534·(4·65533)/2 = 12,884,246,539: the product (count-1)·(add + last
+      // increment) = 17,178,558,488 is just below 2^34 (a 34-bit signed product wraps to a
+      // small negative and would pass).
+      {"add2_last_delay_with_a_34_bit_product", 6,
+       [] { return words_of(65535, 0, {65535, 0, 0, 0}, {{0xFFFFFFFFu, 65535, 0, 4}}); }},
       {"counts_short", 7, [] { return words_of(10, 0, {10, 3, 0, 0}, {{10, 9, 0}}); }},
       {"counts_long", 7, [] { return words_of(10, 0, {10, 3, 0, 0}, {{10, 6, 0}, {10, 5, 0}}); }},
       {"counts_U_not_U_times_2powk", 7, [] { return words_of(3, 2, {3, 1, 0, 0}, {{10, 3, 0}}); }},
@@ -205,6 +225,27 @@ TEST(CoreReject, LimitsAreAccepted) {
 
 namespace cpstep::tb {
 namespace {
+
+// add2 at its limits, accepted (queued, not run): a last delay of exactly 2^32 - 1;
+// 1 + 2·65534·65533/2 = 4,294,639,623 and 2^32 - 1 - 2·65534·65533/2 = 327,673 over
+// 65535 moves; increments 4, 2, 0 (ending at 0, no change of sign); add2 on a
+// chunk of one and of two moves (no delay depends on it).
+TEST(CoreReject, Add2LimitsAreAccepted) {
+  Harness h("reject_add2_limits", 5);
+  h.expecting = false;
+  h.send(words_of(3, 0, {3, 1, 0, 0}, {{0xFFFFFFFCu, 3, 1, 1}}));
+  h.send(words_of(65535, 0, {65535, 0, 0, 0}, {{1, 65535, 0, 2}}));
+  h.send(words_of(65535, 0, {65535, 0, 65535, 0}, {{0xFFFFFFFFu, 65535, 0, -2}}));
+  h.send(words_of(7, 0, {7, 0, 3, 0}, {{20, 4, 4, -2}, {5, 1, -9, 32767}, {6, 2, 3, -32768}}));
+  h.idle(100);
+  const card::Status st = h.status();
+  EXPECT_FALSE(st.fault) << "code " << st.err_code;
+  EXPECT_EQ(st.segments_queued, 4u);
+  EXPECT_EQ(st.chunks_queued, 6u - 1u) << "(the timer holds the first chunk)";
+  h.control(false, true, false);
+  h.control(false, false, true);
+  EXPECT_EQ(h.status().segments_queued, 0u);
+}
 
 // A pulse timing value must fit the TW-bit field; it is refused, not truncated.
 TEST(CoreReject, TimingValueWiderThanTheFieldOnASmallCore) {

@@ -119,13 +119,14 @@ Decoded decode(const std::string& bytes) {
         const int64_t v = int64_t(w[i + 2 + a] & 0xFFFFFF) << k;
         d.delta[a] += (h1 >> (24 + a) & 1) ? v : -v;
       }
+      const unsigned words = (h0 >> 22 & 1) ? 3 : 2;  // chunks with add2: three words
       uint64_t count = 0;
-      for (unsigned c = 0; c < nchunks; ++c) count += w[i + 6 + 2 * c + 1] & 0xFFFF;
+      for (unsigned c = 0; c < nchunks; ++c) count += w[i + 6 + words * c + 1] & 0xFFFF;
       d.counts_add_up = d.counts_add_up && count == u << k;
       d.moves += u << k;
       ++d.segments;
       d.chunks += nchunks;
-      i += 6 + 2 * nchunks;
+      i += 6 + words * nchunks;
     } else {
       d.error = "unexpected opcode at word " + std::to_string(i);
       return d;

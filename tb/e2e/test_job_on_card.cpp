@@ -82,7 +82,7 @@ TEST(WireJob, LongSegmentSplitsExactlyAtWholePatternPeriods) {
     EXPECT_EQ((uint64_t(w.u) << w.k) % 3, 0u) << "a piece ends inside a pattern period";
     x += int64_t(w.v[0]) << w.k;
     y -= int64_t(w.v[1]) << w.k;
-    for (const auto& c : w.chunks) pieces.push_back({c.interval, c.count, c.add, 0});
+    for (const auto& c : w.chunks) pieces.push_back({c.interval, c.count, c.add, c.add2});
   }
   EXPECT_EQ(x, 3'000'000);
   EXPECT_EQ(y, -1'000'000);
@@ -120,11 +120,56 @@ TEST(WireJob, SegmentWithMoreChunksThanTheQueueSplitsAtWholePeriods) {
     EXPECT_EQ((uint64_t(w.u) << w.k) % 5, 0u) << "a piece ends inside a pattern period";
     x += int64_t(w.v[0]) << w.k;
     y += int64_t(w.v[1]) << w.k;
-    for (const auto& c : w.chunks) pieces.push_back({c.interval, c.count, c.add, 0});
+    for (const auto& c : w.chunks) pieces.push_back({c.interval, c.count, c.add, c.add2});
   }
   EXPECT_EQ(x, 160);
   EXPECT_EQ(y, 40);
   EXPECT_EQ(plan::expand(pieces, 0), plan::expand(job.card[0].chunks, 0));
+}
+
+// A cut inside a chunk with add2: 63 one-move chunks, then {10000, 110, -10, -1}
+// (delays 10000 - 10j - j(j-1)/2, increments -10 - j), then 2 one-move chunks, on
+// a pattern of period 5. The first piece holds 64 chunks = 63 + 110 moves, cut to
+// 170 (whole periods): 107 moves of the add2 chunk; the rest starts at delay 107,
+// 10000 - 1070 - 107·106/2 = 3259, with add -10 - 107 = -117, add2 -1, 3 moves.
+TEST(WireJob, CutInsideAnAdd2ChunkKeepsEveryMoveTime) {
+  plan::PlannedJob job = one_move_chunks(63, {140, 35, 0, 0}, {5, 5, 1, 1}, {4, 1, 0, 0});
+  plan::PlannedCardSegment& s = job.card[0];
+  s.segment.moves = 175;
+  s.chunks.push_back({10000, 110, -10, -1});
+  s.chunks.push_back({50, 1, 0, 0});
+  s.chunks.push_back({50, 1, 0, 0});
+  const auto wire = card::to_wire(job, "add2.ngc");
+  ASSERT_TRUE(wire.ok()) << plan::join(wire.errors);
+  ASSERT_EQ(wire->segments.size(), 2u);
+  EXPECT_EQ(uint64_t(wire->segments[0].u) << wire->segments[0].k, 170u);
+  ASSERT_EQ(wire->segments[0].chunks.size(), 64u);
+  EXPECT_TRUE(wire->segments[0].chunks.back() == (card::WireChunk{10000, 107, -10, -1}));
+  ASSERT_EQ(wire->segments[1].chunks.size(), 3u);
+  const card::WireChunk& rest = wire->segments[1].chunks.front();
+  EXPECT_TRUE(rest == (card::WireChunk{3259, 3, -117, -1}))
+      << rest.interval << " " << rest.count << " " << rest.add << " " << rest.add2;
+  std::vector<plan::Chunk> pieces;
+  for (const auto& w : wire->segments)
+    for (const auto& c : w.chunks) pieces.push_back({c.interval, c.count, c.add, c.add2});
+  EXPECT_EQ(plan::expand(pieces, 0), plan::expand(job.card[0].chunks, 0));
+}
+
+// Chunks outside the card's form are refused before anything is sent: increments
+// 5, 2, -1 change sign; increments 32000, 32500, 33000 leave 16 bits.
+TEST(WireJob, ChunkOutsideTheCardsAdd2RuleIsAnError) {
+  for (const plan::Chunk bad : {plan::Chunk{10000, 4, 5, -3}, plan::Chunk{100, 4, 32000, 500}}) {
+    plan::PlannedJob job = one_move_chunks(1, {4, 0, 0, 0}, {1, 1, 1, 1}, {1, 0, 0, 0});
+    job.card[0].segment.moves = 4;
+    job.card[0].chunks = {bad};
+    const auto wire = card::to_wire(job, "bad.ngc");
+    ASSERT_FALSE(wire.ok());
+    EXPECT_NE(plan::join(wire.errors).find("is outside the card's chunk form"), std::string::npos)
+        << plan::join(wire.errors);
+  }
+  EXPECT_TRUE(card::in_card_form({100, 4, 4, -2}));  // increments 4, 2, 0
+  EXPECT_TRUE(card::in_card_form({100, 2, 5, -32768}));  // one increment
+  EXPECT_FALSE(card::in_card_form({100, 4, 5, -3}));
 }
 
 // The same with a pattern that repeats only every 199 moves: no cut fits.
@@ -146,6 +191,10 @@ TEST(JobOnCard, LandsOnThePlannedStepsAtThePlannedCycles) {
   ASSERT_TRUE(wire.ok()) << plan::join(wire.errors);
   std::vector<plan::Chunk> all;
   for (const auto& pc : planned.card) all.insert(all.end(), pc.chunks.begin(), pc.chunks.end());
+  size_t with_add2 = 0;  // the card's chunk form has add2: the job uses it
+  for (const auto& s : wire->segments)
+    for (const auto& c : s.chunks) with_add2 += c.add2 != 0;
+  EXPECT_GT(with_add2, 0u);
   const std::vector<int64_t> expected = plan::expand(all, 0);
 
   sim::RtlDut<CoreRtl> dut;
