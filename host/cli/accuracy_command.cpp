@@ -60,19 +60,8 @@ int run_accuracy(const AccuracyOptions& o) {
   }
   std::string moves;
   const sim::EngineRequest req{uint32_t(o.u), uint32_t(o.v), uint32_t(o.k), 1};
-  model::CpEngineIn reset{};
-  reset.rst = true;
-  if (o.engine == "rtl") {
-    sim::RtlDut<P> dut;
-    dut.step(reset);
-    moves = sim::run_request(dut, params.aw(), req).moves;
-  } else if (o.engine == "model") {
-    sim::ModelDut<P> dut;
-    dut.step(reset);
-    moves = sim::run_request(dut, params.aw(), req).moves;
-  } else {
-    moves = oracle::doubled(o.u, o.v, unsigned(o.k));
-  }
+  moves = o.engine == "oracle" ? oracle::doubled(o.u, o.v, unsigned(o.k))
+                              : sim::run_fresh<P>(o.engine == "rtl", req).moves;
   const AccuracyStats s = accuracy_of(moves, o.u, o.v, unsigned(o.k), o.grid == "base");
   if (!o.curve.empty()) {
     auto f = fmt::output_file(o.curve);

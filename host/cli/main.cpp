@@ -83,19 +83,7 @@ int run_moves(const MovesOptions& o) {
       return kExitRefused;
     }
     const sim::EngineRequest req{uint32_t(o.u), uint32_t(o.v), uint32_t(o.k), uint32_t(o.rep)};
-    model::CpEngineIn reset{};
-    reset.rst = true;
-    if (o.engine == "rtl") {
-      sim::RtlDut<P> dut;
-      dut.step(reset);
-      dut.step(reset);
-      run = sim::run_request(dut, params.aw(), req);
-    } else {
-      sim::ModelDut<P> dut;
-      dut.step(reset);
-      dut.step(reset);
-      run = sim::run_request(dut, params.aw(), req);
-    }
+    run = sim::run_fresh<P>(o.engine == "rtl", req);
     if (run.err_code) {
       fmt::print(stderr, "cpstep moves: refused: {} (u={} v={} k={})\n",
                  engine_error_text(run.err_code), o.u, o.v, o.k);

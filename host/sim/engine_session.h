@@ -11,6 +11,7 @@
 
 #include "model/cp_engine.h"
 #include "model/oracle.h"
+#include "sim/dut.h"
 
 namespace cpstep::sim {
 
@@ -109,6 +110,23 @@ EngineRun run_request(Stepper& dut, unsigned aw, const EngineRequest& req,
   }
   throw std::runtime_error("engine did not finish the request within " + std::to_string(max_cycles) +
                            " cycles");
+}
+
+// One request on a freshly reset engine of configuration P: the Verilated RTL
+// (`rtl`) or the golden model.
+template <class P>
+EngineRun run_fresh(bool rtl, const EngineRequest& req) {
+  model::CpEngineIn reset{};
+  reset.rst = true;
+  const unsigned aw = P::model_params().aw();
+  if (rtl) {
+    RtlDut<P> dut;
+    dut.step(reset);
+    return run_request(dut, aw, req);
+  }
+  ModelDut<P> dut;
+  dut.step(reset);
+  return run_request(dut, aw, req);
 }
 
 }  // namespace cpstep::sim
