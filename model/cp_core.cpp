@@ -115,6 +115,11 @@ CpCore::Out CpCore::outputs() const {
   o.fault = q.fault;
   o.stretched = q.stretched;
   o.err_code = q.err;
+  o.enable = q.enable;
+  o.status = read_register(0x00);
+  o.stretch_count = q.stretch_count;
+  o.moves_done = q.moves_done;
+  o.segments_done = q.segments_done;
   return o;
 }
 
@@ -126,13 +131,17 @@ uint32_t CpCore::read_register(uint32_t reg) const {
       const uint32_t chunks = std::min<uint32_t>(chunk_fifo_.outputs().level, 255);
       const uint32_t segments =
           (seg_fifo_.outputs().level + run_fifo_.outputs().level + q.cur_valid) & 0xFF;
-      return chunks << 24 | segments << 16 | (q.err & 0xFF) << 8 | uint32_t(in.estop) << 3 |
+      return chunks << 24 | segments << 16 | (q.err & 0xFF) << 8 | uint32_t(q.enable) << 4 | uint32_t(in.estop) << 3 |
              uint32_t(q.stretched) << 2 | uint32_t(q.fault) << 1 | uint32_t(q.running);
     }
     case 0x01: return q.stretch_count;
     case 0x02: return q.moves_done;
     case 0x03: return q.segments_done;
     case 0x1F: return kCardId;
+    case 0x20: return (p_.tw & 0x1F) << 24 | (p_.saw & 0xF) << 20 | (p_.caw & 0xF) << 16 | (p_.kmax & 0xFF) << 8 |
+                      (p_.n & 0xFF);
+    case 0x21: return p_.w;
+    case 0x22: return p_.umax;
     default:
       if (reg >= 0x10 && reg < 0x10 + p_.n) return uint32_t(pulses_[reg - 0x10].outputs().position);
       return 0;
@@ -181,6 +190,8 @@ void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
           c.start = (word & 1) != 0;
           c.abort = (word >> 1 & 1) != 0;
           c.clear = (word >> 2 & 1) != 0;
+          c.drivers_on = (word >> 3 & 1) != 0;
+          c.drivers_off = (word >> 4 & 1) != 0;
           break;
         case kOpRead:
           d.rsp_valid = true;
@@ -435,6 +446,9 @@ void CpCore::run(const View& v, Regs& d, Cycle& c) const {
   }
   if (c.abort) c.raise(CoreError::abort);
   if (in.estop) c.raise(CoreError::estop);
+  // Drivers: off wins over on; E-stop holds them off.
+  if (c.drivers_on) d.enable = true;
+  if (c.drivers_off || in.estop) d.enable = false;
   c.flush = stopping || (q.fault && !(q.running && q.cur_valid && !seg_done));
 }
 
@@ -475,6 +489,7 @@ void CpCore::reset_control(Regs& d) const {
   d.fault = false;
   d.err = 0;
   d.stretched = false;
+  d.enable = false;
   d.stretch_count = d.moves_done = d.segments_done = 0;
   d.dir = 0;
   for (AxisConfig& c : d.cfg) {

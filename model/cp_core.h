@@ -69,6 +69,7 @@ class CpCore {
     bool fault = false;
     uint32_t err = 0;
     bool stretched = false;
+    bool enable = false;        // drivers enabled
     uint32_t stretch_count = 0, moves_done = 0, segments_done = 0;
     uint32_t dir = 0;           // bit i: the direction axis i steps in
     std::array<AxisConfig, kCoreMaxAxes> cfg{};
@@ -101,6 +102,7 @@ class CpCore {
     bool stretch = false;       // a move is counted late
     uint32_t step = 0;          // axes that step in it
     bool start = false, abort = false, clear = false, cfg_write = false;
+    bool drivers_on = false, drivers_off = false;
     bool fault_set = false;
     uint32_t fault_code = 0;
     bool flush = false;

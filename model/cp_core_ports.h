@@ -37,6 +37,9 @@ struct CpCoreOut {
   bool running = false, fault = false, stretched = false;
   uint32_t err_code = 0;
   std::array<int64_t, kCoreMaxAxes> position{};  // sign-extended from PW bits
+  bool enable = false;                           // drivers enabled
+  uint32_t status = 0;                           // READ 0x00, live
+  uint32_t stretch_count = 0, moves_done = 0, segments_done = 0;
 };
 
 // Fault and refusal codes (docs/CORE.md).

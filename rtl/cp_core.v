@@ -58,7 +58,14 @@ module cp_core #(
     output wire          fault_o,
     output wire [7:0]    err_code_o,
     output wire          stretched_o,
-    output wire [N*PW-1:0] position_o
+    output wire [N*PW-1:0] position_o,
+    // Drivers enabled (CONTROL bits 3/4; E-stop forces off).
+    output wire          enable_o,
+    // The READ registers 0x00..0x03, live (the SPI front end's status reply).
+    output wire [31:0]   status_o,
+    output wire [31:0]   stretch_cnt_o,
+    output wire [31:0]   moves_done_o,
+    output wire [31:0]   segs_done_o
 );
 
 // ---------------------------------------------------------------- constants
@@ -141,6 +148,7 @@ reg [1:0]    bad_lane_q, bad_lane_d;     // lane l holds a segment its engines r
 reg          fault_q, fault_d;
 reg [7:0]    err_q, err_d;
 reg          stretched_q, stretched_d;
+reg          enable_q, enable_d;         // drivers enabled
 reg [31:0]   stretch_cnt_q, stretch_cnt_d;
 reg [31:0]   moves_done_q, moves_done_d;
 reg [31:0]   segs_done_q, segs_done_d;
@@ -302,14 +310,22 @@ wire          inc_flip = (!add_q[15] && add_q != 16'd0 && last_inc[MW-1]) ||
 wire [31:0] ch_level32 = {{(31 - CAW){1'b0}}, ch_level};
 
 // Registers readable by READ.
+wire [31:0] status_word = {ch_level32 > 32'd255 ? 8'd255 : ch_level32[7:0],
+                           {{(8 - SAW - 1){1'b0}}, seg_level} + {6'd0, run_level} + {7'd0, cur_valid_q},
+                           err_q, 3'd0, enable_q, estop_i, stretched_q, fault_q, running_q};
+// Capabilities (READ 0x20..0x22): what the host must know of this build.
+localparam [31:0] CAPS = {3'd0, TW[4:0], SAW[3:0], CAW[3:0], KMAX[7:0], N[7:0]};
+localparam [31:0] W_WORD = W;
+localparam [31:0] UMAX_WORD = UMAX;
 reg [31:0] read_value;
 integer    ri;
 always @* begin
     read_value = 32'd0;
     case (cmd_data_i[7:0])
-    8'h00: read_value = {ch_level32 > 32'd255 ? 8'd255 : ch_level32[7:0],
-                         {{(8 - SAW - 1){1'b0}}, seg_level} + {6'd0, run_level} + {7'd0, cur_valid_q},
-                         err_q, 4'd0, estop_i, stretched_q, fault_q, running_q};
+    8'h00: read_value = status_word;
+    8'h20: read_value = CAPS;
+    8'h21: read_value = W_WORD;
+    8'h22: read_value = UMAX_WORD;
     8'h01: read_value = stretch_cnt_q;
     8'h02: read_value = moves_done_q;
     8'h03: read_value = segs_done_q;
@@ -323,6 +339,7 @@ end
 
 // ---------------------------------------------------------------- next state
 reg        fire, due, seg_done, fault_set, start_cmd, abort_cmd, clear_cmd, cfg_write;
+reg        drivers_on, drivers_off;
 reg        clearing, stuck, stretch_inc;
 reg [7:0]  fault_code;
 integer    i;
@@ -339,7 +356,7 @@ always @* begin
     running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
     cur_end_d = cur_end_q;  build_lane_d = build_lane_q;  ch_loaded_d = ch_loaded_q;
     late_d = late_q;  bad_lane_d = bad_lane_q;
-    fault_d = fault_q;  err_d = err_q;  stretched_d = stretched_q;
+    fault_d = fault_q;  err_d = err_q;  stretched_d = stretched_q;  enable_d = enable_q;
     stretch_cnt_d = stretch_cnt_q;  moves_done_d = moves_done_q;  segs_done_d = segs_done_q;
     delay_d = delay_q;  left_d = left_q;  tinc_d = tinc_q;  tadd2_d = tadd2_q;  dir_d = dir_q;
     elapsed_d = (elapsed_q == 32'hFFFF_FFFF) ? elapsed_q : elapsed_q + 1'b1;
@@ -350,6 +367,7 @@ always @* begin
     eng_in_valid = {2*N{1'b0}};  eng_move_ready = {2*N{1'b0}};  pulse_step = {N{1'b0}};
     fault_set = 1'b0;  fault_code = E_NONE;
     start_cmd = 1'b0;  abort_cmd = 1'b0;  clear_cmd = 1'b0;  cfg_write = 1'b0;
+    drivers_on = 1'b0;  drivers_off = 1'b0;
 
     // ---- command parser
     case (p_state_q)
@@ -387,6 +405,8 @@ always @* begin
             start_cmd = cmd_data_i[0];
             abort_cmd = cmd_data_i[1];
             clear_cmd = cmd_data_i[2];
+            drivers_on  = cmd_data_i[3];
+            drivers_off = cmd_data_i[4];
         end
         OP_READ: begin
             rsp_valid_d = 1'b1;
@@ -602,6 +622,9 @@ always @* begin
     if (estop_i) begin
         fault_set = 1'b1;  fault_code = E_ESTOP;
     end
+    // Drivers: off wins over on; E-stop holds them off.
+    if (drivers_on) enable_d = 1'b1;
+    if (drivers_off || estop_i) enable_d = 1'b0;
 
     // ---- faults: CLEAR drops what was latched before this cycle; then the first
     // fault latches; a segment under way completes unless its own lane refused it.
@@ -647,6 +670,7 @@ always @(posedge clk) begin
         fault_q       <= 1'b0;
         err_q         <= E_NONE;
         stretched_q   <= 1'b0;
+        enable_q      <= 1'b0;
         stretch_cnt_q <= 32'd0;
         moves_done_q  <= 32'd0;
         segs_done_q   <= 32'd0;
@@ -673,6 +697,7 @@ always @(posedge clk) begin
         fault_q       <= fault_d;
         err_q         <= err_d;
         stretched_q   <= stretched_d;
+        enable_q      <= enable_d;
         stretch_cnt_q <= stretch_cnt_d;
         moves_done_q  <= moves_done_d;
         segs_done_q   <= segs_done_d;
@@ -714,6 +739,11 @@ assign running_o   = running_q;
 assign fault_o     = fault_q;
 assign err_code_o  = err_q;
 assign stretched_o = stretched_q;
+assign enable_o    = enable_q;
+assign status_o    = status_word;
+assign stretch_cnt_o = stretch_cnt_q;
+assign moves_done_o  = moves_done_q;
+assign segs_done_o   = segs_done_q;
 
 endmodule
 

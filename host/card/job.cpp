@@ -153,6 +153,8 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
 
 std::vector<uint32_t> encode_job(const plan::Machine& m, const WireJob& job) {
   std::vector<uint32_t> words;
+  // Drivers on first: the motors hold while the card is configured and filled.
+  encode_drivers(true, words);
   for (int a = 0; a < plan::kAxes; ++a) {
     const plan::AxisConfig& ax = m.axes[a];
     if (!ax.present) continue;

@@ -28,6 +28,10 @@ void encode_control(bool start, bool abort, bool clear, std::vector<uint32_t>& o
   out.push_back(0x3u << 28 | uint32_t(clear) << 2 | uint32_t(abort) << 1 | uint32_t(start));
 }
 
+void encode_drivers(bool on, std::vector<uint32_t>& out) {
+  out.push_back(0x3u << 28 | (on ? 1u << 3 : 1u << 4));
+}
+
 void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out) {
   const uint32_t reg = uint32_t(r) + (r == Register::position0 ? axis : 0);
   out.push_back(0x4u << 28 | (reg & 0xFF));
@@ -40,7 +44,7 @@ size_t command_words(uint32_t first, unsigned axes) {
 
 Status decode_status(uint32_t w) {
   return {bool(w & 1), bool(w >> 1 & 1), bool(w >> 2 & 1), bool(w >> 3 & 1),
-          w >> 8 & 0xFF, w >> 16 & 0xFF, w >> 24 & 0xFF};
+          w >> 8 & 0xFF, w >> 16 & 0xFF, w >> 24 & 0xFF, bool(w >> 4 & 1)};
 }
 
 ErrorName error_name(uint32_t code) {

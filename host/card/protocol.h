@@ -35,6 +35,9 @@ enum class Register : uint32_t {
   segments_done = 0x03,
   position0 = 0x10,
   id = 0x1F,
+  caps = 0x20,          // [7:0] N, [15:8] KMAX, [19:16] CAW, [23:20] SAW, [28:24] TW
+  pattern_capacity = 0x21,  // W
+  umax = 0x22,          // UMAX
 };
 constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
 
@@ -43,6 +46,8 @@ constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
 void encode_segment(const WireSegment& s, std::vector<uint32_t>& out);
 void encode_config(unsigned axis, ConfigField field, uint32_t value, std::vector<uint32_t>& out);
 void encode_control(bool start, bool abort, bool clear, std::vector<uint32_t>& out);
+// CONTROL bit 3 (drivers on) or bit 4 (drivers off): the card's ENABLE pins.
+void encode_drivers(bool on, std::vector<uint32_t>& out);
 void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out);
 
 // How many words the command whose first word is `first` has, on a card of
@@ -53,6 +58,7 @@ size_t command_words(uint32_t first, unsigned axes);
 struct Status {
   bool running, fault, stretched, estop;
   uint32_t err_code, segments_queued, chunks_queued;
+  bool drivers_enabled;
 };
 Status decode_status(uint32_t word);
 

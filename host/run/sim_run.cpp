@@ -233,7 +233,7 @@ CardRun run_on_sim(const CardJob& job, const SimRunOptions& o) {
                                                 "stopped (word {} of {})",
                                                 kStallCycles, sent.next + 1, job.words.size())));
     const model::CpCoreOut& last = drv.last();
-    run.status = {last.running, last.fault, last.stretched, false, last.err_code, 0, 0};
+    run.status = {last.running, last.fault, last.stretched, false, last.err_code, 0, 0, last.enable};
     for (int a = 0; a < plan::kAxes; ++a) run.position[a] = last.position[a];
   } else {
     run.status = card::decode_status(drv.read(card::Register::status));

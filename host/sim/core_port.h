@@ -36,6 +36,11 @@ struct CorePortBase {
     o.fault = r.fault_o;
     o.stretched = r.stretched_o;
     o.err_code = r.err_code_o;
+    o.enable = r.enable_o;
+    o.status = r.status_o;
+    o.stretch_count = r.stretch_cnt_o;
+    o.moves_done = r.moves_done_o;
+    o.segments_done = r.segs_done_o;
     for (unsigned a = 0; a < N; ++a) o.position[a] = int32_t(position_word(r, a));
     return o;
   }
@@ -51,6 +56,11 @@ struct CorePortBase {
           {"fault_o", [](const Out& o) { return uint64_t(o.fault); }},
           {"stretched_o", [](const Out& o) { return uint64_t(o.stretched); }},
           {"err_code_o", [](const Out& o) { return uint64_t(o.err_code); }},
+          {"enable_o", [](const Out& o) { return uint64_t(o.enable); }},
+          {"status_o", [](const Out& o) { return uint64_t(o.status); }},
+          {"stretch_cnt_o", [](const Out& o) { return uint64_t(o.stretch_count); }},
+          {"moves_done_o", [](const Out& o) { return uint64_t(o.moves_done); }},
+          {"segs_done_o", [](const Out& o) { return uint64_t(o.segments_done); }},
       };
       static const char* names[] = {"position_o[x]", "position_o[y]", "position_o[z]",
                                     "position_o[a]", "position_o[4]", "position_o[5]",

@@ -334,3 +334,62 @@ TEST(CoreFaults, StretchWhenTheSegmentComesAfterItsTime) {
 
 }  // namespace
 }  // namespace cpstep::tb
+
+namespace cpstep::tb {
+namespace {
+
+// Drivers' enable (docs/CORE.md "Drivers"): off after reset, CONTROL bit 3 on, bit 4
+// off (off wins), E-stop forces off and holds it off; other faults leave it on. The
+// live outputs and status bit 4 agree with READ. Also the capability registers.
+TEST(CoreFaults, DriversEnableAndCapabilities) {
+  Harness h("core_drivers", 7);
+  auto enabled = [&] { return h.drv.last().enable; };
+  auto drivers = [&](bool on) {
+    std::vector<uint32_t> w;
+    card::encode_drivers(on, w);
+    h.send(w);
+    h.idle(1);
+  };
+  EXPECT_FALSE(enabled()) << "enable after reset";
+  EXPECT_FALSE(h.status().drivers_enabled);
+  drivers(true);
+  EXPECT_TRUE(enabled());
+  EXPECT_TRUE(h.status().drivers_enabled);
+  h.send({0x3u << 28 | 1u << 3 | 1u << 4});  // both bits: off wins
+  h.idle(1);
+  EXPECT_FALSE(enabled()) << "on and off together";
+  drivers(true);
+  h.control(false, true, false);  // ABORT: a fault, the drivers stay on
+  h.idle(1);
+  EXPECT_TRUE(h.status().fault);
+  EXPECT_TRUE(enabled()) << "ABORT must not drop the drivers";
+  h.drv.set_estop(true);
+  h.idle(2);  // seen in t, off from t+1
+  EXPECT_FALSE(enabled()) << "E-stop";
+  drivers(true);  // ignored while E-stop is held
+  EXPECT_FALSE(enabled()) << "drivers on while E-stop is held";
+  h.drv.set_estop(false);
+  h.idle(1);
+  EXPECT_FALSE(enabled()) << "E-stop released: the drivers stay off until asked";
+  drivers(true);
+  EXPECT_TRUE(enabled());
+  // The live status outputs equal the registers READ returns.
+  const model::CpCoreOut o = h.drv.last();
+  EXPECT_EQ(o.status & 0xFFFF'FFF7u, h.read(card::Register::status) & 0xFFFF'FFF7u);
+  EXPECT_EQ(o.moves_done, h.read(card::Register::moves_done));
+  EXPECT_EQ(o.segments_done, h.read(card::Register::segments_done));
+  EXPECT_EQ(o.stretch_count, h.read(card::Register::stretch_count));
+  // Capabilities: what this build is, from the parameters the bench knows.
+  const model::CpCoreParams& p = h.params;
+  const uint32_t caps = h.read(card::Register::caps);
+  EXPECT_EQ(caps & 0xFF, p.n);
+  EXPECT_EQ(caps >> 8 & 0xFF, p.kmax);
+  EXPECT_EQ(caps >> 16 & 0xF, p.caw);
+  EXPECT_EQ(caps >> 20 & 0xF, p.saw);
+  EXPECT_EQ(caps >> 24 & 0x1F, p.tw);
+  EXPECT_EQ(h.read(card::Register::pattern_capacity), p.w);
+  EXPECT_EQ(h.read(card::Register::umax), p.umax);
+}
+
+}  // namespace
+}  // namespace cpstep::tb
