@@ -4,6 +4,7 @@
 //   cpstep sim FILE [--vcd OUT.vcd] [--max-cycles N] [--clock-hz HZ]
 //   cpstep run JOB.ngc --machine M.toml [--transport sim|file] [--out F] [--vcd F] [--report F] [--plots DIR]
 //   cpstep plan JOB.ngc --machine M.toml [-o OUT.bin]
+//   cpstep check --vcd TRACE.vcd --job JOB.ngc --machine M.toml [--map PINS.toml] [--json OUT.json]
 //
 // Exit codes: 0 success, 2 refused input (file:line:col or one line on stderr),
 // 1 internal error (moves) or a run that ended with a fault (sim, docs/SIM.md;
@@ -16,6 +17,7 @@
 #include <optional>
 
 #include "cli/accuracy_command.h"
+#include "cli/check_command.h"
 #include "cli/run_command.h"
 #include "cli/vectors_command.h"
 #include "cli/sim_command.h"
@@ -136,6 +138,8 @@ int main(int argc, char** argv) {
   auto* accc = cli::add_accuracy_command(app, ao);
   cli::VectorsOptions vo;
   auto* vecc = cli::add_vectors_command(app, vo);
+  cli::CheckOptions co;
+  auto* chkc = cli::add_check_command(app, co);
 
   try {
     app.parse(argc, argv);
@@ -150,6 +154,7 @@ int main(int argc, char** argv) {
     if (*planc) return cli::plan_only(po);
     if (*accc) return cli::run_accuracy(ao);
     if (*vecc) return cli::run_vectors(vo);
+    if (*chkc) return cli::run_check(co);
   } catch (const std::exception& e) {
     fmt::print(stderr, "cpstep: internal error: {}\n", e.what());
     return 1;
