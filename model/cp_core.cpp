@@ -27,10 +27,17 @@ uint64_t get_bits(const FifoWord& w, unsigned lo, unsigned bits) {
   return v;
 }
 
-// Chunk queue entry (80 bits, as in the RTL): interval, add, count, add2.
-FifoWord chunk_word(uint32_t interval, uint32_t add, uint32_t count, uint32_t add2) {
+// Chunk queue entry (81 bits, as in the RTL): interval, add, count, add2, and the
+// flag of a segment's last chunk.
+FifoWord chunk_word(uint32_t interval, uint32_t add, uint32_t count, uint32_t add2, bool last) {
   return {uint64_t(count & 0xFFFF) << 48 | uint64_t(add & 0xFFFF) << 32 | interval,
-          uint64_t(add2 & 0xFFFF), 0, 0};
+          uint64_t(add2 & 0xFFFF) | uint64_t(last) << 16, 0, 0};
+}
+
+unsigned clog2(uint64_t x) {
+  unsigned b = 0;
+  while ((uint64_t(1) << b) < x) ++b;
+  return b;
 }
 
 int64_t sext16(uint32_t x) { return int64_t(int16_t(uint16_t(x))); }
@@ -40,9 +47,10 @@ int64_t sext16(uint32_t x) { return int64_t(int16_t(uint16_t(x))); }
 CpCore::CpCore(Params params)
     : p_(params),
       mask_tw_(mask(params.tw)),
-      seg_fifo_({1 + 4 + params.n + 24 * (params.n + 1), params.saw}),
-      run_fifo_({1 + 2 * params.n, 1}),
-      chunk_fifo_({80, params.caw}) {
+      engine_(CpEngineParams{params.w, 0, 1, params.umax}),
+      seg_fifo_({29 + params.n, params.saw + clog2(params.n + 1)}),
+      run_fifo_({2 + 2 * params.n, 1}),
+      chunk_fifo_({81, params.caw}) {
   if (p_.n < 1 || p_.n > kCoreMaxAxes) throw std::invalid_argument("cp_core: N must be 1 to 8");
   if (p_.umax < p_.w || p_.umax > 16777214)
     throw std::invalid_argument("cp_core: UMAX must be W to 2^24-2");
@@ -50,34 +58,12 @@ CpCore::CpCore(Params params)
   if (p_.tw < 1 || p_.tw > 16) throw std::invalid_argument("cp_core: TW must be 1 to 16");
   if (p_.pw < 32) throw std::invalid_argument("cp_core: PW must be at least 32");
   if (p_.caw < 1 || p_.caw > 15) throw std::invalid_argument("cp_core: CAW must be 1 to 15");
-  const CpEngineParams ep{p_.w, p_.kmax, 1, p_.umax};
-  engines_.assign(2 * p_.n, CpEngine(ep));
+  banks_.assign(p_.n, std::vector<uint8_t>(size_t(2) << aw(), 0));
   pulses_.assign(p_.n, CpPulse({p_.tw, p_.pw, p_.step_pol_reset, p_.dir_pol_reset}));
   reset_control(r_);
 }
 
-// Segment entry: v_i at 24·i, U at 24·N, dir at 24·(N+1), then k (4 bits), then end.
-FifoWord CpCore::pack_segment(const Segment& s) const {
-  FifoWord w{};
-  const unsigned n = p_.n;
-  for (unsigned a = 0; a < n; ++a) put_bits(w, 24 * a, 24, s.v[a]);
-  put_bits(w, 24 * n, 24, s.u);
-  put_bits(w, 24 * (n + 1), n, s.dir);
-  put_bits(w, 24 * (n + 1) + n, 4, s.k);
-  put_bits(w, 24 * (n + 1) + n + 4, 1, s.end);
-  return w;
-}
-
-CpCore::Segment CpCore::unpack_segment(const FifoWord& w) const {
-  Segment s;
-  const unsigned n = p_.n;
-  for (unsigned a = 0; a < n; ++a) s.v[a] = uint32_t(get_bits(w, 24 * a, 24));
-  s.u = uint32_t(get_bits(w, 24 * n, 24));
-  s.dir = uint32_t(get_bits(w, 24 * (n + 1), n));
-  s.k = uint32_t(get_bits(w, 24 * (n + 1) + n, 4));
-  s.end = get_bits(w, 24 * (n + 1) + n + 4, 1) != 0;
-  return s;
-}
+unsigned CpCore::aw() const { return p_.w > 2 ? clog2(p_.w) : 1; }
 
 // A pulse timer's inputs are the core's configuration and direction registers.
 CpPulseIn CpCore::pulse_in(unsigned a, uint32_t step) const {
@@ -129,8 +115,8 @@ uint32_t CpCore::read_register(uint32_t reg) const {
   switch (reg) {
     case 0x00: {
       const uint32_t chunks = std::min<uint32_t>(chunk_fifo_.outputs().level, 255);
-      const uint32_t segments =
-          (seg_fifo_.outputs().level + run_fifo_.outputs().level + q.cur_valid) & 0xFF;
+      const uint32_t segments = (q.segs_queued + uint32_t(q.build != Build::idle) +
+                                 run_fifo_.outputs().level + q.cur_valid) & 0xFF;
       return chunks << 24 | segments << 16 | (q.err & 0xFF) << 8 | uint32_t(q.enable) << 4 | uint32_t(in.estop) << 3 |
              uint32_t(q.stretched) << 2 | uint32_t(q.fault) << 1 | uint32_t(q.running);
     }
@@ -158,15 +144,14 @@ void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
       if (!c.take) break;
       switch (word >> 28) {
         case kOpSegment: {
-          d.seg = Segment{};
-          d.seg.end = (word >> 27 & 1) != 0;
-          d.seg.k = word >> 23 & 0xF;
+          d.hdr_end = (word >> 27 & 1) != 0;
+          d.hdr_k = word >> 23 & 0xF;
           d.chunks_left = word & 0xFFFF;
           d.seg_add2 = (word >> 22 & 1) != 0;
           d.count_sum = 0;
           d.discard = q.fault;
           if (!q.fault) {
-            if (d.seg.k > p_.kmax) {
+            if (d.hdr_k > p_.kmax) {
               c.raise(CoreError::seg_k);
               d.discard = true;
             } else if (d.chunks_left == 0 || d.chunks_left > (1u << p_.caw)) {
@@ -204,9 +189,13 @@ void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
     }
     case Parse::seg_h1:
       if (!c.take) break;
-      d.seg.dir = word >> 24 & mask(p_.n);
-      d.seg.u = word & 0xFFFFFF;
-      if (keep && (d.seg.u == 0 || d.seg.u > p_.umax)) {
+      d.seg_u = word & 0xFFFFFF;
+      // The header word {end, k, dir, U} into the segment queue, uncommitted.
+      c.seg_wr = keep;
+      c.seg_data = {uint64_t(q.hdr_end) << (28 + p_.n) | uint64_t(q.hdr_k) << (24 + p_.n) |
+                        uint64_t(word >> 24 & mask(p_.n)) << 24 | d.seg_u,
+                    0, 0, 0};
+      if (keep && (d.seg_u == 0 || d.seg_u > p_.umax)) {
         c.raise(CoreError::seg_u);
         d.discard = true;
       }
@@ -215,8 +204,9 @@ void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
       break;
     case Parse::seg_v:
       if (!c.take) break;
-      d.seg.v[q.v_index] = word & 0xFFFFFF;
-      if (keep && d.seg.v[q.v_index] > q.seg.u) {
+      c.seg_wr = keep;
+      c.seg_data = {word & 0xFFFFFF, 0, 0, 0};
+      if (keep && (word & 0xFFFFFF) > q.seg_u) {
         c.raise(CoreError::seg_v_gt_u);
         d.discard = true;
       }
@@ -308,7 +298,7 @@ void CpCore::parse_check_increment(Regs& d, Cycle& c) const {
 
 // Pass 2: the chunk's last delay interval + (count-1)·(add + last increment)/2, one
 // multiplier bit per cycle; after the segment's last chunk, the count sum and the commit.
-void CpCore::parse_check_chunk(const View& v, Regs& d, Cycle& c) const {
+void CpCore::parse_check_chunk(const View& /*v*/, Regs& d, Cycle& c) const {
   const Regs& q = r_;
   if (multiply_step(d)) return;
   bool raised = false;
@@ -319,67 +309,105 @@ void CpCore::parse_check_chunk(const View& v, Regs& d, Cycle& c) const {
     raised = true;
   }
   d.chunks_left = (q.chunks_left - 1) & 0xFFFF;
-  const uint64_t seg_moves = (uint64_t(q.seg.u) << q.seg.k) & kMask34;
+  const uint64_t seg_moves = (uint64_t(q.seg_u) << q.hdr_k) & kMask34;
   if (q.chunks_left != 1) {
     d.parse = Parse::chunk_interval;
   } else if (q.discard || q.fault || raised) {
-    c.chunk_rollback = true;
+    c.chunk_rollback = c.seg_rollback = true;
     d.parse = Parse::command;
   } else if (q.count_sum != seg_moves) {
     c.raise(CoreError::seg_count_sum);
-    c.chunk_rollback = true;
-    d.parse = Parse::command;
-  } else if (!v.seg.full) {
-    // The whole segment passed: its entry and its chunks appear together.
-    c.seg_wr = true;
-    c.chunk_commit = true;
+    c.chunk_rollback = c.seg_rollback = true;
     d.parse = Parse::command;
   } else {
-    d.chunks_left = q.chunks_left;  // wait for room in the segment queue
+    // The whole segment passed: its words and its chunks appear together.
+    c.seg_commit = c.chunk_commit = true;
+    d.segs_queued = q.segs_queued + 1;
+    d.parse = Parse::command;
   }
 }
 
-// The builder: the segment queue's head into the idle lane's engines.
+// The builder: the next committed segment's patterns, one axis after the other,
+// into the build lane's banks. A constant pattern (v = 0 or v = U) is one move; any
+// other is built by the engine, whose first period is copied move by move.
 void CpCore::build(const View& v, Regs& d, Cycle& c) const {
   const Regs& q = r_;
-  bool lane_ready = true;
-  for (unsigned a = 0; a < p_.n; ++a) lane_ready = lane_ready && v.engine[q.build_lane * p_.n + a].in_ready;
-  if (v.seg.out_valid && !q.fault && lane_ready && !v.run.full) {
-    const Segment head = unpack_segment(v.seg.out_data);
-    c.build = true;
-    c.seg_pop = true;
-    c.run_wr = true;
-    uint32_t moving = 0;
-    for (unsigned a = 0; a < p_.n; ++a) moving |= uint32_t(head.v[a] != 0) << a;
-    put_bits(c.run_data, 0, p_.n, head.dir);
-    put_bits(c.run_data, p_.n, p_.n, moving);
-    put_bits(c.run_data, 2 * p_.n, 1, head.end);
-    d.build_lane = 1 - q.build_lane;
+  const uint64_t head = v.seg.out_data[0];
+  const uint32_t val = uint32_t(head) & 0xFFFFFF;
+  switch (q.build) {
+    case Build::idle:
+      if (v.seg.out_valid && !q.fault && v.run.level + uint32_t(q.cur_valid) <= 1) {
+        c.seg_pop = true;
+        d.segs_queued = d.segs_queued - 1;
+        d.b_u = val;
+        d.b_dir = uint32_t(head >> 24) & mask(p_.n);
+        d.b_end = (head >> (28 + p_.n) & 1) != 0;
+        d.b_axis = 0;
+        d.b_moving = 0;
+        d.build = Build::next_axis;
+      }
+      break;
+    case Build::next_axis:
+      if (v.seg.out_valid && v.engine.in_ready) {
+        c.seg_pop = true;
+        d.b_moving = q.b_moving | uint32_t(val != 0) << q.b_axis;
+        if (val == 0 || val == q.b_u) {
+          c.bank_we = 1u << q.b_axis;
+          c.bank_waddr = 0;
+          c.bank_wbit = val != 0;
+          c.cap_done = true;
+        } else {
+          c.eng_in_valid = true;
+          d.cap_addr = 0;
+          d.build = Build::capture;
+        }
+      }
+      break;
+    case Build::capture:
+      c.eng_move_ready = true;
+      if (v.engine.move_valid) {
+        c.bank_we = 1u << q.b_axis;
+        c.bank_waddr = q.cap_addr;
+        c.bank_wbit = v.engine.move;
+        d.cap_addr = (q.cap_addr + 1) & mask(aw());
+        c.cap_done = v.engine.move_pend;
+      }
+      if (v.engine.err) {
+        c.raise(CoreError::seg_pattern);
+        d.build = Build::idle;
+      }
+      break;
   }
-  unsigned refused = 0;
-  for (unsigned l = 0; l < 2; ++l)
-    for (unsigned a = 0; a < p_.n; ++a)
-      if (v.engine[l * p_.n + a].err) refused |= 1u << l;
-  if (refused) c.raise(CoreError::seg_pattern);
-  d.bad_lanes = q.bad_lanes | refused;
+  if (c.cap_done) {
+    d.lm1[q.build_lane][q.b_axis] = q.build == Build::capture ? q.cap_addr : 0;
+    if (q.b_axis == p_.n - 1) {
+      c.run_wr = true;
+      put_bits(c.run_data, 0, p_.n, q.b_dir);
+      put_bits(c.run_data, p_.n, p_.n, d.b_moving);
+      put_bits(c.run_data, 2 * p_.n, 1, q.b_end);
+      put_bits(c.run_data, 2 * p_.n + 1, 1, q.build_lane);
+      d.build_lane = 1 - q.build_lane;
+      d.build = Build::idle;
+    } else {
+      d.b_axis = q.b_axis + 1;
+      d.build = Build::next_axis;
+    }
+  }
+  c.eng_rst = q.build == Build::capture && c.cap_done;
 }
 
 // The timer (chunks), the runner (move events, segment ends, loads) and the CONTROL
 // word's start, abort and the E-stop.
 void CpCore::run(const View& v, Regs& d, Cycle& c) const {
   const Regs& q = r_;
-  const unsigned lane0 = q.cur_lane * p_.n;
-  bool lane_valid = true;
-  uint32_t lane_move = 0, ready = 0;
-  for (unsigned a = 0; a < p_.n; ++a) {
-    lane_valid = lane_valid && v.engine[lane0 + a].move_valid;
-    lane_move |= uint32_t(v.engine[lane0 + a].move) << a;
-    ready |= uint32_t(v.pulse[a].ready) << a;
-  }
-  const bool lane_last = v.engine[lane0].move_last;
+  const uint32_t lane_move = rbits_ & mask(p_.n);
+  uint32_t ready = 0;
+  for (unsigned a = 0; a < p_.n; ++a) ready |= uint32_t(v.pulse[a].ready) << a;
   const bool due = q.chunk_loaded && q.elapsed >= q.delay;
   const bool stopping = in.estop || c.abort;
-  c.fire = q.running && q.cur_valid && !stopping && due && lane_valid && (lane_move & ~ready) == 0;
+  c.fire = q.running && q.cur_valid && !stopping && due && q.rp_valid && (lane_move & ~ready) == 0;
+  c.rp_lane = q.cur_lane;
+  c.rp_next = q.rp_ptr;
   c.step = c.fire ? lane_move : 0;
 
   // A move is counted late once: the first cycle it is due and does not fire, or
@@ -400,12 +428,13 @@ void CpCore::run(const View& v, Regs& d, Cycle& c) const {
     d.timer_inc = uint32_t(sext16(uint32_t(head >> 32)));
     d.moves_left = uint32_t(head >> 48) & 0xFFFF;
     d.timer_add2 = uint32_t(v.chunk.out_data[1]) & 0xFFFF;
+    d.timer_last = (v.chunk.out_data[1] >> 16 & 1) != 0;
   };
   if (!q.chunk_loaded && v.chunk.out_valid) {
     load_chunk();
     d.chunk_loaded = true;
   }
-  const bool seg_done = c.fire && lane_last;
+  const bool seg_done = c.fire && q.moves_left == 1 && q.timer_last;
   if (c.fire) {
     d.moves_done = q.moves_done + 1;
     d.elapsed = 1;
@@ -418,14 +447,20 @@ void CpCore::run(const View& v, Regs& d, Cycle& c) const {
     } else {
       d.chunk_loaded = false;
     }
+    // The replay registers fetch the next move of the running lane's patterns.
+    if (!seg_done) {
+      c.bank_re = true;
+      for (unsigned a = 0; a < p_.n; ++a)
+        c.rp_next[a] = q.rp_ptr[a] == q.lm1[q.cur_lane][a] ? 0 : (q.rp_ptr[a] + 1) & mask(aw());
+    }
   }
   if (seg_done) {
     d.segments_done = q.segments_done + 1;
     d.cur_valid = false;
-    d.cur_lane = 1 - q.cur_lane;
+    d.rp_valid = false;
     if (q.cur_end) {
       d.running = false;
-    } else if (v.run.level == 0 && v.seg.level == 0 && !q.fault) {
+    } else if (v.run.level == 0 && q.segs_queued == 0 && q.build == Build::idle && !q.fault) {
       d.running = false;
       c.raise(CoreError::underrun);
     }
@@ -437,8 +472,14 @@ void CpCore::run(const View& v, Regs& d, Cycle& c) const {
     const uint32_t moving = uint32_t(get_bits(head, p_.n, p_.n));
     c.run_pop = true;
     d.cur_valid = true;
+    d.cur_lane = unsigned(get_bits(head, 2 * p_.n + 1, 1));
     d.cur_end = get_bits(head, 2 * p_.n, 1) != 0;
     d.dir = (q.dir & ~moving) | (dir & moving);
+    // The replay registers fetch each pattern's first move.
+    c.bank_re = true;
+    c.rp_lane = d.cur_lane;
+    d.rp_valid = true;
+    c.rp_next.fill(0);
   }
   if (c.start && !q.fault && !q.running) {
     d.running = true;
@@ -467,8 +508,6 @@ void CpCore::latch_faults(Regs& d, Cycle& c) const {
     d.fault = true;
     d.err = c.fault_code;
   }
-  const bool stuck = q.cur_valid && (q.bad_lanes >> q.cur_lane & 1);
-  c.flush = c.flush || stuck;
   if (c.flush) {
     d.running = false;
     d.cur_valid = false;
@@ -476,7 +515,9 @@ void CpCore::latch_faults(Regs& d, Cycle& c) const {
     d.cur_lane = 0;
     d.build_lane = 0;
     d.late = false;
-    d.bad_lanes = 0;
+    d.build = Build::idle;
+    d.rp_valid = false;
+    d.segs_queued = 0;
   }
 }
 
@@ -485,7 +526,9 @@ void CpCore::reset_control(Regs& d) const {
   d.discard = d.rsp_valid = d.running = d.cur_valid = false;
   d.cur_lane = d.build_lane = 0;
   d.chunk_loaded = d.late = false;
-  d.bad_lanes = 0;
+  d.build = Build::idle;
+  d.rp_valid = false;
+  d.segs_queued = 0;
   d.fault = false;
   d.err = 0;
   d.stretched = false;
@@ -504,9 +547,9 @@ void CpCore::reset_control(Regs& d) const {
 
 bool CpCore::cmd_ready() const {
   switch (r_.parse) {
-    case Parse::command:
+    case Parse::command: return true;
     case Parse::seg_h1:
-    case Parse::seg_v:
+    case Parse::seg_v: return r_.discard || r_.fault || !seg_fifo_.outputs().full;
     case Parse::chunk_interval: return true;
     case Parse::chunk_count:
       return r_.seg_add2 || r_.discard || r_.fault || !chunk_fifo_.outputs().full;
@@ -523,7 +566,7 @@ void CpCore::tick() {
   v.seg = seg_fifo_.outputs();
   v.run = run_fifo_.outputs();
   v.chunk = chunk_fifo_.outputs();
-  for (unsigned e = 0; e < 2 * n; ++e) v.engine[e] = engines_[e].outputs();
+  v.engine = engine_.outputs();
   for (unsigned a = 0; a < n; ++a) {
     CpPulse pulse = pulses_[a];
     pulse.in = pulse_in(a, 0);
@@ -540,20 +583,24 @@ void CpCore::tick() {
   latch_faults(d, c);
 
   // The sub-blocks' edge.
-  const Segment head = unpack_segment(v.seg.out_data);
-  for (unsigned l = 0; l < 2; ++l) {
-    for (unsigned a = 0; a < n; ++a) {
-      CpEngine& e = engines_[l * n + a];
-      e.in.rst = in.rst || c.flush;
-      e.in.in_valid = c.build && l == q.build_lane;
-      e.in.in_u = head.u;
-      e.in.in_v = head.v[a];
-      e.in.in_k = head.k;
-      e.in.in_rep = 1;
-      e.in.move_ready = c.fire && l == q.cur_lane;
-      e.tick();
-    }
+  engine_.in.rst = in.rst || c.flush || c.eng_rst;
+  engine_.in.in_valid = c.eng_in_valid;
+  engine_.in.in_u = q.b_u;
+  engine_.in.in_v = uint32_t(v.seg.out_data[0]) & 0xFFFFFF;
+  engine_.in.in_k = 0;
+  engine_.in.in_rep = 1;
+  engine_.in.move_ready = c.eng_move_ready;
+  engine_.tick();
+  // Pattern banks: the builder writes the build lane, the replay reads the running one.
+  const uint32_t half = 1u << aw();
+  if (c.bank_re) {
+    uint32_t bits = 0;
+    for (unsigned a = 0; a < n; ++a)
+      bits |= uint32_t(banks_[a][c.rp_lane * half + c.rp_next[a]]) << a;
+    rbits_ = bits;
   }
+  for (unsigned a = 0; a < n; ++a)
+    if (c.bank_we >> a & 1) banks_[a][q.build_lane * half + c.bank_waddr] = c.bank_wbit;
   for (unsigned a = 0; a < n; ++a) {
     pulses_[a].in = pulse_in(a, c.step);
     pulses_[a].tick();
@@ -568,12 +615,14 @@ void CpCore::tick() {
     f.in.out_ready = pop;
     f.tick();
   };
-  edge(seg_fifo_, c.seg_wr, pack_segment(d.seg), true, false, c.seg_pop);
+  edge(seg_fifo_, c.seg_wr, c.seg_data, c.seg_commit, c.seg_rollback, c.seg_pop);
   edge(run_fifo_, c.run_wr, c.run_data, true, false, c.run_pop);
-  edge(chunk_fifo_, c.chunk_wr, chunk_word(q.interval, d.add, d.count, d.add2), c.chunk_commit,
+  edge(chunk_fifo_, c.chunk_wr, chunk_word(q.interval, d.add, d.count, d.add2, q.chunks_left == 1),
+       c.chunk_commit,
        c.chunk_rollback, c.chunk_pop);
 
   // The core's own registers: reset clears the control state; the datapath loads.
+  if (c.bank_re) d.rp_ptr = c.rp_next;
   if (in.rst) {
     reset_control(d);
     r_ = d;

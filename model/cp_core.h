@@ -46,14 +46,8 @@ class CpCore {
     bool step_pol = true, dir_pol = true;
   };
 
-  // A segment as the segment queue holds it.
-  struct Segment {
-    bool end = false;
-    uint32_t k = 0;
-    uint32_t dir = 0;  // bit i: axis i positive
-    uint32_t u = 0;
-    std::array<uint32_t, kCoreMaxAxes> v{};
-  };
+  // The builder's state (docs/CORE.md "Builder").
+  enum class Build { idle, next_axis, capture };
 
   struct Regs {
     // Control state (reset).
@@ -65,7 +59,9 @@ class CpCore {
     unsigned cur_lane = 0, build_lane = 0;
     bool chunk_loaded = false;  // the timer holds a chunk
     bool late = false;          // the pending move has been counted as stretched
-    unsigned bad_lanes = 0;     // bit l: lane l holds a segment its engines refused
+    Build build = Build::idle;
+    bool rp_valid = false;      // the replay registers hold the next move
+    uint32_t segs_queued = 0;   // committed segments in the segment queue
     bool fault = false;
     uint32_t err = 0;
     bool stretched = false;
@@ -74,7 +70,8 @@ class CpCore {
     uint32_t dir = 0;           // bit i: the direction axis i steps in
     std::array<AxisConfig, kCoreMaxAxes> cfg{};
     // Datapath (not reset).
-    Segment seg;                // the segment being read
+    bool hdr_end = false;       // the segment being read: end flag, k, U
+    uint32_t hdr_k = 0, seg_u = 0;
     bool seg_add2 = false;      // its chunks carry add2 (three words)
     uint32_t chunks_left = 0, v_index = 0;
     uint32_t interval = 0, count = 0, add = 0, add2 = 0;
@@ -88,16 +85,32 @@ class CpCore {
     uint32_t delay = 0, moves_left = 0, elapsed = 0;
     uint32_t timer_inc = 0;   // the running increment, 32 bits (signed, mod 2^32)
     uint32_t timer_add2 = 0;  // 16 bits
+    bool timer_last = false;  // the timer's chunk is its segment's last
+    // The builder's datapath.
+    unsigned b_axis = 0;
+    uint32_t b_u = 0, b_dir = 0, b_moving = 0, cap_addr = 0;
+    bool b_end = false;
+    // Replay: the address of the move in each axis's replay register, and each
+    // lane's pattern lengths minus one.
+    std::array<uint32_t, kCoreMaxAxes> rp_ptr{};
+    std::array<std::array<uint32_t, kCoreMaxAxes>, 2> lm1{};
   };
 
   // Everything one clock decides besides the next register values: the sub-blocks'
   // inputs and the fault raised.
   struct Cycle {
     bool take = false;
-    bool seg_wr = false, seg_pop = false, run_wr = false, run_pop = false;
+    bool seg_wr = false, seg_pop = false, seg_commit = false, seg_rollback = false;
+    FifoWord seg_data{};
+    bool run_wr = false, run_pop = false;
     FifoWord run_data{};
     bool chunk_wr = false, chunk_commit = false, chunk_rollback = false, chunk_pop = false;
-    bool build = false;         // the build lane's engines take the queue's head
+    bool eng_in_valid = false, eng_move_ready = false, cap_done = false, eng_rst = false;
+    uint32_t bank_we = 0, bank_waddr = 0;  // axes written, their address in the build lane
+    bool bank_wbit = false;
+    bool bank_re = false;       // the replay registers load rp_next of lane rp_lane
+    unsigned rp_lane = 0;
+    std::array<uint32_t, kCoreMaxAxes> rp_next{};
     bool fire = false;          // a move event
     bool stretch = false;       // a move is counted late
     uint32_t step = 0;          // axes that step in it
@@ -115,14 +128,11 @@ class CpCore {
   // What the sub-blocks show in this cycle.
   struct View {
     CpFifoOut seg, run, chunk;
-    std::array<CpEngineOut, 2 * kCoreMaxAxes> engine;
+    CpEngineOut engine;
     std::array<CpPulseOut, kCoreMaxAxes> pulse;
   };
 
-  // Bit layouts of the queue entries (as in the RTL).
-  FifoWord pack_segment(const Segment& s) const;
-  Segment unpack_segment(const FifoWord& w) const;
-  unsigned seg_bits() const { return 1 + 4 + p_.n + 24 * (p_.n + 1); }
+  unsigned aw() const;  // pattern bank address width
 
   void reset_control(Regs& d) const;
   bool cmd_ready() const;
@@ -139,7 +149,11 @@ class CpCore {
 
   Params p_;
   uint32_t mask_tw_;
-  std::vector<CpEngine> engines_;
+  CpEngine engine_;
+  // Axis a's pattern bank: lane l's pattern at l·2^AW + address; the replay
+  // registers (bit a: axis a's next move).
+  std::vector<std::vector<uint8_t>> banks_;
+  uint32_t rbits_ = 0;
   std::vector<CpPulse> pulses_;
   CpFifo seg_fifo_, run_fifo_, chunk_fifo_;
   Regs r_;

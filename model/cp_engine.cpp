@@ -162,6 +162,7 @@ CpEngine::Regs CpEngine::next(Cycle& io) const {
       d.out_valid = true;
       const bool pattern_end = q.constant || (q.phase == 1 && q.phase_left == 1);
       d.out_last = pattern_end && q.inner == 1 && q.outer == 1;
+      d.out_pend = pattern_end;
       if (pattern_end) {
         d.phase = 0;
         d.phase_left = q.reg[1].len;
@@ -203,6 +204,7 @@ CpEngineOut CpEngine::outputs() const {
   const bool bit = q.constant ? q.constant_move : rdata_[q.out_from];
   o.move = q.out_valid && bit;
   o.move_last = q.out_valid && q.out_last;
+  o.move_pend = q.out_valid && q.out_pend;
   o.dbg_we1 = io.we[0];
   o.dbg_waddr1 = io.we[0] ? io.waddr[0] : 0;
   o.dbg_wbit1 = io.we[0] && io.wbit[0];

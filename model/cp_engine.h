@@ -34,6 +34,7 @@ struct CpEngineOut {
   bool err = false;
   uint32_t err_code = 0;
   bool move_valid = false, move = false, move_last = false;
+  bool move_pend = false;  // the move ends a period of the pattern
   bool dbg_we1 = false;
   uint32_t dbg_waddr1 = 0;
   bool dbg_wbit1 = false;
@@ -117,6 +118,7 @@ class CpEngine {
     uint32_t outer = 0;                   // rounds of x << k left
     int out_from = 0;
     bool out_last = false;
+    bool out_pend = false;
     uint32_t err_code = 0;
     uint32_t snap_x = 0, snap_y = 0;
     Reg snap[2];

@@ -70,11 +70,16 @@ module cp_core #(
 
 // ---------------------------------------------------------------- constants
 localparam integer UW = $clog2(UMAX + 2);           // engine u/v width
-localparam integer KW = (KMAX > 0) ? $clog2(KMAX + 2) : 1;
-// Segment queue entry: end, k, dir[N], U, v[N] (24 bits each).
-localparam integer SDW = 1 + 4 + N + 24 * (N + 1);
-// Run information of a built segment: end, dir[N], moving[N].
-localparam integer RDW = 1 + 2 * N;
+// Pattern bank address width: a bank holds one pattern of up to W moves.
+localparam integer AW = (W > 2) ? $clog2(W) : 1;
+// Segment queue word: the header {end, k, dir[N], U} or a v_i in [23:0].
+localparam integer SWW = 29 + N;
+// Segment queue address width: 2^SAW segments of N + 1 words each, at least.
+localparam integer SQW = SAW + $clog2(N + 1);
+// A built segment, waiting in the run queue: lane, end, moving[N], dir[N].
+localparam integer RDW = 2 + 2 * N;
+// Chunk queue word: last chunk of its segment, add2, count, add, interval.
+localparam integer CDW = 81;
 
 localparam [3:0] OP_SEGMENT = 4'h1;
 localparam [3:0] OP_CONFIG  = 4'h2;
@@ -144,7 +149,9 @@ reg          cur_lane_q, cur_lane_d;
 reg          build_lane_q, build_lane_d;
 reg          ch_loaded_q, ch_loaded_d;
 reg          late_q, late_d;             // the pending move has been counted as stretched
-reg [1:0]    bad_lane_q, bad_lane_d;     // lane l holds a segment its engines refused
+reg [1:0]    b_state_q, b_state_d;       // builder
+reg          rp_valid_q, rp_valid_d;     // the replay registers hold the next move
+reg [SQW:0]  segq_q, segq_d;             // committed segments in the segment queue
 reg          fault_q, fault_d;
 reg [7:0]    err_q, err_d;
 reg          stretched_q, stretched_d;
@@ -160,7 +167,9 @@ reg [N-1:0]  cfg_step_pol_q, cfg_dir_pol_q;
 reg [N-1:0]  dir_q, dir_d;               // direction each axis is to step in
 
 // Datapath (no reset).
-reg [SDW-1:0] seg_q, seg_d;              // the segment being read
+reg          hdr_end_q, hdr_end_d;       // the segment being read: end flag, k, U
+reg [3:0]    hdr_k_q, hdr_k_d;
+reg [23:0]   seg_u_q, seg_u_d;
 reg          seg_add2_q, seg_add2_d;     // its chunks carry add2 (three words)
 reg [15:0]   nchunks_q, nchunks_d;       // chunks still to read
 reg [2:0]    v_idx_q, v_idx_d;
@@ -179,12 +188,20 @@ reg [15:0]   left_q, left_d;
 reg [31:0]   tinc_q, tinc_d;             // the running increment (signed)
 reg [15:0]   tadd2_q, tadd2_d;
 reg [31:0]   elapsed_q, elapsed_d;
+reg          tlast_q, tlast_d;           // the timer's chunk is its segment's last
+// Builder datapath.
+reg [2:0]    b_axis_q, b_axis_d;
+reg [UW-1:0] b_u_q, b_u_d;
+reg          b_end_q, b_end_d;
+reg [N-1:0]  b_dir_q, b_dir_d, b_moving_q, b_moving_d;
+reg [AW-1:0] cap_addr_q, cap_addr_d;
 
 // ---------------------------------------------------------------- queues
 wire          seg_full, seg_head_valid;
-wire [SAW:0]  seg_used, seg_level;
-wire [SDW-1:0] seg_head;
-reg           seg_wr, seg_pop;
+wire [SQW:0]  seg_used, seg_level;
+wire [SWW-1:0] seg_head;
+reg           seg_wr, seg_pop, seg_commit, seg_rollback;
+reg [SWW-1:0] seg_wdata;
 
 wire          run_full, run_head_valid;
 wire [1:0]    run_used, run_level;
@@ -194,14 +211,14 @@ reg [RDW-1:0] run_wdata;
 
 wire          ch_full, ch_head_valid;
 wire [CAW:0]  ch_used, ch_level;
-wire [79:0]   ch_head;
+wire [CDW-1:0] ch_head;
 reg           ch_wr, ch_commit, ch_rollback, ch_pop;
 
 reg           flush;
 
-cp_fifo #(.DW(SDW), .AW(SAW)) u_seg_fifo (
+cp_fifo #(.DW(SWW), .AW(SQW)) u_seg_fifo (
     .clk(clk), .rst(rst), .clear_i(flush),
-    .wr_i(seg_wr), .wr_data_i(seg_d), .commit_i(1'b1), .rollback_i(1'b0),
+    .wr_i(seg_wr), .wr_data_i(seg_wdata), .commit_i(seg_commit), .rollback_i(seg_rollback),
     .full_o(seg_full), .used_o(seg_used), .level_o(seg_level),
     .out_valid_o(seg_head_valid), .out_ready_i(seg_pop), .out_data_o(seg_head));
 
@@ -211,64 +228,78 @@ cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
     .full_o(run_full), .used_o(run_used), .level_o(run_level),
     .out_valid_o(run_head_valid), .out_ready_i(run_pop), .out_data_o(run_head));
 
-cp_fifo #(.DW(80), .AW(CAW)) u_chunk_fifo (
+cp_fifo #(.DW(CDW), .AW(CAW)) u_chunk_fifo (
     .clk(clk), .rst(rst), .clear_i(flush),
-    .wr_i(ch_wr), .wr_data_i({add2_d, count_d, add_d, interval_q}), .commit_i(ch_commit),
+    .wr_i(ch_wr), .wr_data_i({nchunks_q == 16'd1, add2_d, count_d, add_d, interval_q}),
+    .commit_i(ch_commit),
     .rollback_i(ch_rollback),
     .full_o(ch_full), .used_o(ch_used), .level_o(ch_level),
     .out_valid_o(ch_head_valid), .out_ready_i(ch_pop), .out_data_o(ch_head));
 
-// Segment queue entry fields.
-wire          head_end = seg_head[SDW-1];
-wire [3:0]    head_k   = seg_head[SDW-2 -: 4];
-wire [N-1:0]  head_dir = seg_head[SDW-6 -: N];
-wire [23:0]   head_u   = seg_head[24*N +: 24];
+// Segment queue word fields.
+wire          head_end = seg_head[28 + N];
+wire [N-1:0]  head_dir = seg_head[24 +: N];
+wire [23:0]   head_val = seg_head[23:0];
 
-// ---------------------------------------------------------------- engines
-// Lane l, axis a is engine index l*N + a.
-reg  [2*N-1:0] eng_in_valid, eng_move_ready;
-wire [2*N-1:0] eng_in_ready, eng_err, eng_move_valid, eng_move, eng_move_last;
-wire [2*N*3-1:0] eng_err_code;
-reg            eng_rst;
+genvar ga;
 
-genvar gl, ga;
+// ---------------------------------------------------------------- pattern builder
+// One Castle–Pitteway engine builds every axis's pattern in turn; its first
+// period, M2·reverse(M1), is copied into the axis's pattern bank (lane half).
+reg            eng_in_valid, eng_move_ready, eng_rst, cap_done;
+wire           eng_in_ready, eng_err, eng_move_valid, eng_move, eng_move_last, eng_move_pend;
+wire [2:0]     eng_err_code;
+wire           unused_dbg;
+wire           dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter, dbg_m1_rev, dbg_m2_rev;
+wire [AW-1:0]  dbg_waddr1, dbg_waddr2, dbg_m1_lo, dbg_m1_len, dbg_m2_lo, dbg_m2_len;
+wire [UW-1:0]  dbg_x, dbg_y;
+
+cp_engine #(.W(W), .UMAX(UMAX), .KMAX(0), .RW(1)) u_engine (
+    .clk(clk), .rst(rst || eng_rst),
+    .in_valid_i(eng_in_valid), .in_ready_o(eng_in_ready),
+    .in_u_i(b_u_q), .in_v_i(head_val[UW-1:0]), .in_k_i(1'b0), .in_rep_i(1'b1),
+    .err_o(eng_err), .err_code_o(eng_err_code),
+    .move_valid_o(eng_move_valid), .move_ready_i(eng_move_ready),
+    .move_o(eng_move), .move_last_o(eng_move_last), .move_pend_o(eng_move_pend),
+    .dbg_we1_o(dbg_we1), .dbg_waddr1_o(dbg_waddr1), .dbg_wbit1_o(dbg_wbit1),
+    .dbg_we2_o(dbg_we2), .dbg_waddr2_o(dbg_waddr2), .dbg_wbit2_o(dbg_wbit2),
+    .dbg_iter_o(dbg_iter), .dbg_x_o(dbg_x), .dbg_y_o(dbg_y),
+    .dbg_m1_lo_o(dbg_m1_lo), .dbg_m1_len_o(dbg_m1_len), .dbg_m1_rev_o(dbg_m1_rev),
+    .dbg_m2_lo_o(dbg_m2_lo), .dbg_m2_len_o(dbg_m2_len), .dbg_m2_rev_o(dbg_m2_rev));
+// The debug port is for the engine's own bench.
+assign unused_dbg = &{1'b0, dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter,
+                      dbg_m1_rev, dbg_m2_rev, dbg_waddr1, dbg_waddr2, dbg_m1_lo,
+                      dbg_m1_len, dbg_m2_lo, dbg_m2_len, dbg_x, dbg_y};
+
+localparam [1:0] B_IDLE = 2'd0;   // waiting for a committed segment and a free lane
+localparam [1:0] B_V    = 2'd1;   // next axis: its v_i at the segment queue's head
+localparam [1:0] B_CAP  = 2'd2;   // the engine's first period into the bank
+
+// ---------------------------------------------------------------- pattern banks and replay
+// Axis a's bank holds lane l's pattern at {l, address}; the builder writes the
+// build lane while the replay reads the running lane, one move a clock.
+reg  [N-1:0]   bank_we;
+reg  [AW-1:0]  bank_waddr;
+reg            bank_wbit;
+reg            bank_re;
+reg  [AW-1:0]  rp_next [0:N-1];          // the address each axis reads next
+reg            rp_lane;                  // and the lane
+reg  [AW-1:0]  rp_ptr_q [0:N-1];         // the address of the move in the replay register
+reg  [AW-1:0]  lm1_q [0:15];             // lane l, axis a: pattern length - 1 at {l, a}
+wire [N-1:0]   lane_move;                // the replay registers: the next move's bits
+
 generate
-    for (gl = 0; gl < 2; gl = gl + 1) begin : g_lane
-        for (ga = 0; ga < N; ga = ga + 1) begin : g_axis
-            localparam integer E = gl * N + ga;
-            wire [UW-1:0] u_in = head_u[UW-1:0];
-            wire [UW-1:0] v_in = seg_head[24*ga +: UW];
-            wire unused_dbg;
-            wire          dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter;
-            wire          dbg_m1_rev, dbg_m2_rev;
-            wire [$clog2(W)-1:0] dbg_waddr1, dbg_waddr2, dbg_m1_lo, dbg_m1_len, dbg_m2_lo, dbg_m2_len;
-            wire [UW-1:0] dbg_x, dbg_y;
-            cp_engine #(.W(W), .UMAX(UMAX), .KMAX(KMAX), .RW(1)) u_engine (
-                .clk(clk), .rst(rst || eng_rst),
-                .in_valid_i(eng_in_valid[E]), .in_ready_o(eng_in_ready[E]),
-                .in_u_i(u_in), .in_v_i(v_in), .in_k_i(head_k[KW-1:0]), .in_rep_i(1'b1),
-                .err_o(eng_err[E]), .err_code_o(eng_err_code[3*E +: 3]),
-                .move_valid_o(eng_move_valid[E]), .move_ready_i(eng_move_ready[E]),
-                .move_o(eng_move[E]), .move_last_o(eng_move_last[E]),
-                .dbg_we1_o(dbg_we1), .dbg_waddr1_o(dbg_waddr1), .dbg_wbit1_o(dbg_wbit1),
-                .dbg_we2_o(dbg_we2), .dbg_waddr2_o(dbg_waddr2), .dbg_wbit2_o(dbg_wbit2),
-                .dbg_iter_o(dbg_iter), .dbg_x_o(dbg_x), .dbg_y_o(dbg_y),
-                .dbg_m1_lo_o(dbg_m1_lo), .dbg_m1_len_o(dbg_m1_len), .dbg_m1_rev_o(dbg_m1_rev),
-                .dbg_m2_lo_o(dbg_m2_lo), .dbg_m2_len_o(dbg_m2_len), .dbg_m2_rev_o(dbg_m2_rev));
-            // The debug port is for the engine's own bench.
-            assign unused_dbg = &{1'b0, dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter,
-                                  dbg_m1_rev, dbg_m2_rev, dbg_waddr1, dbg_waddr2, dbg_m1_lo,
-                                  dbg_m1_len, dbg_m2_lo, dbg_m2_len, dbg_x, dbg_y};
+    for (ga = 0; ga < N; ga = ga + 1) begin : g_bank
+        reg bank [0:2*(1<<AW)-1];
+        reg rbit_q;
+        always @(posedge clk) begin
+            if (bank_we[ga]) bank[{build_lane_q, bank_waddr}] <= bank_wbit;
+            if (bank_re) rbit_q <= bank[{rp_lane, rp_next[ga]}];
         end
+        assign lane_move[ga] = rbit_q;
     end
 endgenerate
-
-wire [N-1:0] lane_valid = cur_lane_q ? eng_move_valid[2*N-1:N] : eng_move_valid[N-1:0];
-wire [N-1:0] lane_move  = cur_lane_q ? eng_move[2*N-1:N] : eng_move[N-1:0];
-wire         lane_last  = cur_lane_q ? eng_move_last[N] : eng_move_last[0];
-wire [N-1:0] build_ready = build_lane_q ? eng_in_ready[2*N-1:N] : eng_in_ready[N-1:0];
-wire         build_err  = |eng_err;
-wire unused_err_code = &{1'b0, eng_err_code, seg_used, run_used, ch_used, head_u[23:UW], head_k};
+wire unused_eng = &{1'b0, eng_err_code, eng_move_last, seg_used, run_used, ch_used, seg_level, run_full};
 
 // ---------------------------------------------------------------- pulses
 wire [N-1:0]  pulse_ready, pulse_busy;
@@ -297,7 +328,7 @@ wire        take      = cmd_valid_i && cmd_ready_o;
 wire [15:0] c1_count  = cmd_data_i[15:0];
 wire [15:0] c1_add    = cmd_data_i[31:16];
 wire [15:0] c2_add2   = cmd_data_i[15:0];
-wire [33:0] seg_moves = {10'd0, seg_q[24*N +: 24]} << seg_q[SDW-2 -: 4];
+wire [33:0] seg_moves = {10'd0, seg_u_q} << hdr_k_q;
 // Pass 2 of a chunk's check: prod = (count-1)*(add + last increment), even, so the
 // last delay is interval + prod/2.
 wire [MW:0]   last_delay = {{(MW-31){1'b0}}, interval_q} + {{2{prod_q[MW-1]}}, prod_q[MW-1:1]};
@@ -308,10 +339,13 @@ wire          inc_flip = (!add_q[15] && add_q != 16'd0 && last_inc[MW-1]) ||
                          (add_q[15] && !last_inc[MW-1] && last_inc != {MW{1'b0}});
 
 wire [31:0] ch_level32 = {{(31 - CAW){1'b0}}, ch_level};
+// Segments queued: committed, being built, built and waiting, loaded.
+wire [7:0]  segs_queued = {{(7 - SQW){1'b0}}, segq_q} + {7'd0, b_state_q != B_IDLE} +
+                          {6'd0, run_level} + {7'd0, cur_valid_q};
 
 // Registers readable by READ.
 wire [31:0] status_word = {ch_level32 > 32'd255 ? 8'd255 : ch_level32[7:0],
-                           {{(8 - SAW - 1){1'b0}}, seg_level} + {6'd0, run_level} + {7'd0, cur_valid_q},
+                           segs_queued,
                            err_q, 3'd0, enable_q, estop_i, stretched_q, fault_q, running_q};
 // Capabilities (READ 0x20..0x22): what the host must know of this build.
 localparam [31:0] CAPS = {3'd0, TW[4:0], SAW[3:0], CAW[3:0], KMAX[7:0], N[7:0]};
@@ -340,7 +374,8 @@ end
 // ---------------------------------------------------------------- next state
 reg        fire, due, seg_done, fault_set, start_cmd, abort_cmd, clear_cmd, cfg_write;
 reg        drivers_on, drivers_off;
-reg        clearing, stuck, stretch_inc;
+reg        clearing, stretch_inc;
+reg [N-1:0] b_axis_onehot;
 reg [7:0]  fault_code;
 integer    i;
 
@@ -349,22 +384,29 @@ always @* begin
     discard_d   = discard_q;
     rsp_valid_d = rsp_valid_q && !rsp_ready_i;
     rsp_data_d  = rsp_data_q;
-    seg_d = seg_q;  nchunks_d = nchunks_q;  v_idx_d = v_idx_q;
+    hdr_end_d = hdr_end_q;  hdr_k_d = hdr_k_q;  seg_u_d = seg_u_q;
+    nchunks_d = nchunks_q;  v_idx_d = v_idx_q;
     interval_d = interval_q;  count_d = count_q;  add_d = add_q;  add2_d = add2_q;  sum_d = sum_q;
     seg_add2_d = seg_add2_q;
     prod_d = prod_q;  mul_a_d = mul_a_q;  mul_b_d = mul_b_q;
     running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
     cur_end_d = cur_end_q;  build_lane_d = build_lane_q;  ch_loaded_d = ch_loaded_q;
-    late_d = late_q;  bad_lane_d = bad_lane_q;
+    late_d = late_q;  b_state_d = b_state_q;  rp_valid_d = rp_valid_q;  segq_d = segq_q;
+    tlast_d = tlast_q;  b_axis_d = b_axis_q;  b_u_d = b_u_q;  b_end_d = b_end_q;
+    b_dir_d = b_dir_q;  b_moving_d = b_moving_q;  cap_addr_d = cap_addr_q;
     fault_d = fault_q;  err_d = err_q;  stretched_d = stretched_q;  enable_d = enable_q;
     stretch_cnt_d = stretch_cnt_q;  moves_done_d = moves_done_q;  segs_done_d = segs_done_q;
     delay_d = delay_q;  left_d = left_q;  tinc_d = tinc_q;  tadd2_d = tadd2_q;  dir_d = dir_q;
     elapsed_d = (elapsed_q == 32'hFFFF_FFFF) ? elapsed_q : elapsed_q + 1'b1;
 
-    seg_wr = 1'b0;  seg_pop = 1'b0;  run_wr = 1'b0;  run_pop = 1'b0;
+    seg_wr = 1'b0;  seg_pop = 1'b0;  seg_commit = 1'b0;  seg_rollback = 1'b0;
+    seg_wdata = {SWW{1'b0}};  run_wr = 1'b0;  run_pop = 1'b0;
     run_wdata = {RDW{1'b0}};
     ch_wr = 1'b0;  ch_commit = 1'b0;  ch_rollback = 1'b0;  ch_pop = 1'b0;
-    eng_in_valid = {2*N{1'b0}};  eng_move_ready = {2*N{1'b0}};  pulse_step = {N{1'b0}};
+    eng_in_valid = 1'b0;  eng_move_ready = 1'b0;  cap_done = 1'b0;  pulse_step = {N{1'b0}};
+    bank_we = {N{1'b0}};  bank_waddr = {AW{1'b0}};  bank_wbit = 1'b0;
+    bank_re = 1'b0;  rp_lane = cur_lane_q;
+    for (i = 0; i < N; i = i + 1) rp_next[i] = rp_ptr_q[i];
     fault_set = 1'b0;  fault_code = E_NONE;
     start_cmd = 1'b0;  abort_cmd = 1'b0;  clear_cmd = 1'b0;  cfg_write = 1'b0;
     drivers_on = 1'b0;  drivers_off = 1'b0;
@@ -374,9 +416,8 @@ always @* begin
     P_CMD: if (take) begin
         case (op)
         OP_SEGMENT: begin
-            seg_d = {SDW{1'b0}};
-            seg_d[SDW-1] = cmd_data_i[27];
-            seg_d[SDW-2 -: 4] = cmd_data_i[26:23];
+            hdr_end_d = cmd_data_i[27];
+            hdr_k_d   = cmd_data_i[26:23];
             nchunks_d = cmd_data_i[15:0];
             seg_add2_d = cmd_data_i[22];
             sum_d     = 34'd0;
@@ -420,8 +461,9 @@ always @* begin
     end
 
     P_H1: if (take) begin
-        seg_d[SDW-6 -: N] = cmd_data_i[24 +: N];
-        seg_d[24*N +: 24] = cmd_data_i[23:0];
+        seg_u_d   = cmd_data_i[23:0];
+        seg_wr    = !discard_q && !fault_q;
+        seg_wdata = {hdr_end_q, hdr_k_q, cmd_data_i[24 +: N], cmd_data_i[23:0]};
         if (!discard_q && !fault_q &&
             (cmd_data_i[23:0] == 24'd0 || {8'd0, cmd_data_i[23:0]} > UMAX)) begin
             fault_set = 1'b1;  fault_code = E_SEG_U;  discard_d = 1'b1;
@@ -431,8 +473,9 @@ always @* begin
     end
 
     P_V: if (take) begin
-        seg_d[24*v_idx_q +: 24] = cmd_data_i[23:0];
-        if (!discard_q && !fault_q && cmd_data_i[23:0] > seg_q[24*N +: 24]) begin
+        seg_wr    = !discard_q && !fault_q;
+        seg_wdata = {{(SWW-24){1'b0}}, cmd_data_i[23:0]};
+        if (!discard_q && !fault_q && cmd_data_i[23:0] > seg_u_q) begin
             fault_set = 1'b1;  fault_code = E_SEG_V_GT_U;  discard_d = 1'b1;
         end
         v_idx_d = v_idx_q + 1'b1;
@@ -505,19 +548,20 @@ always @* begin
             if (nchunks_q != 16'd1) begin
                 p_state_d = P_C0;
             end else if (discard_q || fault_q || fault_set) begin
-                ch_rollback = 1'b1;
-                p_state_d   = P_CMD;
+                ch_rollback  = 1'b1;
+                seg_rollback = 1'b1;
+                p_state_d    = P_CMD;
             end else if (sum_q != seg_moves) begin
-                fault_set   = 1'b1;  fault_code = E_SEG_COUNT_SUM;
-                ch_rollback = 1'b1;
-                p_state_d   = P_CMD;
-            end else if (!seg_full) begin
-                // The whole segment passed: its entry and its chunks appear together.
-                seg_wr    = 1'b1;
-                ch_commit = 1'b1;
-                p_state_d = P_CMD;
+                fault_set    = 1'b1;  fault_code = E_SEG_COUNT_SUM;
+                ch_rollback  = 1'b1;
+                seg_rollback = 1'b1;
+                p_state_d    = P_CMD;
             end else begin
-                nchunks_d = nchunks_q;   // wait for room in the segment queue
+                // The whole segment passed: its words and its chunks appear together.
+                seg_commit = 1'b1;
+                ch_commit  = 1'b1;
+                segq_d     = segq_q + 1'b1;
+                p_state_d  = P_CMD;
             end
         end
     end
@@ -534,24 +578,65 @@ always @* begin
         mul_b_d = mul_b_q << 1;
     end
 
-    // ---- builder: the next committed segment into the idle lane
-    if (seg_head_valid && !fault_q && &build_ready && !run_full) begin
-        eng_in_valid = build_lane_q ? {{N{1'b1}}, {N{1'b0}}} : {{N{1'b0}}, {N{1'b1}}};
-        seg_pop   = 1'b1;
-        run_wr    = 1'b1;
-        for (i = 0; i < N; i = i + 1) run_wdata[N + i] = seg_head[24*i +: 24] != 24'd0;
-        run_wdata[N-1:0] = head_dir;
-        run_wdata[RDW-1] = head_end;
-        build_lane_d = !build_lane_q;
+    // ---- builder: the next committed segment's patterns into the build lane's banks
+    for (i = 0; i < N; i = i + 1) b_axis_onehot[i] = b_axis_q == i[2:0];
+    case (b_state_q)
+    B_IDLE: if (seg_head_valid && !fault_q && {1'b0, run_level} + {2'd0, cur_valid_q} <= 3'd1) begin
+        seg_pop    = 1'b1;
+        segq_d     = segq_d - 1'b1;
+        b_u_d      = head_val[UW-1:0];
+        b_dir_d    = head_dir;
+        b_end_d    = head_end;
+        b_axis_d   = 3'd0;
+        b_moving_d = {N{1'b0}};
+        b_state_d  = B_V;
     end
-    if (build_err) begin
-        fault_set = 1'b1;  fault_code = E_SEG_PATTERN;
+    B_V: if (seg_head_valid && eng_in_ready) begin
+        seg_pop = 1'b1;
+        b_moving_d = b_moving_q | (b_axis_onehot & {N{head_val != 24'd0}});
+        if (head_val == 24'd0 || head_val[UW-1:0] == b_u_q) begin
+            // A constant pattern: one move.
+            bank_we    = b_axis_onehot;
+            bank_waddr = {AW{1'b0}};
+            bank_wbit  = head_val != 24'd0;
+            cap_done   = 1'b1;
+        end else begin
+            eng_in_valid = 1'b1;
+            cap_addr_d   = {AW{1'b0}};
+            b_state_d    = B_CAP;
+        end
     end
-    bad_lane_d = bad_lane_q | {|eng_err[2*N-1:N], |eng_err[N-1:0]};
+    B_CAP: begin
+        eng_move_ready = 1'b1;
+        if (eng_move_valid) begin
+            bank_we    = b_axis_onehot;
+            bank_waddr = cap_addr_q;
+            bank_wbit  = eng_move;
+            cap_addr_d = cap_addr_q + 1'b1;
+            cap_done   = eng_move_pend;
+        end
+        if (eng_err) begin
+            fault_set = 1'b1;  fault_code = E_SEG_PATTERN;
+            b_state_d = B_IDLE;
+        end
+    end
+    default: b_state_d = B_IDLE;
+    endcase
+    if (cap_done) begin
+        if ({29'd0, b_axis_q} == N - 1) begin
+            run_wr    = 1'b1;
+            run_wdata = {build_lane_q, b_end_q, b_moving_d, b_dir_q};
+            build_lane_d = !build_lane_q;
+            b_state_d = B_IDLE;
+        end else begin
+            b_axis_d  = b_axis_q + 1'b1;
+            b_state_d = B_V;
+        end
+    end
 
     // ---- timer and runner
     due  = ch_loaded_q && elapsed_q >= delay_q;
-    fire = running_q && cur_valid_q && !estop_i && !abort_cmd && due && &lane_valid &&
+    fire = running_q && cur_valid_q && !estop_i && !abort_cmd && due && rp_valid_q &&
            &(pulse_ready | ~lane_move);
     // A move is counted late once: in the first cycle it is due and does not fire,
     // or when it fires after its time without having waited due (its chunk came late).
@@ -563,7 +648,7 @@ always @* begin
         late_d        = 1'b1;
     end
     if (fire) late_d = 1'b0;
-    seg_done = fire && lane_last;
+    seg_done = fire && left_q == 16'd1 && tlast_q;
 
     if (!ch_loaded_q && ch_head_valid) begin
         ch_pop      = 1'b1;
@@ -572,9 +657,9 @@ always @* begin
         tinc_d      = {{16{ch_head[47]}}, ch_head[47:32]};
         left_d      = ch_head[63:48];
         tadd2_d     = ch_head[79:64];
+        tlast_d     = ch_head[80];
     end
     if (fire) begin
-        eng_move_ready = cur_lane_q ? {{N{1'b1}}, {N{1'b0}}} : {{N{1'b0}}, {N{1'b1}}};
         pulse_step     = lane_move;
         moves_done_d   = moves_done_q + 1'b1;
         elapsed_d      = 32'd1;
@@ -588,17 +673,25 @@ always @* begin
             tinc_d  = {{16{ch_head[47]}}, ch_head[47:32]};
             left_d  = ch_head[63:48];
             tadd2_d = ch_head[79:64];
+            tlast_d = ch_head[80];
         end else begin
             ch_loaded_d = 1'b0;
+        end
+        // The replay registers fetch the next move of the running lane's patterns.
+        if (!seg_done) begin
+            bank_re = 1'b1;
+            for (i = 0; i < N; i = i + 1)
+                rp_next[i] = (rp_ptr_q[i] == lm1_q[{cur_lane_q, i[2:0]}]) ? {AW{1'b0}} : rp_ptr_q[i] + 1'b1;
         end
     end
     if (seg_done) begin
         segs_done_d = segs_done_q + 1'b1;
         cur_valid_d = 1'b0;
-        cur_lane_d  = !cur_lane_q;
+        rp_valid_d  = 1'b0;
         if (cur_end_q) begin
             running_d = 1'b0;
-        end else if (run_level == 2'd0 && seg_level == {(SAW+1){1'b0}} && !fault_q) begin
+        end else if (run_level == 2'd0 && segq_q == {(SQW+1){1'b0}} && b_state_q == B_IDLE &&
+                     !fault_q) begin
             running_d = 1'b0;
             fault_set = 1'b1;  fault_code = E_UNDERRUN;
         end
@@ -607,9 +700,15 @@ always @* begin
     if ((!cur_valid_q || seg_done) && run_head_valid && !fault_q) begin
         run_pop     = 1'b1;
         cur_valid_d = 1'b1;
-        cur_end_d   = run_head[RDW-1];
+        cur_lane_d  = run_head[RDW-1];
+        cur_end_d   = run_head[RDW-2];
         for (i = 0; i < N; i = i + 1)
             if (run_head[N + i]) dir_d[i] = run_head[i];
+        // The replay registers fetch each pattern's first move.
+        bank_re    = 1'b1;
+        rp_lane    = run_head[RDW-1];
+        rp_valid_d = 1'b1;
+        for (i = 0; i < N; i = i + 1) rp_next[i] = {AW{1'b0}};
     end
 
     if (start_cmd && !fault_q && !running_q) begin
@@ -638,8 +737,7 @@ always @* begin
         fault_d = 1'b1;
         err_d   = fault_code;
     end
-    stuck = cur_valid_q && bad_lane_q[cur_lane_q];
-    flush = estop_i || abort_cmd || stuck || (fault_q && !(running_q && cur_valid_q && !seg_done));
+    flush = estop_i || abort_cmd || (fault_q && !(running_q && cur_valid_q && !seg_done));
     if (flush) begin
         running_d   = 1'b0;
         cur_valid_d = 1'b0;
@@ -647,11 +745,14 @@ always @* begin
         cur_lane_d  = 1'b0;
         build_lane_d = 1'b0;
         late_d      = 1'b0;
-        bad_lane_d  = 2'b00;
+        b_state_d   = B_IDLE;
+        rp_valid_d  = 1'b0;
+        segq_d      = {(SQW+1){1'b0}};
     end
 end
 
-always @* eng_rst = flush;
+// The engine is reset when a pattern's first period is in its bank, and by a flush.
+always @* eng_rst = flush || (b_state_q == B_CAP && cap_done);
 
 // ---------------------------------------------------------------- registers
 integer a;
@@ -666,7 +767,9 @@ always @(posedge clk) begin
         build_lane_q  <= 1'b0;
         ch_loaded_q   <= 1'b0;
         late_q        <= 1'b0;
-        bad_lane_q    <= 2'b00;
+        b_state_q     <= B_IDLE;
+        rp_valid_q    <= 1'b0;
+        segq_q        <= {(SQW+1){1'b0}};
         fault_q       <= 1'b0;
         err_q         <= E_NONE;
         stretched_q   <= 1'b0;
@@ -693,7 +796,9 @@ always @(posedge clk) begin
         build_lane_q  <= build_lane_d;
         ch_loaded_q   <= ch_loaded_d;
         late_q        <= late_d;
-        bad_lane_q    <= bad_lane_d;
+        b_state_q     <= b_state_d;
+        rp_valid_q    <= rp_valid_d;
+        segq_q        <= segq_d;
         fault_q       <= fault_d;
         err_q         <= err_d;
         stretched_q   <= stretched_d;
@@ -719,7 +824,15 @@ always @(posedge clk) begin
             end
         end
     end
-    seg_q <= seg_d;  nchunks_q <= nchunks_d;  v_idx_q <= v_idx_d;
+    hdr_end_q <= hdr_end_d;  hdr_k_q <= hdr_k_d;  seg_u_q <= seg_u_d;
+    nchunks_q <= nchunks_d;  v_idx_q <= v_idx_d;
+    tlast_q <= tlast_d;  b_axis_q <= b_axis_d;  b_u_q <= b_u_d;  b_end_q <= b_end_d;
+    b_dir_q <= b_dir_d;  b_moving_q <= b_moving_d;  cap_addr_q <= cap_addr_d;
+    for (a = 0; a < N; a = a + 1) if (bank_re) rp_ptr_q[a] <= rp_next[a];
+    if (cap_done)
+        for (a = 0; a < N; a = a + 1)
+            if (b_axis_q == a[2:0])
+                lm1_q[{build_lane_q, a[2:0]}] <= (b_state_q == B_CAP) ? cap_addr_q : {AW{1'b0}};
     interval_q <= interval_d;  count_q <= count_d;  add_q <= add_d;  add2_q <= add2_d;
     sum_q <= sum_d;  seg_add2_q <= seg_add2_d;
     prod_q <= prod_d;  mul_a_q <= mul_a_d;  mul_b_q <= mul_b_d;
@@ -730,7 +843,8 @@ end
 
 // ---------------------------------------------------------------- outputs
 assign cmd_ready_o = (p_state_q == P_CMD) ||
-                     (p_state_q == P_H1) || (p_state_q == P_V) || (p_state_q == P_C0) ||
+                     ((p_state_q == P_H1 || p_state_q == P_V) && (discard_q || fault_q || !seg_full)) ||
+                     (p_state_q == P_C0) ||
                      (p_state_q == P_C1 && (seg_add2_q || discard_q || fault_q || !ch_full)) ||
                      (p_state_q == P_C2 && (discard_q || fault_q || !ch_full));
 assign rsp_valid_o = rsp_valid_q;

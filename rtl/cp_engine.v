@@ -53,6 +53,9 @@ module cp_engine #(
     input  wire          move_ready_i,
     output wire          move_o,
     output wire          move_last_o,
+    // The move ends a period of the pattern M2·reverse(M1) (every move of a
+    // constant pattern does); the first such move ends the pattern's first copy.
+    output wire          move_pend_o,
 
     // Debug port: memory write ports and a snapshot after each loop iteration.
     // All are zero when their strobe is low. Unconnected, they synthesize away.
@@ -163,6 +166,7 @@ reg [NW-1:0] inner_q, inner_d;      // replays left of x << k
 reg [RW-1:0] outer_q, outer_d;      // rounds of x << k left
 reg          out_ph_q, out_ph_d;    // phase of the move in the output register
 reg          out_last_q, out_last_d;
+reg          out_pend_q, out_pend_d;
 reg [2:0]    err_code_q, err_code_d;
 reg [UW-1:0] dbg_x_q, dbg_x_d, dbg_y_q, dbg_y_d;
 reg [AW-1:0] dbg_m1_lo_q, dbg_m1_lo_d, dbg_m1_len_q, dbg_m1_len_d;
@@ -232,7 +236,7 @@ always @* begin
     wp_to2_d = wp_to2_q;  wp_addr_d = wp_addr_q;
     ph_d = ph_q;  rp_cnt_d = rp_cnt_q;  rp_ptr_d = rp_ptr_q;
     inner_d = inner_q;  outer_d = outer_q;
-    out_ph_d = out_ph_q;  out_last_d = out_last_q;
+    out_ph_d = out_ph_q;  out_last_d = out_last_q;  out_pend_d = out_pend_q;
     dbg_x_d = dbg_x_q;  dbg_y_d = dbg_y_q;
     dbg_m1_lo_d = dbg_m1_lo_q;  dbg_m1_len_d = dbg_m1_len_q;  dbg_m1_rev_d = dbg_m1_rev_q;
     dbg_m2_lo_d = dbg_m2_lo_q;  dbg_m2_len_d = dbg_m2_len_q;  dbg_m2_rev_d = dbg_m2_rev_q;
@@ -348,6 +352,7 @@ always @* begin
             move_valid_d = 1'b1;
             out_ph_d     = ph_q;
             out_last_d   = pat_end && inner_q == 1 && outer_q == 1;
+            out_pend_d   = pat_end;
             if (pat_end) begin
                 ph_d     = 1'b0;
                 rp_cnt_d = m2_len_q;
@@ -399,7 +404,7 @@ always @(posedge clk) begin
     wp_to2_q <= wp_to2_d;  wp_addr_q <= wp_addr_d;
     ph_q <= ph_d;  rp_cnt_q <= rp_cnt_d;  rp_ptr_q <= rp_ptr_d;
     inner_q <= inner_d;  outer_q <= outer_d;
-    out_ph_q <= out_ph_d;  out_last_q <= out_last_d;
+    out_ph_q <= out_ph_d;  out_last_q <= out_last_d;  out_pend_q <= out_pend_d;
     err_code_q <= err_code_d;
     dbg_x_q <= dbg_x_d;  dbg_y_q <= dbg_y_d;
     dbg_m1_lo_q <= dbg_m1_lo_d;  dbg_m1_len_q <= dbg_m1_len_d;  dbg_m1_rev_q <= dbg_m1_rev_d;
@@ -415,6 +420,7 @@ assign err_code_o   = err_q ? err_code_q : ERR_NONE;
 assign move_valid_o = move_valid_q;
 assign move_o       = move_valid_q && move_bit;
 assign move_last_o  = move_valid_q && out_last_q;
+assign move_pend_o  = move_valid_q && out_pend_q;
 
 assign dbg_we1_o    = we1;
 assign dbg_waddr1_o = we1 ? waddr1 : {AW{1'b0}};

@@ -36,6 +36,7 @@ struct EnginePort {
     o.move_valid = r.move_valid_o;
     o.move = r.move_o;
     o.move_last = r.move_last_o;
+    o.move_pend = r.move_pend_o;
     o.dbg_we1 = r.dbg_we1_o;
     o.dbg_waddr1 = r.dbg_waddr1_o;
     o.dbg_wbit1 = r.dbg_wbit1_o;
@@ -61,6 +62,7 @@ struct EnginePort {
         CPSTEP_FIELD("in_ready_o", in_ready),     CPSTEP_FIELD("err_o", err),
         CPSTEP_FIELD("err_code_o", err_code),     CPSTEP_FIELD("move_valid_o", move_valid),
         CPSTEP_FIELD("move_o", move),             CPSTEP_FIELD("move_last_o", move_last),
+        CPSTEP_FIELD("move_pend_o", move_pend),
         CPSTEP_FIELD("dbg_we1_o", dbg_we1),       CPSTEP_FIELD("dbg_waddr1_o", dbg_waddr1),
         CPSTEP_FIELD("dbg_wbit1_o", dbg_wbit1),   CPSTEP_FIELD("dbg_we2_o", dbg_we2),
         CPSTEP_FIELD("dbg_waddr2_o", dbg_waddr2), CPSTEP_FIELD("dbg_wbit2_o", dbg_wbit2),

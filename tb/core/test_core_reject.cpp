@@ -148,7 +148,9 @@ TEST(CoreReject, WhileRunningTheRunningSegmentCompletes) {
     a.chunks = {{25, 400, 0}};
     h.segment(a);
     h.control(true, false, false);
-    h.idle(200);
+    // Running: its patterns are built (one axis after the other) and it has moved.
+    ASSERT_TRUE(h.wait_for([](const model::CpCoreOut& o) { return o.position[0] > 8; }, 5000))
+        << where << ": the segment did not start";
     h.expecting = false;
     h.send(bad.words());
     // (a pattern is refused during its build, W cycles later)

@@ -20,9 +20,15 @@ void exhaustive(unsigned umax, unsigned kmax) {
     for (unsigned v = 0; v <= u; ++v)
       for (unsigned k = 0; k <= kmax; ++k, ++n) {
         const Backpressure bp{n % 3 == 0 ? 100u : 40u + n % 60, n};
-        const auto run = run_lockstep(ls, {u, v, k, 1}, bp);
+        std::vector<uint64_t> pends;
+        const auto run = run_lockstep(ls, {u, v, k, 1}, bp, &pends);
         ASSERT_EQ(run.err_code, 0u) << u << "," << v << "," << k;
         ASSERT_EQ(run.moves, oracle::doubled(u, v, k)) << "u=" << u << " v=" << v << " k=" << k;
+        // move_pend_o ends every period: the moves u/gcd(u, v), 2u/gcd(u, v), ...
+        const uint64_t period = u / gcd(u, v);
+        ASSERT_EQ(pends.size(), run.moves.size() / period) << "u=" << u << " v=" << v << " k=" << k;
+        for (size_t i = 0; i < pends.size(); ++i)
+          ASSERT_EQ(pends[i], (i + 1) * period) << "u=" << u << " v=" << v << " k=" << k;
       }
 }
 
