@@ -23,16 +23,17 @@ std::string duration_text(double s) {
   return fmt::format("{:g} s", s);
 }
 
-// What `actual` means for a kind, for "worst ..." in the summary; nullptr: nothing to add.
-const char* worst_unit(FindingKind k) {
-  switch (k) {
-    case FindingKind::deviation: return "steps";
-    case FindingKind::timing: return "cycles";
+// The worst occurrence of a finding with its unit, for the summary; "" when
+// the kind has no measure (strings, directions, endpoints).
+std::string worst_text(const Finding& f) {
+  switch (f.kind) {
+    case FindingKind::deviation: return fmt::format("{:.3f} steps", f.actual);
+    case FindingKind::timing: return fmt::format("{:+.1f} cycles", f.actual);
     case FindingKind::step_high:
     case FindingKind::step_low:
     case FindingKind::dir_setup:
-    case FindingKind::dir_hold: return "ns";
-    default: return nullptr;
+    case FindingKind::dir_hold: return fmt::format("{:.0f} ns", f.actual);
+    default: return "";
   }
 }
 
@@ -163,7 +164,7 @@ std::string verdict_summary(const Verdict& v, size_t listed) {
     std::string more;
     if (f.count > 1) {
       more = fmt::format(" ({} times in this segment", f.count);
-      if (const char* unit = worst_unit(f.kind)) more += fmt::format(", worst {:.3g} {}", f.actual, unit);
+      if (const std::string worst = worst_text(f); !worst.empty()) more += ", worst " + worst;
       more += ")";
     }
     out += fmt::format("  {:<11} {}{}\n", finding_name(f.kind), f.message, more);

@@ -340,6 +340,24 @@ TEST_F(Check, ADirChangeInsideTheSetupWindow) {
   EXPECT_DOUBLE_EQ(f.expected, job_->machine.axes[X].pulse_ns.dir_setup);
 }
 
+TEST_F(Check, ADirChangeInsideTheHoldWindow) {
+  // The same DIR change moved to 500 ns after segment 1's last x leading edge
+  // (the machine asks for 1000 ns of hold).
+  auto& dir = changes("dir_x");
+  auto it = std::find_if(dir.begin(), dir.end(), [&](const VcdChange& c) {
+    return c.time > events_[end(0) - 1] && c.time < events_[first(1)];
+  });
+  ASSERT_NE(it, dir.end());
+  ASSERT_GE(rise_at("step_x", end(0) - 1), 0);
+  it->time = events_[end(0) - 1] + 500'000;
+  sort_by_time(dir);
+
+  const check::Verdict v = verdict();
+  const Finding& f = single(v, FindingKind::dir_hold, 1, X, end(0));
+  EXPECT_NEAR(f.actual, 500, 1e-6);
+  EXPECT_DOUBLE_EQ(f.expected, job_->machine.axes[X].pulse_ns.dir_hold);
+}
+
 TEST_F(Check, TwoAxesSwapped) {
   for (check::VcdVar& var : trace_.vars) {
     for (auto [a, b] : {std::pair{"step_x", "step_y"}, std::pair{"dir_x", "dir_y"}}) {

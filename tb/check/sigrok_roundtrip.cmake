@@ -1,0 +1,28 @@
+# cpstep's own trace through sigrok-cli and back, as a capture would come:
+# read as a VCD, sampled at 8 MHz (twice data/check.toml's 4 MHz card clock),
+# saved as a sigrok session, exported with `sigrok-cli -O vcd`, then checked.
+# Skipped (ctest SKIP_REGULAR_EXPRESSION) where sigrok-cli is not installed.
+#   cmake -DCPSTEP=cpstep -DTRACE=t.vcd -DDATA=tb/check/data -DOUT=dir -P sigrok_roundtrip.cmake
+find_program(SIGROK sigrok-cli)
+if(NOT SIGROK)
+  message("SKIPPED: sigrok-cli is not installed (Debian package sigrok-cli)")
+  return()
+endif()
+file(MAKE_DIRECTORY "${OUT}")
+file(REMOVE "${OUT}/capture.sr" "${OUT}/capture.vcd")
+# The trace's time unit is 1 ps: 125000 of them are one 8 MHz sample.
+execute_process(COMMAND ${SIGROK} -I vcd:downsample=125000 -i ${TRACE} -o ${OUT}/capture.sr
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "sigrok-cli could not read the trace: ${err}")
+endif()
+execute_process(COMMAND ${SIGROK} -i ${OUT}/capture.sr -O vcd -o ${OUT}/capture.vcd RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "sigrok-cli could not export the VCD: ${err}")
+endif()
+file(WRITE "${OUT}/sigrok.toml" "sample_hz = 8_000_000\n")
+execute_process(COMMAND ${CPSTEP} check --vcd ${OUT}/capture.vcd --job ${DATA}/check.ngc --machine ${DATA}/check.toml
+                --map ${OUT}/sigrok.toml RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "time unit 1 ns, resolution 125 ns" OR NOT out MATCHES "\nverdict +conforms\n")
+  message(FATAL_ERROR "exit code ${rc}\nstdout: ${out}\nstderr: ${err}")
+endif()
