@@ -67,16 +67,24 @@ int run_check(const CheckOptions& o) {
   if (refused(vcd)) return kExitRefused;
   const auto pins = check::read_pins(*vcd, map, *job);
   if (refused(pins)) return kExitRefused;
+  // Opened before the check, so that an unwritable path is refused like any bad input.
+  std::ofstream json;
+  if (!o.json.empty()) {
+    json.open(o.json, std::ios::trunc);
+    if (!json) {
+      fmt::print(stderr, "{}: cannot write the verdict\n", o.json);
+      return kExitRefused;
+    }
+  }
 
   check::Verdict v = check::check_trace(*job, *pins, {o.time_tol_cycles, o.skew_cycles});
   v.map = o.map;
   fmt::print("{}", check::verdict_summary(v));
-  if (!o.json.empty()) {
-    std::ofstream out(o.json, std::ios::trunc);
-    out << check::verdict_json(v).dump(2) << '\n';
-    out.close();
-    if (!out) {
-      fmt::print(stderr, "{}: cannot write the verdict\n", o.json);
+  if (json.is_open()) {
+    json << check::verdict_json(v).dump(2) << '\n';
+    json.close();
+    if (!json) {
+      fmt::print(stderr, "{}: writing the verdict failed\n", o.json);
       return kExitRefused;
     }
     fmt::print("{:<10} {}\n", "json", o.json);
