@@ -51,22 +51,21 @@ std::string ns_text(double measured, double required) {
 
 nlohmann::ordered_json verdict_json(const Verdict& v) {
   using json = Json;
-  json j;
-  j["conforms"] = v.conforms();
-  j["trace"] = v.trace;
-  j["job"] = v.job;
-  j["machine"] = v.machine;
-  j["map"] = v.map.empty() ? json(nullptr) : json(v.map);
-  j["clock_hz"] = v.clock_hz;
-  j["trace_unit_s"] = v.unit_s;
-  j["resolution_cycles"] = v.resolution_cycles;
-  j["skew_window_cycles"] = v.skew_cycles;
-  j["time_tolerance_cycles"] = v.time_tol_cycles;
-  j["segments"] = v.segments;
-  j["planned_moves"] = v.planned_moves;
-  j["move_events"] = v.move_events;
-  j["segments_on_endpoint"] = v.segments_on_endpoint;
-  j["segments_bit_exact"] = v.segments_bit_exact;
+  json j = {{"conforms", v.conforms()},
+            {"trace", v.trace},
+            {"job", v.job},
+            {"machine", v.machine},
+            {"map", v.map.empty() ? json(nullptr) : json(v.map)},
+            {"clock_hz", v.clock_hz},
+            {"trace_unit_s", v.unit_s},
+            {"resolution_cycles", v.resolution_cycles},
+            {"skew_window_cycles", v.skew_cycles},
+            {"time_tolerance_cycles", v.time_tol_cycles},
+            {"segments", v.segments},
+            {"planned_moves", v.planned_moves},
+            {"move_events", v.move_events},
+            {"segments_on_endpoint", v.segments_on_endpoint},
+            {"segments_bit_exact", v.segments_bit_exact}};
   j["timing"] = {{"start_offset_cycles", v.time_offset_cycles}, {"max_early_cycles", v.max_early_cycles},
                  {"max_early_move", v.max_early_move},          {"max_late_cycles", v.max_late_cycles},
                  {"max_late_move", v.max_late_move},            {"moves_off_time", v.moves_off_time}};
