@@ -1,0 +1,112 @@
+// A pin-level SPI master (mode 0, MSB first) for the simulated card: it drives
+// SCK, CS and MOSI of a card stepper cycle by cycle and samples MISO, so a byte
+// vector goes out and the card's reply comes back exactly as on the wire
+// (docs/PROTOCOL.md).
+//
+// Stepper: anything with `CardOut step(const CardIn&)` and `uint64_t cycle()`,
+// e.g. RtlDut<CardDefault>. One SCK period is sck_low + sck_high clock cycles
+// (default 4 + 4: clk/8, the card's limit). MOSI changes in the first cycle SCK is
+// low (or at CS fall for the first bit); MISO is sampled in the first cycle SCK is
+// high, i.e. at the rising edge. An undriven MISO (miso_oe low) reads 1, like a
+// pulled-up line with no card.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <stdexcept>
+#include <vector>
+
+#include "sim/card_port.h"
+
+namespace cpstep::sim {
+
+struct SpiTiming {
+  unsigned sck_low = 4;   // clock cycles SCK is low per bit
+  unsigned sck_high = 4;  // clock cycles SCK is high per bit
+  unsigned cs_setup = 4;  // CS fall (first MOSI bit set) to the first SCK rise
+  unsigned cs_hold = 4;   // the last SCK fall to CS rise
+  unsigned cs_idle = 4;   // CS high after the transfer, before the next one may start
+};
+
+template <class Stepper>
+class SpiMaster {
+ public:
+  using Observer = std::function<void(uint64_t cycle, const CardIn&, const CardOut&)>;
+
+  explicit SpiMaster(Stepper& dut, SpiTiming timing = {}, Observer observe = nullptr)
+      : dut_(dut), observe_(std::move(observe)) {
+    set_timing(timing);
+  }
+
+  // One clock with the given pins (E-stop as last set).
+  CardOut step(CardIn in) {
+    in.estop = estop_;
+    const uint64_t c = dut_.cycle();
+    last_ = dut_.step(in);
+    if (observe_) observe_(c, in, last_);
+    return last_;
+  }
+  void reset(unsigned cycles = 2) {
+    CardIn in;
+    in.rst = true;
+    for (unsigned i = 0; i < cycles; ++i) step(in);
+  }
+  void idle(uint64_t cycles) {
+    for (uint64_t i = 0; i < cycles; ++i) step({});
+  }
+
+  // One CS-low period: every byte of `mosi` out, as many bytes of MISO back.
+  std::vector<uint8_t> transfer(std::span<const uint8_t> mosi) { return transfer_bits(mosi, 8 * mosi.size()); }
+
+  // The first `bits` bits of `mosi` (MSB first), then CS rises: a cut frame.
+  // Returns the MISO bits sampled, MSB first, the last byte padded with zeros.
+  std::vector<uint8_t> transfer_bits(std::span<const uint8_t> mosi, size_t bits) {
+    if (bits > 8 * mosi.size()) throw std::invalid_argument("SpiMaster: more bits than bytes given");
+    std::vector<uint8_t> miso((bits + 7) / 8, 0);
+    auto bit = [&](size_t i) { return bool(mosi[i / 8] >> (7 - i % 8) & 1); };
+    CardIn in;
+    in.cs_n = false;
+    in.mosi = bits > 0 && bit(0);
+    hold(in, t_.cs_setup);
+    for (size_t i = 0; i < bits; ++i) {
+      in.sck = true;
+      const CardOut o = step(in);  // the rising edge: MISO sampled
+      if (!o.miso_oe || o.miso) miso[i / 8] |= uint8_t(0x80 >> (i % 8));
+      hold(in, t_.sck_high - 1);
+      in.sck = false;
+      if (i + 1 < bits) {
+        in.mosi = bit(i + 1);  // the falling edge: next MOSI bit
+        hold(in, t_.sck_low);
+      }
+    }
+    hold(in, t_.cs_hold);
+    in = CardIn{};
+    hold(in, t_.cs_idle);
+    return miso;
+  }
+
+  void set_timing(const SpiTiming& t) {
+    if (t.sck_low < 1 || t.sck_high < 1 || t.cs_setup < 1 || t.cs_idle < 1)
+      throw std::invalid_argument("SpiMaster: every SCK phase, the CS setup and the CS idle time need a cycle");
+    t_ = t;
+  }
+  const SpiTiming& timing() const { return t_; }
+  void set_estop(bool on) { estop_ = on; }
+  const CardOut& last() const { return last_; }
+  Stepper& dut() { return dut_; }
+
+ private:
+  void hold(const CardIn& in, unsigned cycles) {
+    for (unsigned i = 0; i < cycles; ++i) step(in);
+  }
+
+  Stepper& dut_;
+  Observer observe_;
+  SpiTiming t_;
+  CardOut last_{};
+  bool estop_ = false;
+};
+
+}  // namespace cpstep::sim

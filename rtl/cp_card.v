@@ -1,0 +1,98 @@
+// cp_card — the card, independent of the board: the SPI front end (cp_spi) feeding
+// the motion core (cp_core), and the E-stop input.
+//
+// Board tops (rtl/boards/) add the clock, the reset, the pads and the MISO
+// tristate. docs/PROTOCOL.md is the wire contract, docs/CORE.md the core's.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module cp_card #(
+    // Number of axes.
+    parameter integer N = 4,
+    // Pattern capacity of every engine: the longest pattern U/gcd(U, v).
+    parameter integer W = 1024,
+    // Largest move count U of a segment (before doubling).
+    parameter integer UMAX = 1048575,
+    // Largest step-doubling exponent k.
+    parameter integer KMAX = 8,
+    // Chunk queue address width: it holds 2^CAW chunks plus its head.
+    parameter integer CAW = 6,
+    // Segment queue address width.
+    parameter integer SAW = 2,
+    // Width of the pulse timing fields.
+    parameter integer TW = 16,
+    // Command buffer address width: it holds 2^CBUF_AW words.
+    parameter integer CBUF_AW = 9,
+    // Pulse timing after reset, in clock cycles (the host configures the real ones).
+    parameter integer STEP_HIGH_RESET = 1,
+    parameter integer STEP_LOW_RESET = 1,
+    parameter integer DIR_SETUP_RESET = 1,
+    parameter integer DIR_HOLD_RESET = 1,
+    // Pin polarity after reset: 1 = STEP active high, 1 = DIR high is positive.
+    parameter [0:0] STEP_POL_RESET = 1'b1,
+    parameter [0:0] DIR_POL_RESET = 1'b1
+) (
+    input  wire          clk,
+    input  wire          rst,
+
+    // SPI (asynchronous to clk, SCK at most clk/8).
+    input  wire          spi_sck_i,
+    input  wire          spi_cs_n_i,
+    input  wire          spi_mosi_i,
+    output wire          spi_miso_o,
+    output wire          spi_miso_oe_o,
+
+    // E-stop, asynchronous, active high here (a normally closed switch to ground
+    // with a pull-up reads high when pressed or when its wire is cut).
+    input  wire          estop_i,
+
+    // Pins.
+    output wire [N-1:0]  step_o,
+    output wire [N-1:0]  dir_o,
+    output wire          enable_o,
+    output wire          running_o,
+    output wire          fault_o,
+
+    // For simulation and observation.
+    output wire [7:0]    err_code_o,
+    output wire          stretched_o,
+    output wire [N*32-1:0] position_o
+);
+
+// E-stop into the clk domain.
+reg [1:0] estop_q;
+always @(posedge clk) estop_q <= {estop_q[0], estop_i};
+wire estop = estop_q[1];
+
+wire        cmd_valid, cmd_ready, rsp_valid, rsp_ready;
+wire [31:0] cmd_data, rsp_data;
+wire [31:0] status, stretch_cnt, moves_done, segs_done;
+
+cp_spi #(.N(N), .CBUF_AW(CBUF_AW)) u_spi (
+    .clk(clk), .rst(rst),
+    .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
+    .spi_miso_o(spi_miso_o), .spi_miso_oe_o(spi_miso_oe_o),
+    .cmd_valid_o(cmd_valid), .cmd_ready_i(cmd_ready), .cmd_data_o(cmd_data),
+    .rsp_valid_i(rsp_valid), .rsp_ready_o(rsp_ready), .rsp_data_i(rsp_data),
+    .estop_i(estop), .enable_i(enable_o),
+    .status_i(status), .stretch_cnt_i(stretch_cnt), .moves_done_i(moves_done),
+    .segs_done_i(segs_done), .position_i(position_o));
+
+cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32),
+          .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
+          .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
+          .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET)) u_core (
+    .clk(clk), .rst(rst),
+    .cmd_valid_i(cmd_valid), .cmd_ready_o(cmd_ready), .cmd_data_i(cmd_data),
+    .rsp_valid_o(rsp_valid), .rsp_ready_i(rsp_ready), .rsp_data_o(rsp_data),
+    .estop_i(estop),
+    .step_o(step_o), .dir_o(dir_o),
+    .running_o(running_o), .fault_o(fault_o), .err_code_o(err_code_o),
+    .stretched_o(stretched_o), .position_o(position_o),
+    .enable_o(enable_o), .status_o(status), .stretch_cnt_o(stretch_cnt),
+    .moves_done_o(moves_done), .segs_done_o(segs_done));
+
+endmodule
+
+`resetall

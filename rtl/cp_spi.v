@@ -1,0 +1,309 @@
+// cp_spi — the card's SPI front end: frames in on MOSI, replies out on MISO, and
+// the command buffer between the frames and the motion core's command port.
+//
+// SPI mode 0, MSB first, one CS-low period per frame (docs/PROTOCOL.md is the
+// contract). SCK, CS and MOSI are sampled in the clk domain through two-flop
+// synchronizers, so SCK may be at most clk/8. One 32-bit register carries both
+// directions: MOSI bits enter at the bottom, MISO leaves from the top, and at
+// every 32-bit boundary the received word is taken off it and the next reply word
+// is loaded onto it (frame words and reply words share their boundaries: the
+// frame header is one word).
+//
+// A COMMANDS frame's words go into the command buffer (cp_fifo) uncommitted as
+// they arrive; at CS rise the frame is committed whole or rolled back whole
+// (result codes 0..6). The executor feeds committed words to the core's command
+// port and keeps its READ replies.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module cp_spi #(
+    // Number of axes: the reply carries N positions; a SEGMENT has 2 + N + ... words.
+    parameter integer N = 4,
+    // Command buffer address width: it holds 2^CBUF_AW words.
+    parameter integer CBUF_AW = 9
+) (
+    input  wire          clk,
+    input  wire          rst,
+
+    // SPI pins (asynchronous to clk).
+    input  wire          spi_sck_i,
+    input  wire          spi_cs_n_i,
+    input  wire          spi_mosi_i,
+    output wire          spi_miso_o,
+    output wire          spi_miso_oe_o,
+
+    // The motion core's command port (docs/CORE.md).
+    output wire          cmd_valid_o,
+    input  wire          cmd_ready_i,
+    output wire [31:0]   cmd_data_o,
+    input  wire          rsp_valid_i,
+    output wire          rsp_ready_o,
+    input  wire [31:0]   rsp_data_i,
+
+    // What the reply reports (estop_i already synchronized).
+    input  wire          estop_i,
+    input  wire          enable_i,
+    input  wire [31:0]   status_i,
+    input  wire [31:0]   stretch_cnt_i,
+    input  wire [31:0]   moves_done_i,
+    input  wire [31:0]   segs_done_i,
+    input  wire [N*32-1:0] position_i
+);
+
+generate
+    if (N < 1 || N > 8) begin : g_check_n
+        cp_spi_parameter_N_must_be_1_to_8 u_bad ();
+    end
+    if (CBUF_AW < 1 || CBUF_AW > 14) begin : g_check_aw
+        cp_spi_parameter_CBUF_AW_must_be_1_to_14 u_bad ();
+    end
+endgenerate
+
+// ---------------------------------------------------------------- constants
+localparam [7:0] MAGIC = 8'hC5;
+localparam [7:0] T_POLL = 8'h00;
+localparam [7:0] T_COMMANDS = 8'h01;
+
+localparam [2:0] R_OK        = 3'd0;
+localparam [2:0] R_TRUNCATED = 3'd1;
+localparam [2:0] R_BAD_CRC   = 3'd2;
+localparam [2:0] R_BAD_TYPE  = 3'd3;
+localparam [2:0] R_NO_ROOM   = 3'd4;
+localparam [2:0] R_BAD_CMD   = 3'd5;
+localparam [2:0] R_SPLIT     = 3'd6;
+
+// Receive phase of a frame.
+localparam [1:0] PH_HDR   = 2'd0;   // type, seq, nwords
+localparam [1:0] PH_WORDS = 2'd1;   // command words
+localparam [1:0] PH_CRC   = 2'd2;   // the frame's CRC
+localparam [1:0] PH_DONE  = 2'd3;   // padding
+
+// Reply words: 0 header, 1 buffer, 2..5 core counters, 6 last READ reply,
+// 7..6+N positions, 7+N the CRC, then zeros.
+localparam integer TXW = 5;
+localparam [TXW-1:0] TX_POS0 = 5'd7;
+localparam [TXW-1:0] TX_CRC  = 5'd7 + N[TXW-1:0];
+localparam [TXW-1:0] TX_ZERO = 5'd8 + N[TXW-1:0];
+
+localparam [3:0] SEG_HDR_WORDS = 4'd1 + N[3:0];   // H1 and the N v words after H0
+
+// CRC-16/CCITT-FALSE, one bit: polynomial 0x1021, MSB first.
+function [15:0] crc_bit(input [15:0] crc, input b);
+    crc_bit = {crc[14:0], 1'b0} ^ ((crc[15] ^ b) ? 16'h1021 : 16'h0000);
+endfunction
+
+// ---------------------------------------------------------------- synchronizers
+// [0] first flop, [1] second (the synchronized level), [2] its previous value.
+reg [2:0] sck_q, cs_q;
+reg [1:0] mosi_q;
+
+always @(posedge clk) begin
+    mosi_q <= {mosi_q[0], spi_mosi_i};
+    if (rst) begin
+        sck_q <= 3'b000;
+        cs_q  <= 3'b111;
+    end else begin
+        sck_q <= {sck_q[1:0], spi_sck_i};
+        cs_q  <= {cs_q[1:0], spi_cs_n_i};
+    end
+end
+
+wire cs_fall = !cs_q[1] && cs_q[2];
+wire cs_rise = cs_q[1] && !cs_q[2];
+// A bit: SCK rises while CS has been low for a sample already.
+wire shift   = sck_q[1] && !sck_q[2] && !cs_q[1] && !cs_q[2];
+wire bit_in  = mosi_q[1];
+
+// ---------------------------------------------------------------- command buffer
+wire [CBUF_AW:0] used, level;
+wire             full;
+reg              buf_wr, buf_commit, buf_rollback;
+wire [31:0]      rx_word;
+
+cp_fifo #(.DW(32), .AW(CBUF_AW)) u_cbuf (
+    .clk(clk), .rst(rst), .clear_i(1'b0),
+    .wr_i(buf_wr), .wr_data_i(rx_word), .commit_i(buf_commit), .rollback_i(buf_rollback),
+    .full_o(full), .used_o(used), .level_o(level),
+    .out_valid_o(cmd_valid_o), .out_ready_i(cmd_ready_i), .out_data_o(cmd_data_o));
+
+wire unused_buf = &{1'b0, full, level};
+
+// Free words: 2^CBUF_AW minus every word held (the head included).
+localparam [CBUF_AW:0] CBUF_WORDS = 1 << CBUF_AW;
+wire [CBUF_AW:0] free = used[CBUF_AW] ? {(CBUF_AW+1){1'b0}} : CBUF_WORDS - used;
+wire [15:0]      free16 = {{(15 - CBUF_AW){1'b0}}, free};
+
+// ---------------------------------------------------------------- state
+// Control (reset).
+reg [7:0]     seq_q, seq_d;              // byte 1 of the last frame that had one
+reg [2:0]     result_q, result_d;        // result of the last frame
+reg           fresh_q, fresh_d;          // no frame has ended since reset
+reg [15:0]    reads_q, reads_d;          // READ replies taken, mod 2^16
+// Frame state (initialized at CS fall).
+reg [1:0]     ph_q, ph_d;
+reg [4:0]     bit_q, bit_d;              // bits of the current word received
+reg [TXW-1:0] txn_q, txn_d;              // the next reply word to load
+reg [15:0]    crc_rx_q, crc_rx_d;
+reg [15:0]    crc_tx_q, crc_tx_d;
+reg [15:0]    left_q, left_d;            // command words still to come
+reg           wr_ok_q, wr_ok_d;          // the frame's words go into the buffer
+reg           bad_type_q, bad_type_d;
+reg           no_room_q, no_room_d;
+reg           bad_cmd_q, bad_cmd_d;
+// Whole-command tracking: a segment's header words, then its chunks' words.
+reg [3:0]     hdr_left_q, hdr_left_d;
+reg [15:0]    chunks_left_q, chunks_left_d;
+reg [1:0]     cw_q, cw_d;                // words of the current chunk taken
+reg           seg_add2_q, seg_add2_d;    // three words per chunk
+// Datapath.
+reg [31:0]    sr_q, sr_d;                // MOSI in at [0], MISO out of [31]
+reg [31:0]    last_read_q;
+
+assign rx_word = {sr_q[30:0], bit_in};
+wire [15:0] crc_tx_next = crc_bit(crc_tx_q, sr_q[31]);
+wire        in_cmd = (hdr_left_q != 4'd0) || (chunks_left_q != 16'd0);
+wire        word_end = shift && (bit_q == 5'd31);
+
+// The reply words, each loaded onto MISO when its first bit goes out: word 0 at
+// CS fall, word txn_q at the end of the word before it.
+wire [31:0]   tx_word0 = {MAGIC, seq_q, 5'd0, result_q, 4'd0, fresh_q, enable_i, estop_i,
+                         used != {(CBUF_AW+1){1'b0}}};
+reg [31:0]    tx_word;
+integer       pi;
+always @* begin
+    tx_word = 32'd0;
+    case (txn_q)
+    5'd1: tx_word = {free16, reads_q};
+    5'd2: tx_word = status_i;
+    5'd3: tx_word = stretch_cnt_i;
+    5'd4: tx_word = moves_done_i;
+    5'd5: tx_word = segs_done_i;
+    5'd6: tx_word = last_read_q;
+    default: begin
+        for (pi = 0; pi < N; pi = pi + 1)
+            if (txn_q == TX_POS0 + pi[TXW-1:0]) tx_word = position_i[32*pi +: 32];
+        if (txn_q == TX_CRC) tx_word = {crc_tx_next, 16'd0};
+    end
+    endcase
+end
+
+always @* begin
+    seq_d = seq_q;  result_d = result_q;  fresh_d = fresh_q;
+    reads_d = rsp_valid_i ? reads_q + 1'b1 : reads_q;
+    ph_d = ph_q;  bit_d = bit_q;  txn_d = txn_q;  crc_rx_d = crc_rx_q;  crc_tx_d = crc_tx_q;
+    left_d = left_q;  wr_ok_d = wr_ok_q;  bad_type_d = bad_type_q;  no_room_d = no_room_q;
+    bad_cmd_d = bad_cmd_q;  hdr_left_d = hdr_left_q;  chunks_left_d = chunks_left_q;
+    cw_d = cw_q;  seg_add2_d = seg_add2_q;
+    sr_d = sr_q;
+    buf_wr = 1'b0;  buf_commit = 1'b0;  buf_rollback = 1'b0;
+
+    if (cs_fall) begin
+        // A frame begins: the reply's word 0 goes out at once.
+        sr_d = tx_word0;
+        ph_d = PH_HDR;  bit_d = 5'd0;  txn_d = 5'd1;
+        crc_rx_d = 16'hFFFF;  crc_tx_d = 16'hFFFF;
+        wr_ok_d = 1'b0;  bad_type_d = 1'b0;  no_room_d = 1'b0;  bad_cmd_d = 1'b0;
+        hdr_left_d = 4'd0;  chunks_left_d = 16'd0;  cw_d = 2'd0;
+    end else if (shift) begin
+        bit_d = bit_q + 1'b1;
+        if (ph_q != PH_DONE) crc_rx_d = crc_bit(crc_rx_q, bit_in);
+        if (txn_q <= TX_CRC) crc_tx_d = crc_tx_next;
+        if (word_end) begin
+            // The received word comes off the register, the next reply word goes on.
+            sr_d = tx_word;
+            if (txn_q != TX_ZERO) txn_d = txn_q + 1'b1;
+        end else begin
+            sr_d = rx_word;
+        end
+
+        case (ph_q)
+        PH_HDR: begin
+            if (bit_q == 5'd15) seq_d = rx_word[7:0];
+            if (word_end) begin
+                // rx_word = {type, seq, nwords}. Room is judged against the free
+                // words that go out in reply word 1, loaded in this same cycle.
+                left_d = rx_word[15:0];
+                bad_type_d = !(rx_word[31:24] == T_COMMANDS ||
+                               (rx_word[31:24] == T_POLL && rx_word[15:0] == 16'd0));
+                no_room_d = rx_word[31:24] == T_COMMANDS && rx_word[15:0] > free16;
+                wr_ok_d = rx_word[31:24] == T_COMMANDS && rx_word[15:0] <= free16;
+                ph_d = (rx_word[15:0] == 16'd0) ? PH_CRC : PH_WORDS;
+            end
+        end
+        PH_WORDS: if (word_end) begin
+            buf_wr = wr_ok_q;
+            left_d = left_q - 1'b1;
+            if (left_q == 16'd1) ph_d = PH_CRC;
+            if (!in_cmd) begin
+                // A command starts: a SEGMENT has H1, N v words and its chunks to come.
+                case (rx_word[31:28])
+                4'h1: begin
+                    hdr_left_d = SEG_HDR_WORDS;
+                    chunks_left_d = rx_word[15:0];
+                    seg_add2_d = rx_word[22];
+                    cw_d = 2'd0;
+                end
+                4'h2, 4'h3, 4'h4: ;
+                default: bad_cmd_d = 1'b1;
+                endcase
+            end else if (hdr_left_q != 4'd0) begin
+                hdr_left_d = hdr_left_q - 1'b1;
+            end else if (cw_q == {seg_add2_q, !seg_add2_q}) begin
+                cw_d = 2'd0;
+                chunks_left_d = chunks_left_q - 1'b1;
+            end else begin
+                cw_d = cw_q + 1'b1;
+            end
+        end
+        PH_CRC: if (bit_q == 5'd15) ph_d = PH_DONE;
+        default: ;
+        endcase
+    end
+
+    if (cs_rise) begin
+        // The frame ends: the first failing check is its result.
+        if (ph_q != PH_DONE)          result_d = R_TRUNCATED;
+        else if (crc_rx_q != 16'd0)   result_d = R_BAD_CRC;
+        else if (bad_type_q)          result_d = R_BAD_TYPE;
+        else if (no_room_q)           result_d = R_NO_ROOM;
+        else if (bad_cmd_q)           result_d = R_BAD_CMD;
+        else if (in_cmd)              result_d = R_SPLIT;
+        else                          result_d = R_OK;
+        buf_commit   = result_d == R_OK;
+        buf_rollback = result_d != R_OK;
+        fresh_d = 1'b0;
+    end
+end
+
+always @(posedge clk) begin
+    if (rst) begin
+        seq_q    <= 8'd0;
+        result_q <= R_OK;
+        fresh_q  <= 1'b1;
+        reads_q  <= 16'd0;
+        last_read_q <= 32'd0;
+    end else begin
+        seq_q    <= seq_d;
+        result_q <= result_d;
+        fresh_q  <= fresh_d;
+        reads_q  <= reads_d;
+        if (rsp_valid_i) last_read_q <= rsp_data_i;
+    end
+    ph_q <= ph_d;  bit_q <= bit_d;  txn_q <= txn_d;  crc_rx_q <= crc_rx_d;  crc_tx_q <= crc_tx_d;
+    left_q <= left_d;  wr_ok_q <= wr_ok_d;  bad_type_q <= bad_type_d;  no_room_q <= no_room_d;
+    bad_cmd_q <= bad_cmd_d;  hdr_left_q <= hdr_left_d;  chunks_left_q <= chunks_left_d;
+    cw_q <= cw_d;  seg_add2_q <= seg_add2_d;
+    sr_q <= sr_d;
+end
+
+// ---------------------------------------------------------------- outputs
+assign spi_miso_o    = sr_q[31];
+// Driven only while CS is low (the raw pin: released at once when CS rises).
+assign spi_miso_oe_o = !spi_cs_n_i;
+// Replies are taken as they come; the last one stays for the reply's word 6.
+assign rsp_ready_o   = 1'b1;
+
+endmodule
+
+`resetall
