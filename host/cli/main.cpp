@@ -1,8 +1,9 @@
 // cpstep — command-line front end.
 //
 //   cpstep moves U V [--k K] [--rep R] [--engine rtl|model|oracle] [--stats] [--table]
-//   cpstep sim FILE [--vcd OUT.vcd] [--max-cycles N] [--clock-hz HZ]
-//   cpstep run JOB.ngc --machine M.toml [--transport sim|file] [--out F] [--vcd F] [--report F] [--plots DIR]
+//   cpstep sim FILE [--vcd OUT.vcd] [--max-cycles N] [--clock-hz HZ] [--sck-div N]
+//   cpstep run JOB.ngc --machine M.toml [--transport sim|spidev|file] [--out F] [--vcd F] [--report F]
+//              [--plots DIR] [--sck-div N] [--device /dev/spidevB.C] [--spi-hz HZ]
 //   cpstep plan JOB.ngc --machine M.toml [-o OUT.bin]
 //   cpstep check --vcd TRACE.vcd --job JOB.ngc --machine M.toml [--map PINS.toml] [--json OUT.json]
 //
@@ -129,6 +130,9 @@ int main(int argc, char** argv) {
   simc->add_option("--clock-hz", so.clock_hz, "the card's clock, for the VCD's time axis")
       ->capture_default_str()
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000'000)));
+  simc->add_option("--sck-div", so.sck_div, "clock cycles per SCK period of the SPI link (8 or more)")
+      ->capture_default_str()
+      ->check(CLI::Range(8u, 1'000'000u));
 
   cli::RunOptions ro;
   auto* runc = cli::add_run_command(app, ro);

@@ -10,7 +10,9 @@
 #include <fstream>
 #include <optional>
 
+#include "card/spidev.h"
 #include "run/card_job.h"
+#include "run/link_run.h"
 #include "run/measure.h"
 #include "run/plots.h"
 #include "run/report.h"
@@ -101,8 +103,9 @@ int run_file_transport(const RunOptions& o, const run::CardJob& j) {
   return 0;
 }
 
-int run_sim_transport(const RunOptions& o, const run::CardJob& j) {
-  // Outputs that cannot be produced are refused before the (long) run.
+// The outputs of a run are checked before it starts: nothing is sent when one
+// cannot be written. Returns 0 or kExitRefused.
+int open_outputs(const RunOptions& o, std::ofstream& report_file) {
   if (!o.plots.empty() && run::find_gnuplot().empty()) {
     fmt::print(stderr, "cpstep run: --plots needs gnuplot, which is not on PATH (scripts/deps installs it)\n");
     return kExitRefused;
@@ -116,7 +119,6 @@ int run_sim_transport(const RunOptions& o, const run::CardJob& j) {
     fmt::print(stderr, "cpstep run: cannot write {}\n", o.vcd);
     return kExitRefused;
   }
-  std::ofstream report_file;
   if (!o.report.empty()) {
     report_file.open(o.report, std::ios::trunc);
     if (!report_file) {
@@ -124,17 +126,24 @@ int run_sim_transport(const RunOptions& o, const run::CardJob& j) {
       return kExitRefused;
     }
   }
-  Progress progress(!o.no_progress);
-  run::SimRunOptions so;
-  so.vcd = o.vcd;
-  so.max_cycles = o.max_cycles;
-  so.progress = [&progress](uint64_t done, uint64_t total) { progress.update(done, total); };
-  const auto began = std::chrono::steady_clock::now();
-  const run::CardRun r = run::run_on_sim(j, so);
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-  progress.clear();
-  const run::RunMeasure m = run::measure_run(j, r);
+  return 0;
+}
 
+std::string link_line(const run::CardRun& r) {
+  const run::LinkReport& l = r.link;
+  const card::LinkStats& s = l.stats;
+  const std::string where = l.sck_div ? fmt::format("SPI at clk/{} = {:.3f} MHz", l.sck_div, l.sck_hz / 1e6)
+                                      : fmt::format("{} at {:.3f} MHz", l.link, l.sck_hz / 1e6);
+  std::string busy;
+  if (l.sck_div && r.sim_cycles)
+    busy = fmt::format(", busy {:.2f}% of the time", 100.0 * double(l.busy_cycles) / double(r.sim_cycles));
+  return fmt::format("{}: {} frames ({} with commands, {} polls), {} bytes{}; {} resent, {} bad replies", where,
+                     s.transfers, s.command_frames, s.polls, s.bytes, busy, s.resent, s.bad_replies);
+}
+
+// The summary on stdout and the faults and warnings on stderr; returns the exit code.
+int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r, const run::RunMeasure& m,
+              double wall_s, std::ofstream& report_file) {
   int rc = r.ok() ? 0 : kExitFault;
   if (report_file.is_open()) {
     report_file << run::make_report(j, r, m).dump(2) << '\n';
@@ -148,32 +157,43 @@ int run_sim_transport(const RunOptions& o, const run::CardJob& j) {
   if (!o.plots.empty()) plot_error = run::write_plots(o.plots, j, r, m);
 
   print_plan_summary(j);
-  fmt::print("job time   {:.6f} s = {} cycles from START to the last move (planned {:.6f} s)\n", m.job_time_s,
-             m.job_time_cycles, j.planned.stats.duration_s);
-  fmt::print("timing     max {:.1f} cycles ({:.3f} us) from the planner's ideal times, at move {}; "
-             "{} moves off their chunk times\n",
-             m.max_timing_error_cycles, m.max_timing_error_cycles / j.clock_hz() * 1e6,
-             m.max_timing_error_move, m.moves_off_chunk_time);
-  fmt::print("checked    position_o at {} of {} card segment ends, {} off the plan\n", r.checked_segments,
-             j.checkpoints.size(), r.position_mismatches);
+  if (r.pins_observed) {
+    fmt::print("job time   {:.6f} s = {} cycles from START to the last move (planned {:.6f} s)\n", m.job_time_s,
+               m.job_time_cycles, j.planned.stats.duration_s);
+    fmt::print("timing     max {:.1f} cycles ({:.3f} us) from the planner's ideal times, at move {}; "
+               "{} moves off their chunk times\n",
+               m.max_timing_error_cycles, m.max_timing_error_cycles / j.clock_hz() * 1e6,
+               m.max_timing_error_move, m.moves_off_chunk_time);
+    fmt::print("checked    position_o at {} of {} card segment ends, {} off the plan\n", r.checked_segments,
+               j.checkpoints.size(), r.position_mismatches);
+  } else {
+    fmt::print("card       {} moves, {} segments done (the card's counters over the job)\n", r.moves_done,
+               r.segments_done);
+  }
   fmt::print("stretches  {}\n", r.stretch_count);
-  fmt::print("simulated  {} card cycles in {:.1f} s ({:.2f} M cycles/s, Verilated cp_core)\n", r.cycles, wall_s,
-             wall_s > 0 ? double(r.cycles) / wall_s / 1e6 : 0.0);
+  if (r.pins_observed)
+    fmt::print("simulated  {} card cycles in {:.1f} s ({:.2f} M cycles/s, Verilated cp_card)\n", r.sim_cycles,
+               wall_s, wall_s > 0 ? double(r.sim_cycles) / wall_s / 1e6 : 0.0);
+  else
+    fmt::print("ran        {:.1f} s\n", wall_s);
+  fmt::print("link       {}\n", link_line(r));
   if (r.faults.empty()) {
     fmt::print("faults     none\n");
   } else {
     fmt::print("faults     {}\n", r.faults.size());
     for (const run::Fault& f : r.faults) fmt::print("  {} ({}): {}\n", f.name, f.code, f.message);
   }
+  if (!r.pins_observed) fmt::print("start      {}\n", axis_positions(j, r.start_position));
   fmt::print("position   {}\n", axis_positions(j, r.position));
-  for (int a = 0; a < plan::kAxes; ++a) {
-    const plan::AxisConfig& ax = j.machine.axes[a];
-    const run::AxisMeasure& am = m.axes[a];
-    if (!ax.present) continue;
-    fmt::print("peaks {}    v {:.2f}/{:g} mm/s, a {:.1f}/{:g} mm/s^2, j {:.0f}/{:g} mm/s^3: {}\n",
-               plan::kAxisLetters[a], am.peak.v, ax.max_velocity, am.peak.a, ax.max_accel, am.peak.j,
-               ax.max_jerk, am.within_limits ? "within limits" : "OVER LIMITS");
-  }
+  if (r.pins_observed)
+    for (int a = 0; a < plan::kAxes; ++a) {
+      const plan::AxisConfig& ax = j.machine.axes[a];
+      const run::AxisMeasure& am = m.axes[a];
+      if (!ax.present) continue;
+      fmt::print("peaks {}    v {:.2f}/{:g} mm/s, a {:.1f}/{:g} mm/s^2, j {:.0f}/{:g} mm/s^3: {}\n",
+                 plan::kAxisLetters[a], am.peak.v, ax.max_velocity, am.peak.a, ax.max_accel, am.peak.j,
+                 ax.max_jerk, am.within_limits ? "within limits" : "OVER LIMITS");
+    }
   if (!o.vcd.empty()) fmt::print("vcd        {}\n", o.vcd);
   if (!o.report.empty()) fmt::print("report     {}\n", o.report);
   if (!o.plots.empty() && plot_error.empty())
@@ -181,7 +201,7 @@ int run_sim_transport(const RunOptions& o, const run::CardJob& j) {
   std::fflush(stdout);
   for (const run::Fault& f : r.faults) fmt::print(stderr, "cpstep run: fault {} ({}): {}\n", f.name, f.code, f.message);
   // Over-limit kinematics are measured, not a card fault: a warning, exit unchanged.
-  for (int a = 0; a < plan::kAxes; ++a) {
+  for (int a = 0; a < plan::kAxes && r.pins_observed; ++a) {
     const plan::AxisConfig& ax = j.machine.axes[a];
     const run::AxisMeasure& am = m.axes[a];
     if (!ax.present || am.within_limits) continue;
@@ -205,21 +225,84 @@ int run_sim_transport(const RunOptions& o, const run::CardJob& j) {
   return rc;
 }
 
+int run_sim_transport(const RunOptions& o, const run::CardJob& j) {
+  std::ofstream report_file;
+  if (const int rc = open_outputs(o, report_file)) return rc;
+  Progress progress(!o.no_progress);
+  run::SimRunOptions so;
+  so.vcd = o.vcd;
+  so.max_cycles = o.max_cycles;
+  so.sck_div = o.sck_div;
+  so.progress = [&progress](uint64_t done, uint64_t total) { progress.update(done, total); };
+  const auto began = std::chrono::steady_clock::now();
+  const run::CardRun r = run::run_on_sim(j, so);
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  progress.clear();
+  return print_run(o, j, r, run::measure_run(j, r), wall_s, report_file);
+}
+
+int run_spidev_transport(const RunOptions& o, const run::CardJob& j) {
+  const uint64_t limit = uint64_t(j.clock_hz() / 8);
+  const uint64_t hz = o.spi_hz ? o.spi_hz : limit;
+  if (hz > limit) {
+    fmt::print(stderr, "cpstep run: --spi-hz {} exceeds the card's limit clk/8 = {} Hz (docs/PROTOCOL.md)\n", hz,
+               limit);
+    return kExitRefused;
+  }
+  std::ofstream report_file;
+  if (const int rc = open_outputs(o, report_file)) return rc;
+  std::unique_ptr<card::SpidevLink> link;
+  try {
+    link = std::make_unique<card::SpidevLink>(o.device.empty() ? "/dev/spidev0.0" : o.device, uint32_t(hz));
+  } catch (const card::LinkError& e) {
+    fmt::print(stderr, "cpstep run: {}\n", e.what());
+    report_file.close();
+    if (!o.report.empty()) fs::remove(o.report);
+    return kExitRefused;
+  }
+  Progress progress(!o.no_progress);
+  run::LinkRunOptions lo;
+  lo.sck_hz = double(hz);
+  // Frames stay within spidev's transfer limit.
+  lo.client.max_frame_words = (card::kSpidevMaxTransfer - card::frame_bytes(0)) / 4;
+  lo.progress = [&progress](uint64_t done, uint64_t total) { progress.update(done, total); };
+  const auto began = std::chrono::steady_clock::now();
+  run::CardRun r;
+  try {
+    r = run::run_on_link(j, *link, lo);
+  } catch (const card::LinkError& e) {
+    progress.clear();
+    fmt::print(stderr, "cpstep run: {}\n", e.what());
+    return kExitFault;
+  }
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  progress.clear();
+  return print_run(o, j, r, run::measure_run(j, r), wall_s, report_file);
+}
+
 }  // namespace
 
 CLI::App* add_run_command(CLI::App& app, RunOptions& o) {
   auto* c = app.add_subcommand("run", "Plan a G-code job and run it on the card (docs/HOST.md)");
   c->add_option("JOB", o.job, "the G-code file")->required();
   c->add_option("--machine", o.machine, "the machine file (TOML, docs/PLANNING.md)")->required();
-  c->add_option("--transport", o.transport, "sim: the Verilated card; file: write the command words to --out")
+  c->add_option("--transport", o.transport,
+                "sim: the Verilated card through its SPI pins; spidev: a card on --device; file: write the "
+                "command words to --out")
       ->capture_default_str()
-      ->check(CLI::IsMember({"sim", "file"}));
+      ->check(CLI::IsMember({"sim", "spidev", "file"}));
   c->add_option("--out", o.out, "file transport: the command stream (little-endian 32-bit words)");
   c->add_option("--vcd", o.vcd, "sim: write the STEP/DIR pins to this VCD file");
   c->add_option("--report", o.report, "sim: write the JSON report here");
   c->add_option("--plots", o.plots, "sim: write path/speed/accel/jerk PNGs (gnuplot) into this directory");
   c->add_option("--max-cycles", o.max_cycles, "sim: give up after this many clock cycles (default: twice the "
                                               "planned time plus 10^7)");
+  c->add_option("--sck-div", o.sck_div, "sim: clock cycles per SCK period (the card needs 8 or more)")
+      ->capture_default_str()
+      ->check(CLI::Range(8u, 1'000'000u));
+  c->add_option("--device", o.device, "spidev: the SPI device (default /dev/spidev0.0)");
+  c->add_option("--spi-hz", o.spi_hz, "spidev: the SCK rate in Hz (default and limit: the card's clock / 8)")
+      ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
   c->add_flag("--no-progress", o.no_progress, "no progress display on stderr");
   return c;
 }
@@ -247,9 +330,23 @@ int run_job(const RunOptions& o) {
     fmt::print(stderr, "cpstep run: --out is for --transport file\n");
     return kExitRefused;
   }
+  if (o.transport == "spidev" && (!o.vcd.empty() || !o.plots.empty())) {
+    fmt::print(stderr, "cpstep run: --vcd and --plots need --transport sim (a real card's pins are not seen; "
+                       "--report works)\n");
+    return kExitRefused;
+  }
+  if (o.transport != "sim" && o.sck_div != 8) {
+    fmt::print(stderr, "cpstep run: --sck-div is for --transport sim (spidev: --spi-hz)\n");
+    return kExitRefused;
+  }
+  if (o.transport != "spidev" && (o.spi_hz != 0 || !o.device.empty())) {
+    fmt::print(stderr, "cpstep run: --device and --spi-hz are for --transport spidev\n");
+    return kExitRefused;
+  }
   const auto j = prepare(o.job, o.machine);
   if (!j) return kExitRefused;
   if (o.transport == "file") return run_file_transport(o, *j);
+  if (o.transport == "spidev") return run_spidev_transport(o, *j);
   return run_sim_transport(o, *j);
 }
 

@@ -1,6 +1,7 @@
 // `cpstep run` and `cpstep plan`: a G-code job planned for the card, then run
-// on a transport (the simulated card, or a file of command words), with a
-// summary, a JSON report, a pin VCD and plots (docs/HOST.md).
+// on a transport (the simulated card through its SPI pins, a card on a Linux
+// spidev device, or a file of command words), with a summary, a JSON report, a
+// pin VCD and plots (docs/HOST.md).
 #pragma once
 
 #include <cstdint>
@@ -12,10 +13,13 @@ namespace cpstep::cli {
 
 struct RunOptions {
   std::string job, machine;
-  std::string transport = "sim";   // sim | file
+  std::string transport = "sim";   // sim | spidev | file
   std::string out;                 // file transport: the command stream
-  std::string vcd, report, plots;  // sim transport: optional outputs
+  std::string vcd, report, plots;  // sim transport: optional outputs (spidev: the report)
   uint64_t max_cycles = 0;         // 0: twice the planned time plus 10^7 cycles
+  unsigned sck_div = 8;            // sim: clock cycles per SCK period
+  std::string device;              // spidev: the device ("": /dev/spidev0.0)
+  uint64_t spi_hz = 0;             // spidev: SCK rate; 0: the card's clock / 8
   bool no_progress = false;
 };
 

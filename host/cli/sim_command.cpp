@@ -2,28 +2,33 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <fstream>
 #include <memory>
 #include <optional>
 
-#include "Vcp_core.h"
-#include "sim/core_driver.h"
-#include "sim/core_port.h"
+#include "card/card_client.h"
+#include "card/protocol.h"
+#include "sim/card_configs.h"
+#include "sim/sim_link.h"
 #include "sim/sim_script.h"
+#include "sim/spi_master.h"
 #include "sim/vcd_writer.h"
 
 namespace cpstep::cli {
 
 namespace {
 
-struct CoreRtl : sim::CorePortBase<Vcp_core, sim::kSimAxes> {};
-using Dut = sim::RtlDut<CoreRtl>;
+using Dut = sim::RtlDut<sim::CardDefault>;
+static_assert(sim::CardDefault::kAxes == sim::kSimAxes);
 
 constexpr int kExitFault = 1;
 constexpr int kExitRefused = 2;
-// Cycles a stopped card may go without taking a command word before the run is
+// Cycles a stopped card may keep its command buffer full before the run is
 // given up: far beyond any build, so only full queues with no motion end up here.
 constexpr uint64_t kStoppedStallCycles = 100'000;
+// Clock cycles between POLLs while the host waits for room or for the end.
+constexpr double kPollCycles = 10'000;
 
 // Why a run stopped before the script's end.
 struct Stopped {
@@ -33,9 +38,13 @@ struct Stopped {
 class SimRun {
  public:
   SimRun(const SimOptions& o, sim::VcdWriter* vcd)
-      : o_(o), vcd_(vcd), drv_(dut_, [this](uint64_t c, const model::CpCoreIn& in, const model::CpCoreOut& out) {
-          observe(c, in, out);
-        }) {
+      : o_(o),
+        vcd_(vcd),
+        spi_(dut_, sim::spi_timing_for_divider(o.sck_div),
+             [this](uint64_t c, const sim::CardIn& in, const sim::CardOut& out) { observe(c, in, out); }),
+        link_(spi_, double(o.clock_hz)),
+        client_(link_, client_options(o)) {
+    link_.set_deadline(o.max_cycles);
     if (vcd_) {
       for (const char* pin : {"step", "dir"})
         for (unsigned a = 0; a < sim::kSimAxes; ++a)
@@ -45,40 +54,58 @@ class SimRun {
   }
 
   // Runs every step of the script, then lets the card finish its motion.
+  // Consecutive command lines go to the card together, in as few frames as fit.
   std::optional<Stopped> run(const std::vector<sim::ScriptStep>& steps) {
-    drv_.reset();
+    spi_.reset();
     try {
-      for (const sim::ScriptStep& s : steps) {
+      for (size_t i = 0; i < steps.size(); ++i) {
+        const sim::ScriptStep& s = steps[i];
         line_ = s.line;
-        if (const auto* w = std::get_if<sim::SendWords>(&s.action)) send(w->words);
-        else if (const auto* d = std::get_if<sim::Wait>(&s.action)) wait(d->cycles);
-        else if (std::holds_alternative<sim::RunToStop>(s.action)) run_to_stop();
-        else if (const auto* e = std::get_if<sim::Estop>(&s.action)) drv_.set_estop(e->on);
+        if (std::holds_alternative<sim::SendWords>(s.action)) {
+          std::vector<uint32_t> words;
+          for (; i < steps.size() && std::holds_alternative<sim::SendWords>(steps[i].action); ++i) {
+            const auto& w = std::get<sim::SendWords>(steps[i].action).words;
+            words.insert(words.end(), w.begin(), w.end());
+          }
+          --i;
+          send(words);
+        } else if (const auto* d = std::get_if<sim::Wait>(&s.action)) {
+          wait(d->cycles);
+        } else if (std::holds_alternative<sim::RunToStop>(s.action)) {
+          run_to_stop();
+        } else if (const auto* e = std::get_if<sim::Estop>(&s.action)) {
+          spi_.set_estop(e->on);
+        }
+        check_cycles();
       }
       line_ = 0;
       run_to_stop();
     } catch (const Stopped& s) {
-      cycles_ = dut_.cycle();
       return s;
+    } catch (const card::CardError& e) {
+      return Stopped{where() + e.what()};
     }
-    cycles_ = dut_.cycle();
     return std::nullopt;
   }
 
-  // Reads the card's registers over the command port and prints them.
+  // Polls the card and prints its state from the reply.
   int report(const std::optional<Stopped>& stopped) {
-    const card::Status st = card::decode_status(drv_.read(card::Register::status));
-    const uint32_t stretch = drv_.read(card::Register::stretch_count);
-    const uint32_t moves = drv_.read(card::Register::moves_done);
-    const uint32_t segments = drv_.read(card::Register::segments_done);
+    const uint64_t end = ran_ && !spi_.last().running ? last_fall_ : dut_.cycle();
+    card::Reply r;
+    try {
+      r = client_.poll();
+    } catch (const card::CardError& e) {
+      fmt::print(stderr, "cpstep sim: {}\n", e.what());
+      return kExitFault;
+    }
+    const card::Status st = card::decode_status(r.status);
     std::string pos = "position";
-    for (unsigned a = 0; a < sim::kSimAxes; ++a)
-      pos += fmt::format(" {}={}", sim::kSimAxisNames[a], int32_t(drv_.read(card::Register::position0, a)));
+    for (unsigned a = 0; a < sim::kSimAxes; ++a) pos += fmt::format(" {}={}", sim::kSimAxisNames[a], r.positions[a]);
     const card::ErrorName err = card::error_name(st.err_code);
     fmt::print("{}\n", pos);
     fmt::print("status running={:d} fault={:d} error={} stretched={:d} stretch_count={}\n", st.running,
-               st.fault, err.name, st.stretched, stretch);
-    fmt::print("counters moves_done={} segments_done={} cycles={}\n", moves, segments, cycles_);
+               st.fault, err.name, st.stretched, r.stretch);
+    fmt::print("counters moves_done={} segments_done={} cycles={}\n", r.moves, r.segments, end);
     std::fflush(stdout);
     int rc = 0;
     if (st.fault) {
@@ -93,7 +120,18 @@ class SimRun {
   }
 
  private:
-  void observe(uint64_t cycle, const model::CpCoreIn& in, const model::CpCoreOut& out) {
+  static card::ClientOptions client_options(const SimOptions& o) {
+    card::ClientOptions c;
+    c.axes = sim::kSimAxes;
+    c.confirm_each_frame = false;  // the next frame's reply carries each result (pipelined)
+    c.poll_interval_s = kPollCycles / double(o.clock_hz);
+    return c;
+  }
+
+  void observe(uint64_t cycle, const sim::CardIn& in, const sim::CardOut& out) {
+    if (out.running) ran_ = true;
+    else if (was_running_) last_fall_ = cycle + 1;
+    was_running_ = out.running;
     if (!vcd_) return;
     for (unsigned a = 0; a < sim::kSimAxes; ++a) {
       vcd_->set(pins_[a], out.step >> a & 1);
@@ -107,48 +145,50 @@ class SimRun {
     return line_ ? fmt::format("{}:{}: ", o_.file, line_) : std::string();
   }
 
-  model::CpCoreOut step(const model::CpCoreIn& in) {
+  void check_cycles() {
     if (dut_.cycle() >= o_.max_cycles)
       throw Stopped{fmt::format("{}stopped at --max-cycles {}{}", where(), o_.max_cycles,
-                                drv_.last().running ? " with the card still running" : "")};
-    return drv_.step(in);
+                                spi_.last().running ? " with the card still running" : "")};
+  }
+
+  // While the host waits: the cycle budget, and a stopped card whose buffer
+  // stays full with its free words unchanged.
+  bool keep_waiting(const card::Reply& r) {
+    check_cycles();
+    if (stall_.stalled(r, double(dut_.cycle())))
+      throw Stopped{fmt::format(
+          "{}the card took no command word for {} cycles while stopped: its queues are full "
+          "(send `start` before more segments)",
+          where(), kStoppedStallCycles)};
+    return true;
   }
 
   void send(const std::vector<uint32_t>& words) {
-    for (uint32_t w : words) {
-      model::CpCoreIn in;
-      in.cmd_valid = true;
-      in.cmd_data = w;
-      uint64_t stalled = 0;
-      while (!step(in).cmd_ready) {
-        stalled = drv_.last().running ? 0 : stalled + 1;
-        if (stalled > kStoppedStallCycles)
-          throw Stopped{fmt::format(
-              "{}the card took no command word for {} cycles while stopped: its queues are full "
-              "(send `start` before more segments)",
-              where(), kStoppedStallCycles)};
-      }
-    }
+    client_.send(words, [this](const card::Reply& r) { return keep_waiting(r); });
   }
 
   void wait(uint64_t cycles) {
-    for (uint64_t i = 0; i < cycles; ++i) step({});
+    const uint64_t now = dut_.cycle();
+    spi_.idle(std::min(cycles, o_.max_cycles > now ? o_.max_cycles - now : 0));
   }
 
-  // One cycle lets a START just taken show as running; then idle while it is.
+  // Polls until the card is not running and its buffer is empty.
   void run_to_stop() {
-    step({});
-    while (drv_.last().running) step({});
+    client_.wait_until_stopped([this](const card::Reply& r) { return keep_waiting(r); });
   }
 
   const SimOptions& o_;
   sim::VcdWriter* vcd_;
   Dut dut_;
-  sim::CoreDriver<Dut> drv_;
+  sim::SpiMaster<Dut> spi_;
+  sim::SimLink<Dut> link_;
+  card::CardClient client_;
   std::vector<int> pins_;
   int estop_signal_ = -1;
   unsigned line_ = 0;
-  uint64_t cycles_ = 0;
+  bool ran_ = false, was_running_ = false;
+  uint64_t last_fall_ = 0;
+  card::StallWatch stall_{double(kStoppedStallCycles)};
 };
 
 }  // namespace
@@ -168,6 +208,10 @@ int run_sim(const SimOptions& o) {
   }
   if (o.clock_hz == 0 || o.clock_hz > 1'000'000'000'000u) {
     fmt::print(stderr, "cpstep sim: --clock-hz must be 1..10^12\n");
+    return kExitRefused;
+  }
+  if (o.sck_div < 8) {
+    fmt::print(stderr, "cpstep sim: --sck-div must be 8 or more (the card needs SCK <= clk/8)\n");
     return kExitRefused;
   }
   std::ofstream vcd_file;

@@ -1,5 +1,5 @@
 // `cpstep sim`: runs a script of raw segments and commands (docs/SIM.md) on the
-// Verilated motion core and reports its final state.
+// Verilated card, through its SPI pins, and reports its final state.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +12,7 @@ struct SimOptions {
   std::string vcd;                      // "" for no waveform
   uint64_t max_cycles = 100'000'000;    // clock cycles, reset included
   uint64_t clock_hz = 48'000'000;       // the VCD's time base
+  unsigned sck_div = 8;                 // clock cycles per SCK period (8 or more)
 };
 
 // Exit codes: 0 the run ended without a fault; 1 it ended with a fault, or did

@@ -10,7 +10,7 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
   json r;
   r["job"] = job.job_file;
   r["machine"] = job.machine.file;
-  r["transport"] = "sim";
+  r["transport"] = run.link.transport.empty() ? "sim" : run.link.transport;
   r["clock_hz"] = job.clock_hz();
   r["ok"] = run.ok();
   r["step_segments"] = st.step_segments;
@@ -21,21 +21,26 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
   r["moves_per_chunk"] = job.wire_chunks() ? double(job.moves()) / double(job.wire_chunks()) : 0.0;
   r["command_words"] = job.words.size();
   r["planned_time_s"] = st.duration_s;
-  r["job_time_s"] = m.job_time_s;
-  r["job_time_cycles"] = m.job_time_cycles;
-  r["run_cycles"] = run.cycles;
-  r["start_cycle"] = run.start_cycle;
-  r["move_events"] = m.moves;
+  if (run.pins_observed) {
+    r["job_time_s"] = m.job_time_s;
+    r["job_time_cycles"] = m.job_time_cycles;
+    r["run_cycles"] = run.cycles;
+    r["sim_cycles"] = run.sim_cycles;
+    r["start_cycle"] = run.start_cycle;
+    r["move_events"] = m.moves;
+  }
   r["moves_done"] = run.moves_done;
   r["segments_done"] = run.segments_done;
-  r["checked_segments"] = run.checked_segments;
-  r["position_mismatches"] = run.position_mismatches;
-  r["max_timing_error_cycles"] = m.max_timing_error_cycles;
-  r["max_timing_error_s"] = m.max_timing_error_cycles / job.clock_hz();
-  r["max_timing_error_move"] = m.max_timing_error_move;
-  r["chunk_tolerance_cycles"] = job.machine.chunk_tolerance_cycles();
-  r["max_chunk_error_cycles"] = m.max_chunk_error_cycles;
-  r["moves_off_chunk_time"] = m.moves_off_chunk_time;
+  if (run.pins_observed) {
+    r["checked_segments"] = run.checked_segments;
+    r["position_mismatches"] = run.position_mismatches;
+    r["max_timing_error_cycles"] = m.max_timing_error_cycles;
+    r["max_timing_error_s"] = m.max_timing_error_cycles / job.clock_hz();
+    r["max_timing_error_move"] = m.max_timing_error_move;
+    r["chunk_tolerance_cycles"] = job.machine.chunk_tolerance_cycles();
+    r["max_chunk_error_cycles"] = m.max_chunk_error_cycles;
+    r["moves_off_chunk_time"] = m.moves_off_chunk_time;
+  }
   r["stretches"] = run.stretch_count;
   r["stretched"] = run.status.stretched;
   json faults = json::array();
@@ -45,6 +50,33 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
   for (const plan::Diagnostic& w : job.warnings) warnings.push_back(w.str());
   r["warnings"] = warnings;
 
+  const LinkReport& l = run.link;
+  json link;
+  link["device"] = l.transport == "sim" ? std::string("Verilated cp_card") : l.link;
+  link["sck_hz"] = l.sck_hz;
+  if (l.sck_div) link["sck_div"] = l.sck_div;
+  link["frames"] = l.stats.transfers;
+  link["command_frames"] = l.stats.command_frames;
+  link["polls"] = l.stats.polls;
+  link["bytes"] = l.stats.bytes;
+  link["command_words"] = l.stats.words;
+  link["marker_words"] = l.stats.markers;
+  link["resent"] = l.stats.resent;
+  link["damaged"] = l.stats.damaged;
+  link["no_room"] = l.stats.no_room;
+  link["bad_replies"] = l.stats.bad_replies;
+  link["lost_results"] = l.stats.lost_results;
+  link["waits"] = l.stats.waits;
+  link["seconds"] = l.seconds;
+  link["capacity_bytes_per_s"] = l.sck_hz / 8;
+  link["bytes_per_s"] = l.seconds > 0 ? double(l.stats.bytes) / l.seconds : 0.0;
+  link["command_bytes_per_s"] = l.seconds > 0 ? 4.0 * double(l.stats.words) / l.seconds : 0.0;
+  if (l.sck_div) {
+    link["busy_cycles"] = l.busy_cycles;
+    link["utilisation"] = run.sim_cycles ? double(l.busy_cycles) / double(run.sim_cycles) : 0.0;
+  }
+  r["link"] = link;
+
   json axes = json::object();
   for (int a = 0; a < plan::kAxes; ++a) {
     const plan::AxisConfig& ax = job.machine.axes[a];
@@ -52,10 +84,11 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
     const AxisMeasure& am = m.axes[a];
     json j;
     j["steps_per_mm"] = ax.steps_per_mm;
+    if (!run.pins_observed) j["start_steps"] = run.start_position[a];
     j["final_steps"] = run.position[a];
     j["final_mm"] = double(run.position[a]) / ax.steps_per_mm;
     j["planned_final_steps"] = job.checkpoints.empty() ? 0 : job.checkpoints.back().position[a];
-    j["pulses"] = am.pulses;
+    if (run.pins_observed) j["pulses"] = am.pulses;
     j["step_high_cycles"] = ax.pulse.step_high;
     j["step_low_cycles"] = ax.pulse.step_low;
     j["dir_setup_cycles"] = ax.pulse.dir_setup;
@@ -65,16 +98,18 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
     j["max_velocity"] = ax.max_velocity;
     j["max_accel"] = ax.max_accel;
     j["max_jerk"] = ax.max_jerk;
-    j["peak_velocity"] = am.peak.v;
-    j["peak_accel"] = am.peak.a;
-    j["peak_jerk"] = am.peak.j;
-    j["velocity_window_s"] = am.window.v;
-    j["accel_window_s"] = am.window.a;
-    j["jerk_window_s"] = am.window.j;
-    j["velocity_tolerance"] = am.tolerance.v;
-    j["accel_tolerance"] = am.tolerance.a;
-    j["jerk_tolerance"] = am.tolerance.j;
-    j["within_limits"] = am.within_limits;
+    if (run.pins_observed) {
+      j["peak_velocity"] = am.peak.v;
+      j["peak_accel"] = am.peak.a;
+      j["peak_jerk"] = am.peak.j;
+      j["velocity_window_s"] = am.window.v;
+      j["accel_window_s"] = am.window.a;
+      j["jerk_window_s"] = am.window.j;
+      j["velocity_tolerance"] = am.tolerance.v;
+      j["accel_tolerance"] = am.tolerance.a;
+      j["jerk_tolerance"] = am.tolerance.j;
+      j["within_limits"] = am.within_limits;
+    }
     axes[std::string(1, plan::kAxisLetters[a])] = j;
   }
   r["axes"] = axes;

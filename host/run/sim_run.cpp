@@ -6,9 +6,9 @@
 #include <memory>
 #include <stdexcept>
 
-#include "Vcp_core.h"
-#include "sim/core_driver.h"
-#include "sim/core_port.h"
+#include "sim/card_configs.h"
+#include "sim/sim_link.h"
+#include "sim/spi_master.h"
 #include "sim/vcd_writer.h"
 
 namespace cpstep::run {
@@ -20,62 +20,23 @@ const char* host_fault_name(HostFault f) {
     case HostFault::pin_count: return "PIN_COUNT";
     case HostFault::timeout: return "TIMEOUT";
     case HostFault::stall: return "STALL";
+    case HostFault::link: return "LINK";
   }
   return "UNKNOWN";
 }
 
 namespace {
 
-struct CoreRtl : sim::CorePortBase<Vcp_core, plan::kAxes> {};
-using Dut = sim::RtlDut<CoreRtl>;
+using Dut = sim::RtlDut<sim::CardDefault>;
+static_assert(sim::CardDefault::kAxes == plan::kAxes);
 
 // Mismatching checkpoints listed one by one in the faults; the rest are counted.
 constexpr uint64_t kListedMismatches = 10;
-// A stopped card that takes no command word for this long has full queues and
+// A stopped card whose command buffer stays full this long has full queues and
 // nothing to drain them: far beyond any pattern build.
 constexpr uint64_t kStallCycles = 1'000'000;
 
-struct SendEnd {
-  enum How { done, budget, stalled } how = done;
-  size_t next = 0;  // the first word not taken
-};
-
-// Sends words in order, holding each until the card takes it, within the
-// cycle budget; a card that is stopped and takes nothing for kStallCycles stalls.
-template <class Driver, class Stepper>
-SendEnd send_words(Driver& drv, const Stepper& dut, const std::vector<uint32_t>& words, uint64_t budget) {
-  SendEnd end;
-  for (; end.next < words.size(); ++end.next) {
-    model::CpCoreIn in;
-    in.cmd_valid = true;
-    in.cmd_data = words[end.next];
-    for (uint64_t idle = 0;;) {
-      if (dut.cycle() >= budget) {
-        end.how = SendEnd::budget;
-        return end;
-      }
-      const model::CpCoreOut o = drv.step(in);
-      if (o.cmd_ready) break;
-      idle = o.running ? 0 : idle + 1;
-      if (idle > kStallCycles) {
-        end.how = SendEnd::stalled;
-        return end;
-      }
-    }
-  }
-  return end;
-}
-
-// The index after the command that word `i` belongs to (docs/CORE.md: a
-// SEGMENT is 2 + N + 2 nchunks words, every other command one word).
-size_t command_end(const std::vector<uint32_t>& words, size_t i) {
-  for (size_t c = 0; c < words.size();) {
-    const size_t len = card::command_words(words[c], plan::kAxes);
-    if (i < c + len) return std::min(words.size(), c + len);
-    c += len;
-  }
-  return words.size();
-}
+}  // namespace
 
 Fault host_fault(HostFault f, std::string message) {
   return {uint32_t(f), host_fault_name(f), std::move(message)};
@@ -87,6 +48,32 @@ std::string axes_text(const plan::PerAxis<int64_t>& p, const plan::Machine& m) {
     if (m.axes[a].present) s += fmt::format("{}{}={}", s.empty() ? "" : " ", plan::kAxisLetters[a], p[a]);
   return s;
 }
+
+void take_reply(CardRun& run, const card::Reply& r) {
+  run.status = card::decode_status(r.status);
+  run.stretch_count = r.stretch;
+  run.moves_done = r.moves;
+  run.segments_done = r.segments;
+  for (int a = 0; a < plan::kAxes && size_t(a) < r.positions.size(); ++a) run.position[a] = r.positions[a];
+}
+
+void add_card_faults(const CardJob& job, CardRun& run) {
+  // The card's own fault first: it is the cause, the host's checks follow from it.
+  if (run.status.fault) {
+    const card::ErrorName e = card::error_name(run.status.err_code);
+    run.faults.insert(run.faults.begin(), Fault{run.status.err_code, e.name, e.meaning});
+  }
+  if (run.pins_observed ? run.move_cycles.size() != job.moves() || run.moves_done != job.moves()
+                        : run.moves_done != job.moves())
+    run.faults.push_back(host_fault(
+        HostFault::move_count,
+        run.pins_observed ? fmt::format("{} move events on the pins, {} counted by the card, {} planned",
+                                        run.move_cycles.size(), run.moves_done, job.moves())
+                          : fmt::format("{} move events counted by the card, {} planned", run.moves_done,
+                                        job.moves())));
+}
+
+namespace {
 
 // Watches every cycle: START, leading STEP edges (one cycle after their move
 // event), DIR at each edge, position_o at each card segment's last move.
@@ -109,7 +96,7 @@ class Recorder {
     run_.move_cycles.reserve(job.moves());
   }
 
-  void observe(uint64_t cycle, const model::CpCoreIn& in, const model::CpCoreOut& out) {
+  void observe(uint64_t cycle, const sim::CardIn& in, const sim::CardOut& out) {
     if (vcd_) {
       for (int a = 0; a < plan::kAxes; ++a) {
         vcd_->set(signals_[a], out.step >> a & 1);
@@ -117,15 +104,19 @@ class Recorder {
       }
       vcd_->sample(sim::cycle_start_ps(cycle, uint64_t(job_.clock_hz())));
     }
+    if (options_.pins) options_.pins(cycle, out.step, out.dir);
     if (options_.progress && (cycle & 0xFFFF) == 0) options_.progress(run_.move_cycles.size(), job_.moves());
     if (in.rst) {
       primed_ = false;
       return;
     }
-    if (!started_ && in.cmd_valid && out.cmd_ready && in.cmd_data >> 28 == 0x3 && (in.cmd_data & 1)) {
+    // START taken in t shows as running_o from t+1; running_o falls in the
+    // cycle after the last move of the run (or at a fault).
+    if (!started_ && out.running) {
       started_ = true;
-      run_.start_cycle = cycle;
+      run_.start_cycle = cycle - 1;
     }
+    if (started_ && !end_cycle_ && !out.running) end_cycle_ = cycle + 1;
     const uint32_t active = ~(out.step ^ step_active_high_) & kAxisMask;
     const uint32_t leading = primed_ ? active & ~active_ : 0;
     active_ = active;
@@ -146,11 +137,13 @@ class Recorder {
   }
 
   const plan::PerAxis<int64_t>& pin_position() const { return pins_; }
+  // One past the first cycle running_o was low after START; 0 while it runs or never ran.
+  uint64_t end_cycle() const { return end_cycle_; }
 
  private:
   static constexpr uint32_t kAxisMask = (1u << plan::kAxes) - 1;
 
-  void check_segment_end(const model::CpCoreOut& out) {
+  void check_segment_end(const sim::CardOut& out) {
     if (next_ >= job_.checkpoints.size()) return;
     const Checkpoint& cp = job_.checkpoints[next_];
     if (run_.move_cycles.size() != cp.moves) return;
@@ -179,6 +172,7 @@ class Recorder {
   uint32_t step_active_high_ = 0, dir_positive_high_ = 0;
   uint32_t active_ = 0;
   bool primed_ = false, started_ = false;
+  uint64_t end_cycle_ = 0;
   size_t next_ = 0;
   plan::PerAxis<int64_t> pins_{};
 };
@@ -196,73 +190,76 @@ CardRun run_on_sim(const CardJob& job, const SimRunOptions& o) {
   }
   Recorder rec(job, run, vcd.get(), o);
   Dut dut;
-  sim::CoreDriver<Dut> drv(dut, [&rec](uint64_t c, const model::CpCoreIn& in, const model::CpCoreOut& out) {
+  const sim::SpiTiming timing = sim::spi_timing_for_divider(o.sck_div);
+  sim::SpiMaster<Dut> spi(dut, timing, [&rec](uint64_t c, const sim::CardIn& in, const sim::CardOut& out) {
     rec.observe(c, in, out);
   });
+  sim::SimLink<Dut> sim_link(spi, job.clock_hz());
+  const std::unique_ptr<card::Link> wrapped = o.wrap_link ? o.wrap_link(sim_link) : nullptr;
+  card::ClientOptions co = o.client;
+  co.axes = plan::kAxes;
+  card::CardClient client(wrapped ? *wrapped : sim_link, co);
+
   const double planned_cycles = job.planned.stats.duration_s * job.clock_hz();
   const uint64_t budget = o.max_cycles ? o.max_cycles : uint64_t(2 * planned_cycles) + 10'000'000;
+  sim_link.set_deadline(budget);
 
-  drv.reset();
-  const SendEnd sent = send_words(drv, dut, job.words, budget);
-  bool out_of_time = sent.how == SendEnd::budget;
-  if (!out_of_time && sent.how == SendEnd::done) {
-    // One cycle lets a START taken last show as running; then run to the end.
-    drv.step({});
-    while (drv.last().running && dut.cycle() < budget) drv.step({});
-    out_of_time = drv.last().running;
+  // While the host waits (for room, or for the end): give up at the budget, or
+  // when the card, stopped, keeps its buffer full and its free words unchanged.
+  enum class GaveUp { no, out_of_time, stalled } gave_up = GaveUp::no;
+  card::StallWatch stall{double(kStallCycles)};
+  const auto keep_waiting = [&](const card::Reply& r) {
+    const uint64_t now = dut.cycle();
+    if (now >= budget) gave_up = GaveUp::out_of_time;
+    else if (stall.stalled(r, double(now))) gave_up = GaveUp::stalled;
+    return gave_up == GaveUp::no;
+  };
+
+  spi.reset();
+  size_t sent = 0;
+  try {
+    client.poll();
+    sent = client.send(job.words, keep_waiting);
+    if (sent == job.words.size()) client.wait_until_stopped(keep_waiting);
+  } catch (const card::CardError& e) {
+    run.faults.push_back(host_fault(HostFault::link, e.what()));
   }
-  run.cycles = dut.cycle();
-  if (out_of_time) {
-    // E-stop stops the card at once whatever its command port is doing; the
-    // command under way is completed (the card drops it) so that the port
-    // reads commands again.
-    drv.set_estop(true);
-    const std::vector<uint32_t> rest(job.words.begin() + long(sent.next),
-                                     job.words.begin() + long(command_end(job.words, sent.next)));
-    drv.send(rest, kStallCycles);
-    drv.idle(4);
+  run.cycles = rec.end_cycle() ? rec.end_cycle() : dut.cycle();
+  if (gave_up == GaveUp::out_of_time) {
+    // E-stop stops the card at once, whatever its command buffer holds.
+    spi.set_estop(true);
+    spi.idle(4);
     run.faults.push_back(host_fault(HostFault::timeout,
                                     fmt::format("the card was still running after {} cycles; the host "
                                                 "stopped it with E-stop",
                                                 budget)));
-  }
-  if (sent.how == SendEnd::stalled) {
-    // The port takes nothing: read nothing either, keep what the pins showed.
+  } else if (gave_up == GaveUp::stalled) {
     run.faults.push_back(host_fault(HostFault::stall,
-                                    fmt::format("the card took no command word for {} cycles while "
-                                                "stopped (word {} of {})",
-                                                kStallCycles, sent.next + 1, job.words.size())));
-    const model::CpCoreOut& last = drv.last();
-    run.status = {last.running, last.fault, last.stretched, false, last.err_code, 0, 0, last.enable};
-    for (int a = 0; a < plan::kAxes; ++a) run.position[a] = last.position[a];
-  } else {
-    run.status = card::decode_status(drv.read(card::Register::status));
-    run.stretch_count = drv.read(card::Register::stretch_count);
-    run.moves_done = drv.read(card::Register::moves_done);
-    run.segments_done = drv.read(card::Register::segments_done);
-    for (int a = 0; a < plan::kAxes; ++a)
-      run.position[a] = int32_t(drv.read(card::Register::position0, unsigned(a)));
+                                    fmt::format("the card, stopped, took no command word for {} cycles "
+                                                "(word {} of {} sent)",
+                                                kStallCycles, sent, job.words.size())));
   }
+  // The final state: one POLL (the reply needs no command port, so it comes
+  // even from a stalled card).
+  try {
+    take_reply(run, client.poll());
+  } catch (const card::CardError& e) {
+    run.faults.push_back(host_fault(HostFault::link, e.what()));
+  }
+  run.sim_cycles = dut.cycle();
+  run.link = {"sim", sim_link.name(), client.stats(), job.clock_hz() / o.sck_div, o.sck_div,
+              sim_link.busy_cycles(), double(run.sim_cycles) / job.clock_hz()};
   if (o.progress) o.progress(run.move_cycles.size(), job.moves());
 
-  // The card's own fault first: it is the cause, the host's checks follow from it.
-  if (run.status.fault) {
-    const card::ErrorName e = card::error_name(run.status.err_code);
-    run.faults.insert(run.faults.begin(), Fault{run.status.err_code, e.name, e.meaning});
-  }
-  if (run.move_cycles.size() != job.moves() || run.moves_done != job.moves())
-    run.faults.push_back(host_fault(HostFault::move_count,
-                                    fmt::format("{} move events on the pins, {} counted by the card, "
-                                                "{} planned",
-                                                run.move_cycles.size(), run.moves_done, job.moves())));
+  add_card_faults(job, run);
   if (run.position_mismatches > kListedMismatches)
     run.faults.push_back(host_fault(HostFault::position,
                                     fmt::format("{} more card segments ended off the plan",
                                                 run.position_mismatches - kListedMismatches)));
   if (rec.pin_position() != run.position)
     run.faults.push_back(host_fault(HostFault::pin_count,
-                                    fmt::format("STEP/DIR edges on the pins add up to {}, position_o "
-                                                "reads {}",
+                                    fmt::format("STEP/DIR edges on the pins add up to {}, the card's "
+                                                "position reads {}",
                                                 axes_text(rec.pin_position(), job.machine),
                                                 axes_text(run.position, job.machine))));
   vcd.reset();

@@ -1,12 +1,16 @@
-// Runs a CardJob on the simulated card (the Verilated cp_core) and records
-// what its pins and counters did: the transport `sim` of `cpstep run`.
+// Runs a CardJob on the simulated card (the Verilated cp_card: the SPI front end
+// and the motion core) through its SPI pins, and records what its pins and
+// counters did: the transport `sim` of `cpstep run`.
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "card/card_client.h"
+#include "card/link.h"
 #include "card/protocol.h"
 #include "plan/common.h"
 #include "run/card_job.h"
@@ -21,6 +25,7 @@ enum class HostFault : uint32_t {
   pin_count = 103,   // the STEP/DIR edges counted on the pins differ from position_o
   timeout = 104,     // the card was still running after the cycle budget
   stall = 105,       // the card stopped taking command words while stopped
+  link = 106,        // the card refused a frame the host does not repair, or stopped answering
 };
 const char* host_fault_name(HostFault f);
 
@@ -36,6 +41,17 @@ struct AxisPulses {
   std::vector<int8_t> dirs;       // +1 / -1 from the DIR pin at that edge
 };
 
+// What went over the SPI link.
+struct LinkReport {
+  std::string transport;       // "sim", "spidev"
+  std::string link;            // what Link::name() says (the device)
+  card::LinkStats stats;
+  double sck_hz = 0;           // the SCK rate
+  unsigned sck_div = 0;        // sim: clock cycles per SCK period (0 on a real link)
+  uint64_t busy_cycles = 0;    // sim: clock cycles spent in transfers (CS setup to idle)
+  double seconds = 0;          // on the link's clock, from the first POLL to the final reply
+};
+
 struct CardRun {
   uint64_t start_cycle = 0;              // the cycle START was taken in
   std::vector<uint64_t> move_cycles;     // per move event: the cycle it fired (pin edge - 1)
@@ -46,6 +62,10 @@ struct CardRun {
   card::Status status{};                 // read back at the end
   uint32_t stretch_count = 0, moves_done = 0, segments_done = 0;
   uint64_t cycles = 0;                   // clock cycles from reset to the end of motion
+  uint64_t sim_cycles = 0;               // clock cycles simulated in all (the final POLL included)
+  bool pins_observed = true;             // false on a real card: pulses, move_cycles, checks empty
+  plan::PerAxis<int64_t> start_position{};  // the card's position before the job (0 after a reset)
+  LinkReport link;
   std::vector<Fault> faults;             // the card's, then the host's
 
   [[nodiscard]] bool ok() const { return faults.empty(); }
@@ -54,12 +74,31 @@ struct CardRun {
 struct SimRunOptions {
   std::string vcd;                  // "" for none: step_<axis>, dir_<axis> per pin
   uint64_t max_cycles = 0;          // 0: twice the planned job time plus 10^7
+  unsigned sck_div = 8;             // clock cycles per SCK period (8 or more)
+  card::ClientOptions client;       // frames, polling (axes is set to the card's)
   // Called with (moves done, moves planned) about every 65536 cycles.
   std::function<void(uint64_t, uint64_t)> progress;
+  // Tests: every cycle's STEP and DIR pins (bit i: axis i).
+  std::function<void(uint64_t cycle, uint32_t step, uint32_t dir)> pins;
+  // Tests: a link put between the client and the card (e.g. one that damages
+  // bytes in flight); it forwards to the link it is given.
+  std::function<std::unique_ptr<card::Link>(card::Link&)> wrap_link;
 };
 
-// Sends the job's words to a freshly reset card, runs it to its end and reads
-// its registers back. Throws std::runtime_error when the VCD cannot be written.
+// Resets the simulated card, sends the job's words to it in SPI frames
+// (card::CardClient over the pin-level master), runs it to its end and takes
+// the final state from a POLL reply, while watching its pins every cycle.
+// Throws std::runtime_error when the VCD cannot be written.
 CardRun run_on_sim(const CardJob& job, const SimRunOptions& options);
+
+// The parts of a run shared by every transport.
+Fault host_fault(HostFault f, std::string message);
+// Status, counters and positions from the card's reply (positions absolute).
+void take_reply(CardRun& run, const card::Reply& reply);
+// The card's own fault first, then MOVE_COUNT (the card's counter, and the pins
+// when observed) against the plan.
+void add_card_faults(const CardJob& job, CardRun& run);
+// "x=1 y=2 z=3" over the machine's axes.
+std::string axes_text(const plan::PerAxis<int64_t>& p, const plan::Machine& m);
 
 }  // namespace cpstep::run

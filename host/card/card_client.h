@@ -1,0 +1,164 @@
+// The host's side of the card's SPI protocol (docs/PROTOCOL.md) over any Link:
+// command words go out as COMMANDS frames of whole commands that fit the room
+// the card announces, every reply is checked (CRC, magic, last_seq,
+// last_result), refused frames are sent again when that is safe, and the card's
+// state comes back in POLL replies.
+//
+// Order. The card does not order frames: if frame k is refused and k+1
+// accepted, k+1 runs without k. So with `confirm_each_frame` (the default) the
+// client learns each COMMANDS frame's result from a POLL before it sends the
+// next one, and resends a frame the card refused as damaged (BAD_CRC,
+// TRUNCATED) or for lack of room (NO_ROOM). Each such frame ends with a READ of
+// the card's id register (a *marker*): if the reply that carries a frame's
+// result is itself damaged, the result is lost (the next reply reports the POLL
+// in between), and the card's count of READ replies tells whether the frame ran
+// — the client waits until that count moves or the card's buffer is empty. So
+// nothing runs twice and nothing is skipped.
+//
+// Without `confirm_each_frame` (pipelined: `cpstep sim`, where frames are never
+// damaged) the next frame's own reply carries the result and no marker is sent;
+// a refusal seen there is an error, since the frame after it already went in.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <vector>
+
+#include "card/frame.h"
+#include "card/link.h"
+
+namespace cpstep::card {
+
+// The card refused a frame in a way the client does not repair (with its code
+// name), stopped answering, or was reset during the session.
+class CardError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct ClientOptions {
+  unsigned axes = 4;              // the card's N (the reply has 7 + N words)
+  size_t max_frame_words = 0;     // at most this many words per frame (marker included); 0: no limit of
+                                  // the host's (the card's free words always limit)
+  double poll_interval_s = 1e-3;  // between POLLs while waiting for room, a lost result or the end
+  bool confirm_each_frame = true; // see above
+  unsigned max_retries = 16;      // a frame damaged this many times in a row, or this many bad replies
+                                  // in a row: CardError
+};
+
+// What went over the link.
+struct LinkStats {
+  uint64_t transfers = 0;       // CS-low periods (frames of any kind)
+  uint64_t command_frames = 0;  // COMMANDS frames, resends included
+  uint64_t polls = 0;           // POLL frames
+  uint64_t bytes = 0;           // bytes clocked out (and in): frames padded to a whole reply
+  uint64_t words = 0;           // command words the card accepted (markers not included)
+  uint64_t markers = 0;         // marker READs the card accepted
+  uint64_t resent = 0;          // COMMANDS frames sent again
+  uint64_t damaged = 0;         // frames of ours the card refused as BAD_CRC or TRUNCATED
+  uint64_t no_room = 0;         // frames of ours refused with NO_ROOM
+  uint64_t bad_replies = 0;     // replies with a CRC mismatch or without the magic byte
+  uint64_t lost_results = 0;    // COMMANDS frames whose result reply was damaged (settled by the marker)
+  uint64_t waits = 0;           // waits of poll_interval_s
+};
+
+class CardClient {
+ public:
+  // Called with the latest good reply before each wait; false gives up the wait
+  // (send and wait_until_stopped then return early).
+  using KeepWaiting = std::function<bool(const Reply&)>;
+
+  explicit CardClient(Link& link, ClientOptions options = {});
+
+  // POLLs until a good reply comes (at most max_retries bad ones) and returns it.
+  const Reply& poll();
+
+  // Sends `words` (whole commands, docs/CORE.md) in order, in frames that fit the
+  // card's free words. With confirm_each_frame it returns when every frame is
+  // accepted; pipelined, the last frame's result is learned by the next transfer.
+  // Returns the number of words handed to frames: words.size() unless
+  // keep_waiting gave up. Throws CardError (a refusal named by its code), LinkError,
+  // std::invalid_argument (the stream ends inside a command).
+  size_t send(std::span<const uint32_t> words, const KeepWaiting& keep_waiting = nullptr);
+
+  // Learns the result of the last frame sent, resending it if it was refused as
+  // damaged or for room. false: keep_waiting gave up.
+  bool settle(const KeepWaiting& keep_waiting = nullptr);
+
+  // Settles, then POLLs every poll_interval_s until the card is not running and
+  // its command buffer is empty. false: keep_waiting gave up.
+  bool wait_until_stopped(const KeepWaiting& keep_waiting = nullptr);
+
+  // The latest good reply (after at least one poll or frame), and the first.
+  [[nodiscard]] const Reply& last() const { return last_; }
+  [[nodiscard]] const Reply& first() const { return first_; }
+  [[nodiscard]] bool has_reply() const { return have_reply_; }
+  [[nodiscard]] const LinkStats& stats() const { return stats_; }
+  [[nodiscard]] const ClientOptions& options() const { return o_; }
+  Link& link() { return link_; }
+
+ private:
+  enum class Kind { none, poll, commands };
+  struct Sent {
+    Kind kind = Kind::none;
+    uint8_t seq = 0;
+    size_t nwords = 0;
+  };
+  enum class State { sent, lost, refused };
+  struct Pending {
+    std::vector<uint32_t> words;  // the frame's words (marker included)
+    size_t caller_words = 0;      // of them, the caller's
+    uint8_t seq = 0;
+    uint16_t reads = 0;           // READ commands among them
+    State state = State::sent;
+    uint8_t refusal = 0;          // FrameResult when refused
+  };
+
+  bool poll_once();
+  void send_frame(std::vector<uint32_t> frame_words, size_t caller_words);
+  bool on_reply(std::span<const uint8_t> miso, const Sent& sent);
+  void resolve(const Reply& r, const Sent& sent);
+  bool settle_lost(const KeepWaiting& keep);
+  bool wait_for_room(size_t n, const KeepWaiting& keep);
+  bool pause(const KeepWaiting& keep);
+  [[nodiscard]] size_t room() const;
+  [[nodiscard]] size_t marker_words() const { return o_.confirm_each_frame ? 1 : 0; }
+
+  Link& link_;
+  ClientOptions o_;
+  LinkStats stats_;
+  Reply last_, first_;
+  bool have_reply_ = false;
+  size_t unaccounted_ = 0;        // words sent since the transfer of last_ (its own included)
+  Sent prev_;                     // the previous transfer: the next reply reports on it
+  uint64_t transfers_done_ = 0;
+  std::optional<Pending> pending_;
+  uint16_t reads_expected_ = 0;   // the card's READ count once every accepted READ has run
+  uint8_t next_seq_ = 1;
+  unsigned bad_in_a_row_ = 0, damaged_in_a_row_ = 0;
+};
+
+// Whether a card is stalled: stopped, its command buffer holding words and its
+// free words unchanged for longer than `limit` (in the caller's unit of time:
+// cycles or seconds). Fed every reply the host waits on.
+class StallWatch {
+ public:
+  explicit StallWatch(double limit) : limit_(limit) {}
+  bool stalled(const Reply& r, double now) {
+    if ((r.status & 1) || !(r.flags & reply_flag::busy) || int(r.free_words) != free_) {
+      since_ = now;
+      free_ = r.free_words;
+    }
+    return now - since_ > limit_;
+  }
+
+ private:
+  double limit_, since_ = 0;
+  int free_ = -1;
+};
+
+}  // namespace cpstep::card

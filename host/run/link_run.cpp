@@ -1,0 +1,113 @@
+#include "run/link_run.h"
+
+#include <fmt/format.h>
+
+namespace cpstep::run {
+
+namespace {
+
+// A stopped card whose command buffer stays full this long is stalled (as the
+// sim's 10^6 cycles at 48 MHz).
+constexpr double kStallSeconds = 0.02;
+
+}  // namespace
+
+CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& o) {
+  CardRun run;
+  run.pins_observed = false;
+  card::ClientOptions co = o.client;
+  co.axes = plan::kAxes;
+  card::CardClient client(link, co);
+  const double t0 = link.now_s();
+  const auto finish = [&] {
+    run.link = {"spidev", link.name(), client.stats(), o.sck_hz, 0, 0, link.now_s() - t0};
+    run.sim_cycles = 0;
+    return run;
+  };
+
+  card::Reply first;
+  try {
+    first = client.poll();
+  } catch (const card::CardError& e) {
+    run.faults.push_back(host_fault(HostFault::link, fmt::format("{}; nothing was sent", e.what())));
+    return finish();
+  }
+  for (int a = 0; a < plan::kAxes; ++a) run.start_position[a] = first.positions[size_t(a)];
+  const card::Status st0 = card::decode_status(first.status);
+  std::string refuse;
+  if (st0.running) refuse = "the card is running";
+  else if (first.flags & card::reply_flag::busy) refuse = "the card's command buffer holds words";
+  else if (first.flags & card::reply_flag::estop) refuse = "the card's E-stop input is active";
+  if (!refuse.empty()) {
+    take_reply(run, first);
+    run.faults.push_back(host_fault(HostFault::link, fmt::format("{}; nothing was sent", refuse)));
+    return finish();
+  }
+  std::vector<uint32_t> words;
+  if (st0.fault) card::encode_control(false, false, true, words);  // CLEAR the fault left latched
+  words.insert(words.end(), job.words.begin(), job.words.end());
+
+  const double timeout = o.timeout_s > 0 ? o.timeout_s : 2 * job.planned.stats.duration_s + 10;
+  enum class GaveUp { no, out_of_time, stalled } gave_up = GaveUp::no;
+  card::StallWatch stall(kStallSeconds);
+  const auto keep_waiting = [&](const card::Reply& r) {
+    const double now = link.now_s();
+    if (o.progress) o.progress(r.moves - first.moves, job.moves());
+    if (now - t0 >= timeout) gave_up = GaveUp::out_of_time;
+    else if (stall.stalled(r, now)) gave_up = GaveUp::stalled;
+    return gave_up == GaveUp::no;
+  };
+  size_t sent = 0;
+  try {
+    sent = client.send(words, keep_waiting);
+    if (sent == words.size()) client.wait_until_stopped(keep_waiting);
+    if (gave_up == GaveUp::out_of_time) {
+      std::vector<uint32_t> abort;
+      card::encode_control(false, true, false, abort);
+      const double until = link.now_s() + 1;
+      client.send(abort, [&](const card::Reply&) { return link.now_s() < until; });
+      client.settle([&](const card::Reply&) { return link.now_s() < until; });
+    }
+  } catch (const card::CardError& e) {
+    run.faults.push_back(host_fault(HostFault::link, e.what()));
+  }
+  if (gave_up == GaveUp::out_of_time)
+    run.faults.push_back(host_fault(HostFault::timeout,
+                                    fmt::format("the card was still running after {:.3f} s; the host sent "
+                                                "CONTROL abort",
+                                                timeout)));
+  else if (gave_up == GaveUp::stalled)
+    run.faults.push_back(host_fault(HostFault::stall,
+                                    fmt::format("the card, stopped, took no command word for {:.3f} s "
+                                                "(word {} of {} sent)",
+                                                kStallSeconds, sent, words.size())));
+  try {
+    take_reply(run, client.poll());
+    const card::Reply& last = client.last();
+    run.moves_done = last.moves - first.moves;
+    run.segments_done = last.segments - first.segments;
+    run.stretch_count = last.stretch - first.stretch;
+  } catch (const card::CardError& e) {
+    run.faults.push_back(host_fault(HostFault::link, e.what()));
+  }
+  if (o.progress) o.progress(run.moves_done, job.moves());
+
+  add_card_faults(job, run);
+  if (!job.checkpoints.empty()) {
+    plan::PerAxis<int64_t> want{}, moved{};
+    for (int a = 0; a < plan::kAxes; ++a) {
+      want[a] = job.checkpoints.back().position[a];
+      moved[a] = run.position[a] - run.start_position[a];
+    }
+    if (moved != want)
+      run.faults.push_back(host_fault(HostFault::position,
+                                      fmt::format("the card moved {} (from {} to {}) but the plan moves {}",
+                                                  axes_text(moved, job.machine),
+                                                  axes_text(run.start_position, job.machine),
+                                                  axes_text(run.position, job.machine),
+                                                  axes_text(want, job.machine))));
+  }
+  return finish();
+}
+
+}  // namespace cpstep::run

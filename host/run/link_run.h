@@ -1,0 +1,33 @@
+// Runs a CardJob on a card over any card::Link — the transport `spidev` of
+// `cpstep run`, and the same code over the simulated card in the tests. Nothing
+// of the card's pins is seen: what the run reports is what the card's replies say.
+#pragma once
+
+#include <functional>
+
+#include "card/card_client.h"
+#include "card/link.h"
+#include "run/card_job.h"
+#include "run/sim_run.h"
+
+namespace cpstep::run {
+
+struct LinkRunOptions {
+  card::ClientOptions client;  // axes is set to the machine's card (4)
+  double timeout_s = 0;        // on the link's clock; 0: twice the planned job time plus 10 s
+  double sck_hz = 0;           // the SCK rate, for the report
+  // Called with (moves done, moves planned) at every wait.
+  std::function<void(uint64_t, uint64_t)> progress;
+};
+
+// Polls the card; refuses to start (a LINK fault, nothing sent) when no card
+// answers, when it is running or holds words, or when its E-stop input is
+// active; clears a fault it has latched (CONTROL clear before the job's words);
+// sends the job; waits until it stopped; takes the final state from a POLL.
+// Counters are the job's (the card's minus their values before it); positions
+// are the card's, and the job's end is checked as start + the plan's end. A run
+// longer than the timeout is stopped with CONTROL abort (it runs after the words
+// already in the card's buffer) and reported as TIMEOUT.
+CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& options);
+
+}  // namespace cpstep::run
