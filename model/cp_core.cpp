@@ -47,6 +47,7 @@ int64_t sext16(uint32_t x) { return int64_t(int16_t(uint16_t(x))); }
 CpCore::CpCore(Params params)
     : p_(params),
       mask_tw_(mask(params.tw)),
+      aw_(CpEngineParams{params.w}.aw()),  // the engine's and the banks' AW
       engine_(CpEngineParams{params.w, 0, 1, params.umax}),
       seg_fifo_({29 + params.n, params.saw + clog2(params.n + 1)}),
       run_fifo_({2 + 2 * params.n, 1}),
@@ -58,12 +59,10 @@ CpCore::CpCore(Params params)
   if (p_.tw < 1 || p_.tw > 16) throw std::invalid_argument("cp_core: TW must be 1 to 16");
   if (p_.pw < 32) throw std::invalid_argument("cp_core: PW must be at least 32");
   if (p_.caw < 1 || p_.caw > 15) throw std::invalid_argument("cp_core: CAW must be 1 to 15");
-  banks_.assign(p_.n, std::vector<uint8_t>(size_t(2) << aw(), 0));
+  banks_.assign(p_.n, std::vector<uint8_t>(size_t(2) << aw_, 0));
   pulses_.assign(p_.n, CpPulse({p_.tw, p_.pw, p_.step_pol_reset, p_.dir_pol_reset}));
   reset_control(r_);
 }
-
-unsigned CpCore::aw() const { return p_.w > 2 ? clog2(p_.w) : 1; }
 
 // A pulse timer's inputs are the core's configuration and direction registers.
 CpPulseIn CpCore::pulse_in(unsigned a, uint32_t step) const {
@@ -369,7 +368,7 @@ void CpCore::build(const View& v, Regs& d, Cycle& c) const {
         c.bank_we = 1u << q.b_axis;
         c.bank_waddr = q.cap_addr;
         c.bank_wbit = v.engine.move;
-        d.cap_addr = (q.cap_addr + 1) & mask(aw());
+        d.cap_addr = (q.cap_addr + 1) & mask(aw_);
         c.cap_done = v.engine.move_pend;
       }
       if (v.engine.err) {
@@ -451,7 +450,7 @@ void CpCore::run(const View& v, Regs& d, Cycle& c) const {
     if (!seg_done) {
       c.bank_re = true;
       for (unsigned a = 0; a < p_.n; ++a)
-        c.rp_next[a] = q.rp_ptr[a] == q.lm1[q.cur_lane][a] ? 0 : (q.rp_ptr[a] + 1) & mask(aw());
+        c.rp_next[a] = q.rp_ptr[a] == q.lm1[q.cur_lane][a] ? 0 : (q.rp_ptr[a] + 1) & mask(aw_);
     }
   }
   if (seg_done) {
@@ -592,7 +591,7 @@ void CpCore::tick() {
   engine_.in.move_ready = c.eng_move_ready;
   engine_.tick();
   // Pattern banks: the builder writes the build lane, the replay reads the running one.
-  const uint32_t half = 1u << aw();
+  const uint32_t half = 1u << aw_;
   if (c.bank_re) {
     uint32_t bits = 0;
     for (unsigned a = 0; a < n; ++a)

@@ -132,7 +132,6 @@ class CpCore {
     std::array<CpPulseOut, kCoreMaxAxes> pulse;
   };
 
-  unsigned aw() const;  // pattern bank address width
 
   void reset_control(Regs& d) const;
   bool cmd_ready() const;
@@ -149,6 +148,7 @@ class CpCore {
 
   Params p_;
   uint32_t mask_tw_;
+  unsigned aw_;  // pattern bank address width, as the RTL's AW
   CpEngine engine_;
   // Axis a's pattern bank: lane l's pattern at l·2^AW + address; the replay
   // registers (bit a: axis a's next move).

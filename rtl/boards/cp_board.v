@@ -1,11 +1,21 @@
-// cp_board — what every board top shares: the reset after the PLL locks, the
+// cp_board — what every iCE40 board top shares: the PLL from the 12 MHz
+// oscillator, the SPI MISO and E-stop pads, the reset after the PLL locks, the
 // card (cp_card), the drivers' ENABLE polarity and the two status LEDs. A board
-// top (rtl/boards/<board>/) adds only its PLL and its pads.
+// top (rtl/boards/<board>/) only names its pins and picks the parameters.
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none
 
 module cp_board #(
+    // 1: the oscillator is on the PLL's own pad (SB_PLL40_PAD), 0: any clock pin
+    // (SB_PLL40_CORE).
+    parameter [0:0] PLL_PAD = 1'b1,
+    // PLL: F_out = 12 MHz · (DIVF + 1) / (2^DIVQ · (DIVR + 1)) (icepll's figures;
+    // scripts/synth sets them).
+    parameter [3:0] PLL_DIVR = 4'd0,
+    parameter [6:0] PLL_DIVF = 7'd63,
+    parameter [2:0] PLL_DIVQ = 3'd4,
+    parameter [2:0] PLL_FILTER = 3'd1,
     parameter integer N = 4,
     parameter integer W = 1024,
     parameter integer UMAX = 1048575,
@@ -17,15 +27,13 @@ module cp_board #(
     // want low: their EN/ENABLE input is active low).
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
-    input  wire         clk,
-    input  wire         pll_lock,
+    input  wire         osc_i,          // the 12 MHz oscillator's pin
     input  wire         btn_n,          // reset button, active low (tie high if none)
     input  wire         spi_sck_i,
     input  wire         spi_cs_n_i,
     input  wire         spi_mosi_i,
-    output wire         spi_miso_o,
-    output wire         spi_miso_oe_o,
-    input  wire         estop_i,        // high: E-stop (open loop)
+    inout  wire         spi_miso_io,    // driven only while CS is low
+    input  wire         estop_loop_i,   // E-stop loop: NC switch to ground, pulled up here
     output wire [N-1:0] step_o,
     output wire [N-1:0] dir_o,
     output wire [N-1:0] enable_o,
@@ -33,6 +41,38 @@ module cp_board #(
     output wire         led_fault_n_o   // on while a fault is latched, blinking at E-stop
 );
 
+// ---------------------------------------------------------------- clock
+wire clk, pll_lock;
+generate
+    if (PLL_PAD) begin : g_pll_pad
+        SB_PLL40_PAD #(
+            .FEEDBACK_PATH("SIMPLE"),
+            .DIVR(PLL_DIVR), .DIVF(PLL_DIVF), .DIVQ(PLL_DIVQ), .FILTER_RANGE(PLL_FILTER)
+        ) u_pll (
+            .PACKAGEPIN(osc_i), .PLLOUTGLOBAL(clk), .LOCK(pll_lock),
+            .RESETB(1'b1), .BYPASS(1'b0),
+            .EXTFEEDBACK(1'b0), .DYNAMICDELAY(8'd0), .LATCHINPUTVALUE(1'b0),
+            .SDI(1'b0), .SCLK(1'b0));
+    end else begin : g_pll_core
+        SB_PLL40_CORE #(
+            .FEEDBACK_PATH("SIMPLE"),
+            .DIVR(PLL_DIVR), .DIVF(PLL_DIVF), .DIVQ(PLL_DIVQ), .FILTER_RANGE(PLL_FILTER)
+        ) u_pll (
+            .REFERENCECLK(osc_i), .PLLOUTGLOBAL(clk), .LOCK(pll_lock),
+            .RESETB(1'b1), .BYPASS(1'b0),
+            .EXTFEEDBACK(1'b0), .DYNAMICDELAY(8'd0), .LATCHINPUTVALUE(1'b0),
+            .SDI(1'b0), .SCLK(1'b0));
+    end
+endgenerate
+
+// ---------------------------------------------------------------- pads
+wire miso, miso_oe, estop;
+SB_IO #(.PIN_TYPE(6'b1010_01)) u_miso (
+    .PACKAGE_PIN(spi_miso_io), .OUTPUT_ENABLE(miso_oe), .D_OUT_0(miso));
+SB_IO #(.PIN_TYPE(6'b0000_01), .PULLUP(1'b1)) u_estop (
+    .PACKAGE_PIN(estop_loop_i), .D_IN_0(estop));
+
+// ---------------------------------------------------------------- reset
 // Reset for 2^8 clocks after the PLL locks and while the button is held.
 reg [1:0] btn_q = 2'b00;
 reg [8:0] por_q = 9'd0;
@@ -49,8 +89,8 @@ wire [N*32-1:0] position;
 cp_card #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW)) u_card (
     .clk(clk), .rst(rst),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
-    .spi_miso_o(spi_miso_o), .spi_miso_oe_o(spi_miso_oe_o),
-    .estop_i(estop_i),
+    .spi_miso_o(miso), .spi_miso_oe_o(miso_oe),
+    .estop_i(estop),
     .step_o(step_o), .dir_o(dir_o), .enable_o(enable),
     .running_o(running), .fault_o(fault),
     .err_code_o(err_code), .stretched_o(stretched), .position_o(position));
@@ -62,7 +102,7 @@ assign enable_o = {N{enable == ENABLE_ACTIVE_HIGH}};
 reg [23:0] blink_q = 24'd0;
 always @(posedge clk) blink_q <= blink_q + 1'b1;
 assign led_run_n_o   = !running;
-assign led_fault_n_o = !(fault && !(estop_i && blink_q[23]));
+assign led_fault_n_o = !(fault && !(estop && blink_q[23]));
 
 endmodule
 

@@ -33,27 +33,13 @@ module cp_hx8k #(
     input  wire         ESTOP_LOOP
 );
 
-wire clk, pll_lock;
-SB_PLL40_CORE #(
-    .FEEDBACK_PATH("SIMPLE"),
-    .DIVR(PLL_DIVR), .DIVF(PLL_DIVF), .DIVQ(PLL_DIVQ), .FILTER_RANGE(PLL_FILTER)
-) u_pll (
-    .REFERENCECLK(CLK), .PLLOUTGLOBAL(clk), .LOCK(pll_lock),
-    .RESETB(1'b1), .BYPASS(1'b0),
-    .EXTFEEDBACK(1'b0), .DYNAMICDELAY(8'd0), .LATCHINPUTVALUE(1'b0),
-    .SDI(1'b0), .SCLK(1'b0));
-
-wire miso, miso_oe, estop_pad, led_run_n, led_fault_n;
-SB_IO #(.PIN_TYPE(6'b1010_01)) u_miso (
-    .PACKAGE_PIN(SPI_MISO), .OUTPUT_ENABLE(miso_oe), .D_OUT_0(miso));
-SB_IO #(.PIN_TYPE(6'b0000_01), .PULLUP(1'b1)) u_estop (
-    .PACKAGE_PIN(ESTOP_LOOP), .D_IN_0(estop_pad));
-
-cp_board #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
-           .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
-    .clk(clk), .pll_lock(pll_lock), .btn_n(1'b1),
-    .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI),
-    .spi_miso_o(miso), .spi_miso_oe_o(miso_oe), .estop_i(estop_pad),
+wire led_run_n, led_fault_n;
+cp_board #(.PLL_PAD(1'b0), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(PLL_DIVQ),
+           .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
+           .SAW(SAW), .TW(TW), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
+    .osc_i(CLK), .btn_n(1'b1),
+    .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
+    .estop_loop_i(ESTOP_LOOP),
     .step_o(STEP), .dir_o(DIR), .enable_o(ENABLE),
     .led_run_n_o(led_run_n), .led_fault_n_o(led_fault_n));
 

@@ -45,30 +45,12 @@ module cp_icebreaker #(
     input  wire         ESTOP_LOOP
 );
 
-// ---------------------------------------------------------------- clock and reset
-wire clk, pll_lock;
-SB_PLL40_PAD #(
-    .FEEDBACK_PATH("SIMPLE"),
-    .DIVR(PLL_DIVR), .DIVF(PLL_DIVF), .DIVQ(PLL_DIVQ), .FILTER_RANGE(PLL_FILTER)
-) u_pll (
-    .PACKAGEPIN(CLK), .PLLOUTGLOBAL(clk), .LOCK(pll_lock),
-    .RESETB(1'b1), .BYPASS(1'b0),
-    .EXTFEEDBACK(1'b0), .DYNAMICDELAY(8'd0), .LATCHINPUTVALUE(1'b0),
-    .SDI(1'b0), .SCLK(1'b0));
-
-// ---------------------------------------------------------------- pads
-wire miso, miso_oe, estop_pad;
-SB_IO #(.PIN_TYPE(6'b1010_01)) u_miso (
-    .PACKAGE_PIN(SPI_MISO), .OUTPUT_ENABLE(miso_oe), .D_OUT_0(miso));
-SB_IO #(.PIN_TYPE(6'b0000_01), .PULLUP(1'b1)) u_estop (
-    .PACKAGE_PIN(ESTOP_LOOP), .D_IN_0(estop_pad));
-
-// ---------------------------------------------------------------- the card
-cp_board #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
-           .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
-    .clk(clk), .pll_lock(pll_lock), .btn_n(BTN_N),
-    .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI),
-    .spi_miso_o(miso), .spi_miso_oe_o(miso_oe), .estop_i(estop_pad),
+cp_board #(.PLL_PAD(1'b1), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(PLL_DIVQ),
+           .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
+           .SAW(SAW), .TW(TW), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
+    .osc_i(CLK), .btn_n(BTN_N),
+    .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
+    .estop_loop_i(ESTOP_LOOP),
     .step_o(STEP), .dir_o(DIR), .enable_o(ENABLE),
     .led_run_n_o(LEDG_N), .led_fault_n_o(LEDR_N));
 
