@@ -1,10 +1,11 @@
 // cp_core — cycle-accurate, bit-exact model of rtl/cp_core.v, the motion core.
 //
 // Written from docs/CORE.md ("Cycle behaviour" states every rule it follows). Like
-// the RTL it is built from the sub-blocks' own models — 2·N CpEngines (lane l, axis
-// a is engine l·N + a), N CpPulses and three CpFifos (segments, built segments,
-// chunks) — with the core's own logic on top: the command parser and validator,
-// the builder, the runner with its move-event timer, status and faults.
+// the RTL it is built from the sub-blocks' own models — one CpEngine (the pattern
+// builder), N CpPulses and three CpFifos (segment words, built segments, chunks) —
+// with the core's own logic on top: the command parser and validator, the builder
+// and the pattern banks, the replay, the runner with its move-event timer, status
+// and faults.
 // The bench sets `in`, reads outputs() (the pins before the rising edge), then
 // calls tick() (the edge).
 #pragma once

@@ -1,6 +1,7 @@
-// cp_core — the motion core: command port, segment and chunk queues, two lanes
-// of Castle–Pitteway engines (one engine per axis per lane, double buffering),
-// the move-event timer, per-axis pulse timing, status and faults.
+// cp_core — the motion core: command port, segment and chunk queues, one
+// Castle–Pitteway engine that builds every axis's pattern into that axis's
+// two-lane pattern bank (double buffering), the replay, the move-event timer,
+// per-axis pulse timing, status and faults.
 //
 // docs/CORE.md is the contract: the command words, the validation and fault
 // codes, and the cycle behaviour the golden model (model/cp_core.*) follows.
@@ -11,7 +12,7 @@
 module cp_core #(
     // Number of axes (x y z a ...).
     parameter integer N = 4,
-    // Pattern capacity of every engine: the longest pattern U/gcd(U, v).
+    // Pattern capacity of the engine and the banks: the longest pattern U/gcd(U, v).
     parameter integer W = 1024,
     // Largest move count U of a segment (before doubling).
     parameter integer UMAX = 1048575,
