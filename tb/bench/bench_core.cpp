@@ -250,10 +250,13 @@ void build_latency() {
              "one chunk, interval 1, count U) is sent. Latency = cycles from the cycle the segment's "
              "last command word is taken to the cycle of its first leading STEP edge. After that word "
              "the card checks the chunk's last delay, one cycle per bit of count − 1 (*check bits*); "
-             "the engines build in about U/gcd + 1 cycles (docs/ENGINE.md); the rest is the core's "
-             "fixed path (commit, segment queue, builder, lane hand-over, pulse).\n\n");
-  fmt::print("| U | v (y) | U/gcd | check bits | latency (cycles) | latency − U/gcd − check bits |\n"
-             "|---:|---:|---:|---:|---:|---:|\n");
+             "the builder then takes the four axes in turn (docs/CORE.md \"Builder\"): a constant "
+             "pattern (v = 0 or v = U) costs 1 cycle, any other 2·U/gcd + 1 (the engine's build, "
+             "then its first period copied into the bank), so *build* = 3 + that of y; the rest is "
+             "the core's fixed path (commit, segment queue, builder start, load, replay, pulse).\n\n");
+  fmt::print("| U | v (y) | U/gcd | check bits | build (cycles) | latency (cycles) | "
+             "latency − build − check bits |\n"
+             "|---:|---:|---:|---:|---:|---:|---:|\n");
   const auto row = [](uint32_t u, uint32_t vy) {
     Bench b;
     b.start();
@@ -264,7 +267,9 @@ void build_latency() {
     const int64_t latency = int64_t(b.pins.rises[0].front() - last_word);
     const uint32_t n = u / std::gcd(u, vy);
     const int bits = std::bit_width(u - 1);
-    fmt::print("| {} | {} | {} | {} | {} | {} |\n", u, vy, n, bits, latency, latency - n - bits);
+    const int64_t build = 3 + (vy == u || vy == 0 ? 1 : 2 * int64_t(n) + 1);
+    fmt::print("| {} | {} | {} | {} | {} | {} | {} |\n", u, vy, n, bits, build, latency,
+               latency - build - bits);
   };
   for (uint32_t u : {1u, 2u, 8u, 64u, 1024u}) row(u, 1);
   for (uint32_t u : {64u, 1024u}) row(u, u);  // a constant pattern
