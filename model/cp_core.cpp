@@ -86,6 +86,8 @@ CpCore::Out CpCore::outputs() const {
   o.cmd_ready = cmd_ready();
   o.rsp_valid = q.rsp_valid;
   o.rsp_data = q.rsp_valid ? q.rsp_data : 0;
+  o.rsp_addr = q.rsp_valid ? q.rsp_addr : 0;
+  o.rd_data = read_register(in.rd_addr & 0xFF);
   for (unsigned a = 0; a < p_.n; ++a) {
     CpPulse pulse = pulses_[a];
     pulse.in = pulse_in(a, 0);
@@ -108,7 +110,8 @@ CpCore::Out CpCore::outputs() const {
   return o;
 }
 
-// READ's registers, as they are in the cycle the READ word is taken.
+// READ's registers, as they are in the cycle the READ word is taken (or the
+// read port names them).
 uint32_t CpCore::read_register(uint32_t reg) const {
   const Regs& q = r_;
   switch (reg) {
@@ -180,6 +183,7 @@ void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
         case kOpRead:
           d.rsp_valid = true;
           d.rsp_data = read_register(word & 0xFF);
+          d.rsp_addr = word & 0xFF;
           d.parse = Parse::reply;
           break;
         default: c.raise(CoreError::bad_opcode); break;

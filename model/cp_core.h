@@ -81,7 +81,7 @@ class CpCore {
     // pass 2 (count-1)·(add + last increment); both fit 49 bits, never wrap.
     int64_t product = 0, mul_b = 0;
     uint32_t mul_a = 0;
-    uint32_t rsp_data = 0;
+    uint32_t rsp_data = 0, rsp_addr = 0;
     bool cur_end = false;
     uint32_t delay = 0, moves_left = 0, elapsed = 0;
     uint32_t timer_inc = 0;   // the running increment, 32 bits (signed, mod 2^32)

@@ -27,12 +27,15 @@ struct CpCoreIn {
   uint32_t cmd_data = 0;
   bool rsp_ready = false;
   bool estop = false;
+  uint32_t rd_addr = 0;  // the read port's register (8 bits)
 };
 
 struct CpCoreOut {
   bool cmd_ready = false;
   bool rsp_valid = false;
   uint32_t rsp_data = 0;
+  uint32_t rsp_addr = 0;  // the register the reply names
+  uint32_t rd_data = 0;   // the read port: register rd_addr, now
   uint32_t step = 0, dir = 0;  // bit i: axis i's pin
   bool running = false, fault = false, stretched = false;
   uint32_t err_code = 0;

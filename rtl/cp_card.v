@@ -22,6 +22,8 @@ module cp_card #(
     parameter integer SAW = 2,
     // Width of the pulse timing fields.
     parameter integer TW = 16,
+    // The chunk check's multiplier: 0 bit-serial, 1 DSP blocks (docs/CORE.md).
+    parameter integer MUL_DSP = 0,
     // Command buffer address width: it holds 2^CBUF_AW words.
     parameter integer CBUF_AW = 9,
     // Pulse timing after reset, in clock cycles (the host configures the real ones).
@@ -66,26 +68,29 @@ always @(posedge clk) estop_q <= {estop_q[0], estop_i};
 wire estop = estop_q[1];
 
 wire        cmd_valid, cmd_ready, rsp_valid, rsp_ready;
-wire [31:0] cmd_data, rsp_data;
-wire [31:0] status, stretch_cnt, moves_done, segs_done;
+wire [31:0] cmd_data, rsp_data, rd_data, status, stretch_cnt, moves_done, segs_done;
+wire [7:0]  rsp_addr, rd_addr;
+// The core's READ reply data, status and counter outputs: the SPI front end reads
+// the same registers through the core's read port instead.
+wire unused_core = &{1'b0, rsp_data, status, stretch_cnt, moves_done, segs_done};
 
 cp_spi #(.N(N), .CBUF_AW(CBUF_AW)) u_spi (
     .clk(clk), .rst(rst),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
     .spi_miso_o(spi_miso_o), .spi_miso_oe_o(spi_miso_oe_o),
     .cmd_valid_o(cmd_valid), .cmd_ready_i(cmd_ready), .cmd_data_o(cmd_data),
-    .rsp_valid_i(rsp_valid), .rsp_ready_o(rsp_ready), .rsp_data_i(rsp_data),
-    .estop_i(estop), .enable_i(enable_o),
-    .status_i(status), .stretch_cnt_i(stretch_cnt), .moves_done_i(moves_done),
-    .segs_done_i(segs_done), .position_i(position_o));
+    .rsp_valid_i(rsp_valid), .rsp_ready_o(rsp_ready), .rsp_addr_i(rsp_addr),
+    .rd_addr_o(rd_addr), .rd_data_i(rd_data),
+    .estop_i(estop), .enable_i(enable_o));
 
-cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32),
+cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32), .MUL_DSP(MUL_DSP),
           .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
           .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
           .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET)) u_core (
     .clk(clk), .rst(rst),
     .cmd_valid_i(cmd_valid), .cmd_ready_o(cmd_ready), .cmd_data_i(cmd_data),
     .rsp_valid_o(rsp_valid), .rsp_ready_i(rsp_ready), .rsp_data_o(rsp_data),
+    .rsp_addr_o(rsp_addr), .rd_addr_i(rd_addr), .rd_data_o(rd_data),
     .estop_i(estop),
     .step_o(step_o), .dir_o(dir_o),
     .running_o(running_o), .fault_o(fault_o), .err_code_o(err_code_o),

@@ -26,6 +26,9 @@ module cp_core #(
     parameter integer TW = 16,
     // Width of the position counters.
     parameter integer PW = 32,
+    // The chunk check's multiplier: 0 bit-serial in logic (one adder), 1 a hard
+    // multiplier (`*`: the iCE40 UP5K's SB_MAC16 DSP blocks). Same cycles either way.
+    parameter integer MUL_DSP = 0,
     // Pulse timing after reset, in clock cycles (the host configures the real ones).
     parameter integer STEP_HIGH_RESET = 1,
     parameter integer STEP_LOW_RESET = 1,
@@ -46,6 +49,11 @@ module cp_core #(
     output wire          rsp_valid_o,
     input  wire          rsp_ready_i,
     output wire [31:0]   rsp_data_o,
+    output wire [7:0]    rsp_addr_o,       // the register the reply names
+    // A second read of the READ registers, combinational, at any time (the SPI
+    // front end's reply words).
+    input  wire [7:0]    rd_addr_i,
+    output wire [31:0]   rd_data_o,
 
     // E-stop, synchronous to clk, active high.
     input  wire          estop_i,
@@ -137,6 +145,9 @@ generate
     if (CAW < 1 || CAW > 15) begin : g_check_caw
         cp_core_parameter_CAW_must_be_1_to_15 u_bad ();
     end
+    if (MUL_DSP < 0 || MUL_DSP > 1) begin : g_check_mul_dsp
+        cp_core_parameter_MUL_DSP_must_be_0_or_1 u_bad ();
+    end
 endgenerate
 
 // ---------------------------------------------------------------- state
@@ -181,8 +192,10 @@ reg [15:0]   add2_q, add2_d;
 reg [33:0]   sum_q, sum_d;               // chunk counts so far
 reg [MW-1:0] prod_q, prod_d;             // a product, built bit by bit
 reg [15:0]   mul_a_q, mul_a_d;           // multiplier bits left
-reg [MW-1:0] mul_b_q, mul_b_d;           // multiplicand, shifted
+reg [MW-1:0] mul_b_q, mul_b_d;           // multiplicand (shifted when bit-serial)
+reg [15:0]   mul_a0_q, mul_a0_d;         // the multiplier whole (MUL_DSP)
 reg [31:0]   rsp_data_q, rsp_data_d;
+reg [7:0]    rsp_addr_q, rsp_addr_d;
 reg          cur_end_q, cur_end_d;
 reg [31:0]   delay_q, delay_d;
 reg [15:0]   left_q, left_d;
@@ -255,7 +268,7 @@ wire           dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter, dbg_m1_rev, dbg
 wire [AW-1:0]  dbg_waddr1, dbg_waddr2, dbg_m1_lo, dbg_m1_len, dbg_m2_lo, dbg_m2_len;
 wire [UW-1:0]  dbg_x, dbg_y;
 
-cp_engine #(.W(W), .UMAX(UMAX), .KMAX(0), .RW(1)) u_engine (
+cp_engine #(.W(W), .UMAX(UMAX), .KMAX(0), .RW(1), .ONE_PERIOD(1)) u_engine (
     .clk(clk), .rst(rst || eng_rst),
     .in_valid_i(eng_in_valid), .in_ready_o(eng_in_ready),
     .in_u_i(b_u_q), .in_v_i(head_val[UW-1:0]), .in_k_i(1'b0), .in_rep_i(1'b1),
@@ -336,6 +349,14 @@ wire [MW:0]   last_delay = {{(MW-31){1'b0}}, interval_q} + {{2{prod_q[MW-1]}}, p
 wire [MW-1:0] add_sx   = {{(MW-16){add_q[15]}}, add_q};
 // Pass 1: prod = (count-2)*add2; the last increment add + prod.
 wire [MW-1:0] last_inc = add_sx + prod_q;
+// MUL_DSP: the whole product at once. Every multiplicand fits 34 signed bits
+// (2·add, add2, add + last increment: |.| < 2^32 + 2^16), the multiplier 16
+// unsigned; the product is taken mod 2^MW like the bit-serial one.
+wire signed [16:0] mul_sa   = {1'b0, mul_a0_q};
+wire signed [33:0] mul_sb   = mul_b_q[33:0];
+wire signed [50:0] mul_full = mul_sa * mul_sb;
+wire [MW-1:0]      mul_prod = mul_full[MW-1:0];
+wire unused_mul = &{1'b0, mul_full[50:MW]};
 wire          inc_flip = (!add_q[15] && add_q != 16'd0 && last_inc[MW-1]) ||
                          (add_q[15] && !last_inc[MW-1] && last_inc != {MW{1'b0}});
 
@@ -352,24 +373,30 @@ wire [31:0] status_word = {ch_level32 > 32'd255 ? 8'd255 : ch_level32[7:0],
 localparam [31:0] CAPS = {3'd0, TW[4:0], SAW[3:0], CAW[3:0], KMAX[7:0], N[7:0]};
 localparam [31:0] W_WORD = W;
 localparam [31:0] UMAX_WORD = UMAX;
-reg [31:0] read_value;
-integer    ri;
+// Two reads: [0] the READ command's, [1] the read port's.
+wire [7:0] read_addr [0:1];
+assign read_addr[0] = cmd_data_i[7:0];
+assign read_addr[1] = rd_addr_i;
+reg [31:0] read_value [0:1];
+integer    ri, rp;
 always @* begin
-    read_value = 32'd0;
-    case (cmd_data_i[7:0])
-    8'h00: read_value = status_word;
-    8'h20: read_value = CAPS;
-    8'h21: read_value = W_WORD;
-    8'h22: read_value = UMAX_WORD;
-    8'h01: read_value = stretch_cnt_q;
-    8'h02: read_value = moves_done_q;
-    8'h03: read_value = segs_done_q;
-    8'h1F: read_value = 32'h43505331;   // "CPS1"
-    default: begin
-        for (ri = 0; ri < N; ri = ri + 1)
-            if (cmd_data_i[7:0] == 8'h10 + ri[7:0]) read_value = pulse_pos[ri][31:0];
+    for (rp = 0; rp < 2; rp = rp + 1) begin
+        read_value[rp] = 32'd0;
+        case (read_addr[rp])
+        8'h00: read_value[rp] = status_word;
+        8'h20: read_value[rp] = CAPS;
+        8'h21: read_value[rp] = W_WORD;
+        8'h22: read_value[rp] = UMAX_WORD;
+        8'h01: read_value[rp] = stretch_cnt_q;
+        8'h02: read_value[rp] = moves_done_q;
+        8'h03: read_value[rp] = segs_done_q;
+        8'h1F: read_value[rp] = 32'h43505331;   // "CPS1"
+        default: begin
+            for (ri = 0; ri < N; ri = ri + 1)
+                if (read_addr[rp] == 8'h10 + ri[7:0]) read_value[rp] = pulse_pos[ri][31:0];
+        end
+        endcase
     end
-    endcase
 end
 
 // ---------------------------------------------------------------- next state
@@ -385,11 +412,12 @@ always @* begin
     discard_d   = discard_q;
     rsp_valid_d = rsp_valid_q && !rsp_ready_i;
     rsp_data_d  = rsp_data_q;
+    rsp_addr_d  = rsp_addr_q;
     hdr_end_d = hdr_end_q;  hdr_k_d = hdr_k_q;  seg_u_d = seg_u_q;
     nchunks_d = nchunks_q;  v_idx_d = v_idx_q;
     interval_d = interval_q;  count_d = count_q;  add_d = add_q;  add2_d = add2_q;  sum_d = sum_q;
     seg_add2_d = seg_add2_q;
-    prod_d = prod_q;  mul_a_d = mul_a_q;  mul_b_d = mul_b_q;
+    prod_d = prod_q;  mul_a_d = mul_a_q;  mul_b_d = mul_b_q;  mul_a0_d = mul_a0_q;
     running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
     cur_end_d = cur_end_q;  build_lane_d = build_lane_q;  ch_loaded_d = ch_loaded_q;
     late_d = late_q;  b_state_d = b_state_q;  rp_valid_d = rp_valid_q;  segq_d = segq_q;
@@ -452,7 +480,8 @@ always @* begin
         end
         OP_READ: begin
             rsp_valid_d = 1'b1;
-            rsp_data_d  = read_value;
+            rsp_data_d  = read_value[0];
+            rsp_addr_d  = cmd_data_i[7:0];
             p_state_d   = P_RSP;
         end
         default: begin
@@ -572,11 +601,20 @@ always @* begin
     default: p_state_d = P_CMD;
     endcase
 
-    // The chunk check's bit-serial multiplier: one bit of mul_a a cycle while any is left.
+    // The chunk check's multiplier: one bit of mul_a a cycle while any is left.
+    // Bit-serial, the product grows by the shifted multiplicand; MUL_DSP, it is
+    // the whole product of the operands, which hold still (a multiplier of 0
+    // takes no cycle and leaves the product 0, as bit-serial).
     if ((p_state_q == P_INC || p_state_q == P_MUL) && mul_a_q != 16'd0) begin
-        if (mul_a_q[0]) prod_d = prod_q + mul_b_q;
+        if (MUL_DSP != 0) begin
+            prod_d = mul_prod;
+        end else begin
+            if (mul_a_q[0]) prod_d = prod_q + mul_b_q;
+            mul_b_d = mul_b_q << 1;
+        end
         mul_a_d = mul_a_q >> 1;
-        mul_b_d = mul_b_q << 1;
+    end else begin
+        mul_a0_d = mul_a_d;
     end
 
     // ---- builder: the next committed segment's patterns into the build lane's banks
@@ -836,8 +874,8 @@ always @(posedge clk) begin
                 lm1_q[{build_lane_q, a[2:0]}] <= (b_state_q == B_CAP) ? cap_addr_q : {AW{1'b0}};
     interval_q <= interval_d;  count_q <= count_d;  add_q <= add_d;  add2_q <= add2_d;
     sum_q <= sum_d;  seg_add2_q <= seg_add2_d;
-    prod_q <= prod_d;  mul_a_q <= mul_a_d;  mul_b_q <= mul_b_d;
-    rsp_data_q <= rsp_data_d;  cur_end_q <= cur_end_d;
+    prod_q <= prod_d;  mul_a_q <= mul_a_d;  mul_b_q <= mul_b_d;  mul_a0_q <= mul_a0_d;
+    rsp_data_q <= rsp_data_d;  rsp_addr_q <= rsp_addr_d;  cur_end_q <= cur_end_d;
     delay_q <= delay_d;  left_q <= left_d;  tinc_q <= tinc_d;  tadd2_q <= tadd2_d;
     elapsed_q <= elapsed_d;
 end
@@ -850,6 +888,8 @@ assign cmd_ready_o = (p_state_q == P_CMD) ||
                      (p_state_q == P_C2 && (discard_q || fault_q || !ch_full));
 assign rsp_valid_o = rsp_valid_q;
 assign rsp_data_o  = rsp_valid_q ? rsp_data_q : 32'd0;
+assign rsp_addr_o  = rsp_valid_q ? rsp_addr_q : 8'd0;
+assign rd_data_o   = read_value[1];
 assign running_o   = running_q;
 assign fault_o     = fault_q;
 assign err_code_o  = err_q;

@@ -31,7 +31,12 @@ module cp_engine #(
     // Largest step-doubling exponent k accepted.
     parameter integer KMAX = 8,
     // Width of the replay multiplier rep (rep >= 1).
-    parameter integer RW = 16
+    parameter integer RW = 16,
+    // 1: the motion core's mode. The caller has validated the request (u, v, k
+    // and rep are not checked; only a pattern longer than W is refused), and one
+    // period of the pattern is all it takes: the stream ends with the first
+    // M2·reverse(M1) (move_last_o with move_pend_o), whatever x, k and rep.
+    parameter integer ONE_PERIOD = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -117,6 +122,9 @@ generate
     if (RW < 1 || RW > 32) begin : g_check_rw
         cp_engine_parameter_RW_must_be_1_to_32 u_bad ();
     end
+    if (ONE_PERIOD < 0 || ONE_PERIOD > 1) begin : g_check_one_period
+        cp_engine_parameter_ONE_PERIOD_must_be_0_or_1 u_bad ();
+    end
 endgenerate
 
 // ---------------------------------------------------------------- storage
@@ -200,7 +208,8 @@ wire issue  = state_q == S_REPLAY && !wp_q && (!move_valid_q || move_ready_i);
 
 reg [2:0] refuse_code;
 always @* begin
-    if (in_u_i == {UW{1'b0}})       refuse_code = ERR_U_ZERO;
+    if (ONE_PERIOD != 0)            refuse_code = ERR_NONE;
+    else if (in_u_i == {UW{1'b0}})  refuse_code = ERR_U_ZERO;
     else if (in_v_i > in_u_i)       refuse_code = ERR_V_GT_U;
     else if (in_u_i > UMAX_U)       refuse_code = ERR_U_GT_UMAX;
     else if (in_k_i > KMAX_K)       refuse_code = ERR_K_GT_KMAX;
@@ -351,13 +360,15 @@ always @* begin
             end
             move_valid_d = 1'b1;
             out_ph_d     = ph_q;
-            out_last_d   = pat_end && inner_q == 1 && outer_q == 1;
+            out_last_d   = pat_end && (ONE_PERIOD != 0 || (inner_q == 1 && outer_q == 1));
             out_pend_d   = pat_end;
             if (pat_end) begin
                 ph_d     = 1'b0;
                 rp_cnt_d = m2_len_q;
                 rp_ptr_d = log_first(m2_lo_q, m2_len_q, m2_rev_q);
-                if (inner_q != 1) begin
+                if (ONE_PERIOD != 0) begin
+                    state_d = S_IDLE;
+                end else if (inner_q != 1) begin
                     inner_d = inner_q - 1'b1;
                 end else if (outer_q != 1) begin
                     outer_d = outer_q - 1'b1;

@@ -39,16 +39,14 @@ module cp_spi #(
     output wire [31:0]   cmd_data_o,
     input  wire          rsp_valid_i,
     output wire          rsp_ready_o,
-    input  wire [31:0]   rsp_data_i,
+    input  wire [7:0]    rsp_addr_i,
+    // The core's read port: its READ registers, read as each reply word goes out.
+    output wire [7:0]    rd_addr_o,
+    input  wire [31:0]   rd_data_i,
 
     // What the reply reports (estop_i already synchronized).
     input  wire          estop_i,
-    input  wire          enable_i,
-    input  wire [31:0]   status_i,
-    input  wire [31:0]   stretch_cnt_i,
-    input  wire [31:0]   moves_done_i,
-    input  wire [31:0]   segs_done_i,
-    input  wire [N*32-1:0] position_i
+    input  wire          enable_i
 );
 
 generate
@@ -158,7 +156,7 @@ reg [1:0]     cw_q, cw_d;                // words of the current chunk taken
 reg           seg_add2_q, seg_add2_d;    // three words per chunk
 // Datapath.
 reg [31:0]    sr_q, sr_d;                // MOSI in at [0], MISO out of [31]
-reg [31:0]    last_read_q;
+reg [7:0]     last_addr_q;              // the register the last READ named
 
 assign rx_word = {sr_q[30:0], bit_in};
 wire [15:0] crc_tx_next = crc_bit(crc_tx_q, sr_q[31]);
@@ -166,26 +164,27 @@ wire        in_cmd = (hdr_left_q != 4'd0) || (chunks_left_q != 16'd0);
 wire        word_end = shift && (bit_q == 5'd31);
 
 // The reply words, each loaded onto MISO when its first bit goes out: word 0 at
-// CS fall, word txn_q at the end of the word before it.
+// CS fall, word txn_q at the end of the word before it. Words 2..6+N are core
+// registers, read through the core's read port as they go out.
 wire [31:0]   tx_word0 = {MAGIC, seq_q, 5'd0, result_q, 4'd0, fresh_q, enable_i, estop_i,
                          used != {(CBUF_AW+1){1'b0}}};
+wire [TXW-1:0] txn_pos = txn_q - TX_POS0;
 reg [31:0]    tx_word;
-integer       pi;
+reg [7:0]     rd_addr;
 always @* begin
-    tx_word = 32'd0;
+    // Registers 0x00..0x03 (status and counters), the one the last READ named,
+    // 0x10+i (positions); 0xFF reads 0.
     case (txn_q)
-    5'd1: tx_word = {free16, reads_q};
-    5'd2: tx_word = status_i;
-    5'd3: tx_word = stretch_cnt_i;
-    5'd4: tx_word = moves_done_i;
-    5'd5: tx_word = segs_done_i;
-    5'd6: tx_word = last_read_q;
-    default: begin
-        for (pi = 0; pi < N; pi = pi + 1)
-            if (txn_q == TX_POS0 + pi[TXW-1:0]) tx_word = position_i[32*pi +: 32];
-        if (txn_q == TX_CRC) tx_word = {crc_tx_next, 16'd0};
-    end
+    5'd2: rd_addr = 8'h00;
+    5'd3: rd_addr = 8'h01;
+    5'd4: rd_addr = 8'h02;
+    5'd5: rd_addr = 8'h03;
+    5'd6: rd_addr = last_addr_q;
+    default: rd_addr = (txn_q >= TX_POS0 && txn_q < TX_CRC) ? 8'h10 + {3'd0, txn_pos} : 8'hFF;
     endcase
+    if (txn_q == 5'd1)         tx_word = {free16, reads_q};
+    else if (txn_q == TX_CRC)  tx_word = {crc_tx_next, 16'd0};
+    else                       tx_word = rd_data_i;
 end
 
 always @* begin
@@ -282,13 +281,13 @@ always @(posedge clk) begin
         result_q <= R_OK;
         fresh_q  <= 1'b1;
         reads_q  <= 16'd0;
-        last_read_q <= 32'd0;
+        last_addr_q <= 8'hFF;
     end else begin
         seq_q    <= seq_d;
         result_q <= result_d;
         fresh_q  <= fresh_d;
         reads_q  <= reads_d;
-        if (rsp_valid_i) last_read_q <= rsp_data_i;
+        if (rsp_valid_i) last_addr_q <= rsp_addr_i;
     end
     ph_q <= ph_d;  bit_q <= bit_d;  txn_q <= txn_d;  crc_rx_q <= crc_rx_d;  crc_tx_q <= crc_tx_d;
     left_q <= left_d;  wr_ok_q <= wr_ok_d;  bad_type_q <= bad_type_d;  no_room_q <= no_room_d;
@@ -301,8 +300,9 @@ end
 assign spi_miso_o    = sr_q[31];
 // Driven only while CS is low (the raw pin: released at once when CS rises).
 assign spi_miso_oe_o = !spi_cs_n_i;
-// Replies are taken as they come; the last one stays for the reply's word 6.
+// Replies are taken as they come; the register the last one named is word 6.
 assign rsp_ready_o   = 1'b1;
+assign rd_addr_o     = rd_addr;
 
 endmodule
 

@@ -22,10 +22,15 @@ class CoreDriver {
   explicit CoreDriver(Stepper& dut, Observer observe = nullptr)
       : dut_(dut), observe_(std::move(observe)) {}
 
-  // One clock with the given inputs (estop as last set).
+  // One clock with the given inputs (estop as last set). The read port names a
+  // register a cycle, in turn: every READ register, positions past the axes,
+  // and addresses that read 0.
   model::CpCoreOut step(model::CpCoreIn in) {
+    static constexpr uint8_t kReadSweep[] = {0x00, 0x01, 0x02, 0x03, 0x10, 0x11, 0x12, 0x13, 0x14,
+                                             0x17, 0x1F, 0x20, 0x21, 0x22, 0x04, 0x18, 0x23, 0xFF};
     in.estop = estop_;
     const uint64_t c = dut_.cycle();
+    in.rd_addr = kReadSweep[c % sizeof kReadSweep];
     last_ = dut_.step(in);
     if (observe_) observe_(c, in, last_);
     return last_;

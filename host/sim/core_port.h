@@ -24,12 +24,15 @@ struct CorePortBase {
     r.cmd_data_i = i.cmd_data;
     r.rsp_ready_i = i.rsp_ready;
     r.estop_i = i.estop;
+    r.rd_addr_i = i.rd_addr;
   }
   static Out sample(const V& r) {
     Out o;
     o.cmd_ready = r.cmd_ready_o;
     o.rsp_valid = r.rsp_valid_o;
     o.rsp_data = r.rsp_data_o;
+    o.rsp_addr = r.rsp_addr_o;
+    o.rd_data = r.rd_data_o;
     o.step = r.step_o;
     o.dir = r.dir_o;
     o.running = r.running_o;
@@ -50,6 +53,8 @@ struct CorePortBase {
           {"cmd_ready_o", [](const Out& o) { return uint64_t(o.cmd_ready); }},
           {"rsp_valid_o", [](const Out& o) { return uint64_t(o.rsp_valid); }},
           {"rsp_data_o", [](const Out& o) { return uint64_t(o.rsp_data); }},
+          {"rsp_addr_o", [](const Out& o) { return uint64_t(o.rsp_addr); }},
+          {"rd_data_o", [](const Out& o) { return uint64_t(o.rd_data); }},
           {"step_o", [](const Out& o) { return uint64_t(o.step); }},
           {"dir_o", [](const Out& o) { return uint64_t(o.dir); }},
           {"running_o", [](const Out& o) { return uint64_t(o.running); }},

@@ -23,6 +23,7 @@ module cp_board #(
     parameter integer CAW = 6,
     parameter integer SAW = 2,
     parameter integer TW = 16,
+    parameter integer MUL_DSP = 0,
     // ENABLE pins: 1 = high enables the drivers (TMC2209, A4988 and most others
     // want low: their EN/ENABLE input is active low).
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
@@ -86,7 +87,8 @@ wire rst = !por_q[8];
 wire enable, running, fault, stretched;
 wire [7:0] err_code;
 wire [N*32-1:0] position;
-cp_card #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW)) u_card (
+cp_card #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
+          .MUL_DSP(MUL_DSP)) u_card (
     .clk(clk), .rst(rst),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
     .spi_miso_o(miso), .spi_miso_oe_o(miso_oe),

@@ -79,6 +79,7 @@ class CoreChecker {
     }
     if (rise) on_edges(rise, out);
     take_command(in, out);
+    check_read_port(in, out);
   }
 
   // Figures.
@@ -157,6 +158,28 @@ class CoreChecker {
     p.dir = (o.dir >> a & 1) != 0;
     p.position = uint64_t(o.position[a]) & 0xFFFFFFFFu;
     return p;
+  }
+
+  // The read port (docs/CORE.md "Read port") shows the registers the outputs
+  // show, in the same cycle; unmapped addresses read 0.
+  void check_read_port(const model::CpCoreIn& in, const model::CpCoreOut& out) {
+    const uint32_t r = in.rd_addr & 0xFF;
+    uint32_t want = 0;
+    if (r == 0x00) want = out.status;
+    else if (r == 0x01) want = out.stretch_count;
+    else if (r == 0x02) want = out.moves_done;
+    else if (r == 0x03) want = out.segments_done;
+    else if (r == 0x1F) want = card::kCardId;
+    else if (r == 0x20) return;  // the capabilities word: CoreFaults.DriversEnableAndCapabilities
+    else if (r == 0x21) want = p_.w;
+    else if (r == 0x22) want = p_.umax;
+    else if (r >= 0x10 && r < 0x10 + p_.n) want = uint32_t(out.position[r - 0x10]);
+    if (out.rd_data != want) {
+      std::ostringstream m;
+      m << "read port: register 0x" << std::hex << r << " reads 0x" << out.rd_data << ", the outputs show 0x"
+        << want;
+      fail(m.str());
+    }
   }
 
   void fail(const std::string& what) {

@@ -18,6 +18,8 @@ module cp_hx8k #(
     parameter integer CAW = 6,
     parameter integer SAW = 2,
     parameter integer TW = 16,
+    // The HX8K has no DSP blocks: the chunk check multiplies bit-serially.
+    parameter integer MUL_DSP = 0,
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
     input  wire         CLK,
@@ -36,7 +38,7 @@ module cp_hx8k #(
 wire led_run_n, led_fault_n;
 cp_board #(.PLL_PAD(1'b0), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(PLL_DIVQ),
            .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
-           .SAW(SAW), .TW(TW), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
+           .SAW(SAW), .TW(TW), .MUL_DSP(MUL_DSP), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
     .osc_i(CLK), .btn_n(1'b1),
     .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
     .estop_loop_i(ESTOP_LOOP),

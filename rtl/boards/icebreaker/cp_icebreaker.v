@@ -23,6 +23,8 @@ module cp_icebreaker #(
     parameter integer CAW = 6,
     parameter integer SAW = 2,
     parameter integer TW = 16,
+    // The chunk check multiplies in the UP5K's DSP blocks.
+    parameter integer MUL_DSP = 1,
     // ENABLE pins: 1 = high enables the drivers (docs/BOARDS.md).
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
@@ -47,7 +49,7 @@ module cp_icebreaker #(
 
 cp_board #(.PLL_PAD(1'b1), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(PLL_DIVQ),
            .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
-           .SAW(SAW), .TW(TW), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
+           .SAW(SAW), .TW(TW), .MUL_DSP(MUL_DSP), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
     .osc_i(CLK), .btn_n(BTN_N),
     .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
     .estop_loop_i(ESTOP_LOOP),
