@@ -8,21 +8,12 @@
 #include <vector>
 
 #include "core/core_bench.h"
-#include "sim/core_configs.h"
-// CPSTEP_TB_CORE_DSP: the same benches against the core whose chunk check
-// multiplies with DSP blocks (test_core_dsp in CMakeLists.txt).
-#ifdef CPSTEP_TB_CORE_DSP
-#include "core/core_dsp.h"
-#endif
+#include "core/core_validated.h"
 
 namespace cpstep::tb {
 namespace {
 
-#ifdef CPSTEP_TB_CORE_DSP
-using Core = sim::CoreDsp;
-#else
-using Core = sim::CoreDefault;
-#endif
+using Core = ValidatedCore;
 using Harness = CoreHarness<Core>;
 
 card::WireSegment seg_of(Harness& h, const std::vector<int64_t>& d, std::vector<card::WireChunk> chunks,

@@ -10,21 +10,12 @@
 
 #include "core/core_bench.h"
 #include "core/core_small.h"
-#include "sim/core_configs.h"
-// CPSTEP_TB_CORE_DSP: the same benches against the core whose chunk check
-// multiplies with DSP blocks (test_core_dsp in CMakeLists.txt).
-#ifdef CPSTEP_TB_CORE_DSP
-#include "core/core_dsp.h"
-#endif
+#include "core/core_validated.h"
 
 namespace cpstep::tb {
 namespace {
 
-#ifdef CPSTEP_TB_CORE_DSP
-using Core = sim::CoreDsp;
-#else
-using Core = sim::CoreDefault;
-#endif
+using Core = ValidatedCore;
 using Harness = CoreHarness<Core>;
 
 std::vector<uint32_t> words_of(uint32_t u, unsigned k, std::vector<uint32_t> v,
