@@ -9,6 +9,8 @@ namespace {
 constexpr uint32_t kOpSegment = 0x1, kOpConfig = 0x2, kOpControl = 0x3, kOpRead = 0x4;
 constexpr uint64_t kMask34 = (uint64_t(1) << 34) - 1;  // the validator's arithmetic width
 constexpr uint32_t kCardId = 0x43505331;              // "CPS1"
+// The command set, register map and SPI frames version (READ 0x23 [23:16]).
+constexpr uint32_t kProtocolVersion = 2;
 
 uint32_t mask(unsigned bits) { return bits >= 32 ? ~0u : (1u << bits) - 1; }
 
@@ -130,6 +132,9 @@ uint32_t CpCore::read_register(uint32_t reg) const {
                       (p_.n & 0xFF);
     case 0x21: return p_.w;
     case 0x22: return p_.umax;
+    case 0x23: return kProtocolVersion << 16 | (p_.cbuf_aw & 0xFF) << 8 | (p_.pw & 0xFF);
+    case 0x24: return p_.clock_hz;
+    case 0x25: return p_.build_id;
     default:
       if (reg >= 0x10 && reg < 0x10 + p_.n) return uint32_t(pulses_[reg - 0x10].outputs().position);
       return 0;
@@ -166,7 +171,11 @@ void CpCore::parse(const View& v, Regs& d, Cycle& c) const {
         }
         case kOpConfig: {
           const uint32_t axis = word >> 24 & 0xF, field = word >> 20 & 0xF, value = word & 0xFFFF;
-          if (q.running) c.raise(CoreError::config_busy);
+          // Refused while running, and while a STEP pulse is still high (after ABORT,
+          // E-stop or the run's last move): a polarity or timing write never cuts it.
+          bool pulse_high = false;
+          for (unsigned a = 0; a < p_.n; ++a) pulse_high = pulse_high || v.pulse[a].busy;
+          if (q.running || pulse_high) c.raise(CoreError::config_busy);
           else if (axis >= p_.n || field > 4 || (field <= 1 && value == 0) ||
                    (field <= 3 && value > mask_tw_))  // must fit the TW-bit timing field
             c.raise(CoreError::config_value);

@@ -19,6 +19,11 @@ struct CpCoreParams {
   unsigned pw = 32;         // position width
   unsigned step_high_reset = 1, step_low_reset = 1, dir_setup_reset = 1, dir_hold_reset = 1;
   bool step_pol_reset = true, dir_pol_reset = true;
+  // Only reported (READ 0x23..0x25): the command buffer's address width in front
+  // of the core (0: none), the clock in Hz, the build id.
+  unsigned cbuf_aw = 0;
+  uint32_t clock_hz = 48000000;
+  uint32_t build_id = 0;
 };
 
 struct CpCoreIn {

@@ -17,28 +17,29 @@ CpPulse::Regs CpPulse::reset_state() const {
   Regs s;
   s.low_cnt = sat_;    // "long ago": ready at once after reset
   s.setup_cnt = sat_;
+  s.step_pol = p_.step_pol_reset;  // the pins stay at the reset idle levels
+  s.dir_pin = !p_.dir_pol_reset;
   return s;
 }
 
-// ready_o = !rst && !active && low_cnt >= step_low && dir_q == dir_i
-//           && setup_cnt >= dir_setup
-bool CpPulse::ready() const {
-  return !in.rst && !r_.active && r_.low_cnt >= (in.cfg_step_low & sat_) && r_.dir == in.dir &&
+// quiet: a STEP edge (leading or polarity) may happen now —
+//   !active && low_cnt >= step_low && dir_pin == want_dir && setup_cnt >= dir_setup
+bool CpPulse::quiet() const {
+  return !r_.active && r_.low_cnt >= (in.cfg_step_low & sat_) && r_.dir_pin == want_dir() &&
          r_.setup_cnt >= (in.cfg_dir_setup & sat_);
 }
+
+// ready_o = !rst && quiet && step_pol == cfg_step_pol
+bool CpPulse::ready() const { return !in.rst && quiet() && r_.step_pol == in.cfg_step_pol; }
 
 CpPulseOut CpPulse::outputs() const {
   CpPulseOut o;
   o.ready = ready();
   // In reset: the parameter polarities' idle levels (STEP inactive, DIR logical 0).
-  const bool step_pol = in.rst ? p_.step_pol_reset : in.cfg_step_pol;
-  const bool dir_pol = in.rst ? p_.dir_pol_reset : in.cfg_dir_pol;
-  const bool active = !in.rst && r_.active;
-  const bool dir = !in.rst && r_.dir;
-  o.step = step_pol ? active : !active;
-  o.dir = dir_pol ? dir : !dir;
+  o.step = in.rst ? !p_.step_pol_reset : r_.step_pol == r_.active;
+  o.dir = in.rst ? !p_.dir_pol_reset : r_.dir_pin;
   o.position = r_.position;
-  o.busy = r_.active || r_.dir != in.dir;
+  o.busy = r_.active;
   return o;
 }
 
@@ -50,20 +51,23 @@ void CpPulse::tick() {
   const Regs& q = r_;
   Regs d = q;
   const bool start = in.step && ready();
-  // A DIR change needs the pin inactive for dir_hold cycles; it excludes start
-  // (start needs dir_q == dir_i).
-  const bool dir_change = !q.active && q.dir != in.dir && q.low_cnt >= (in.cfg_dir_hold & sat_);
+  // A new STEP polarity moves the pin where a pulse could start instead.
+  const bool pol_change = quiet() && q.step_pol != in.cfg_step_pol;
+  // The DIR pin moves once STEP has been inactive for dir_hold cycles; never together
+  // with a STEP edge (a leading or polarity edge needs the DIR pin settled).
+  const bool dir_change = !q.active && q.dir_pin != want_dir() && q.low_cnt >= (in.cfg_dir_hold & sat_);
 
   d.active = start || (q.active && q.high_cnt > 1);
   d.high_cnt = start ? (in.cfg_step_high & sat_) : ((q.high_cnt - 1) & sat_);
-  d.low_cnt = d.active ? 0 : sat_inc(q.low_cnt);
+  d.low_cnt = d.active ? 0 : pol_change ? 1 : sat_inc(q.low_cnt);
+  if (pol_change) d.step_pol = in.cfg_step_pol;
   if (dir_change) {
-    d.dir = in.dir;
+    d.dir_pin = want_dir();
     d.setup_cnt = 1;
   } else {
     d.setup_cnt = sat_inc(q.setup_cnt);
   }
-  if (start) d.position = (q.position + (q.dir ? 1 : pos_mask_)) & pos_mask_;
+  if (start) d.position = (q.position + (in.dir ? 1 : pos_mask_)) & pos_mask_;
   r_ = d;
 }
 

@@ -53,12 +53,15 @@ class CpPulse {
     bool active = false;
     uint32_t high_cnt = 0;
     uint32_t low_cnt = 0;    // set to saturated by reset_state()
-    bool dir = false;
+    bool step_pol = true;    // the STEP polarity on the pin; reset_state(): the parameter
+    bool dir_pin = false;    // the DIR pin level; reset_state(): logical 0 in the parameter polarity
     uint32_t setup_cnt = 0;  // set to saturated by reset_state()
     uint64_t position = 0;
   };
   Regs reset_state() const;
   uint32_t sat_inc(uint32_t x) const { return x == sat_ ? x : x + 1; }
+  bool want_dir() const { return in.cfg_dir_pol ? in.dir : !in.dir; }
+  bool quiet() const;
   bool ready() const;
 
   CpPulseParams p_;

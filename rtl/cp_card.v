@@ -33,7 +33,11 @@ module cp_card #(
     parameter integer DIR_HOLD_RESET = 1,
     // Pin polarity after reset: 1 = STEP active high, 1 = DIR high is positive.
     parameter [0:0] STEP_POL_RESET = 1'b1,
-    parameter [0:0] DIR_POL_RESET = 1'b1
+    parameter [0:0] DIR_POL_RESET = 1'b1,
+    // The card clock in Hz and the build id, only reported (READ 0x24 / 0x25):
+    // rtl/builds.json sets both for every build.
+    parameter integer CLK_HZ = 48000000,
+    parameter [31:0] BUILD_ID = 32'h0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -84,6 +88,7 @@ cp_spi #(.N(N), .CBUF_AW(CBUF_AW)) u_spi (
     .estop_i(estop), .enable_i(enable_o));
 
 cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32), .MUL_DSP(MUL_DSP),
+          .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID),
           .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
           .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
           .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET)) u_core (

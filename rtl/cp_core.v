@@ -36,7 +36,13 @@ module cp_core #(
     parameter integer DIR_HOLD_RESET = 1,
     // Pin polarity after reset: 1 = STEP active high, 1 = DIR high is positive.
     parameter [0:0] STEP_POL_RESET = 1'b1,
-    parameter [0:0] DIR_POL_RESET = 1'b1
+    parameter [0:0] DIR_POL_RESET = 1'b1,
+    // Only reported, in the capability registers (READ 0x23..0x25): the address
+    // width of the command buffer in front of the core (cp_spi; 0: none), the
+    // clock in Hz and the build id (rtl/builds.json sets them for every build).
+    parameter integer CBUF_AW = 0,
+    parameter integer CLK_HZ = 48000000,
+    parameter [31:0] BUILD_ID = 32'h0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -144,6 +150,12 @@ generate
     end
     if (CAW < 1 || CAW > 15) begin : g_check_caw
         cp_core_parameter_CAW_must_be_1_to_15 u_bad ();
+    end
+    if (CBUF_AW < 0 || CBUF_AW > 14) begin : g_check_cbuf_aw
+        cp_core_parameter_CBUF_AW_must_be_0_to_14 u_bad ();
+    end
+    if (CLK_HZ < 1) begin : g_check_clk_hz
+        cp_core_parameter_CLK_HZ_must_be_positive u_bad ();
     end
     if (MUL_DSP < 0 || MUL_DSP > 1) begin : g_check_mul_dsp
         cp_core_parameter_MUL_DSP_must_be_0_or_1 u_bad ();
@@ -334,7 +346,7 @@ generate
         assign position_o[PW*ga +: PW] = pulse_pos[ga];
     end
 endgenerate
-wire unused_busy = &{1'b0, pulse_busy};
+// pulse_busy[a]: axis a's STEP pin is at its active level (CONFIG is refused then).
 
 // ---------------------------------------------------------------- command word fields
 wire [3:0]  op        = cmd_data_i[31:28];
@@ -373,6 +385,11 @@ wire [31:0] status_word = {ch_level32 > 32'd255 ? 8'd255 : ch_level32[7:0],
 localparam [31:0] CAPS = {3'd0, TW[4:0], SAW[3:0], CAW[3:0], KMAX[7:0], N[7:0]};
 localparam [31:0] W_WORD = W;
 localparam [31:0] UMAX_WORD = UMAX;
+// The version of the command set and register map (docs/CORE.md) together with
+// the SPI frames (docs/PROTOCOL.md); the host refuses a card of another version.
+localparam [7:0] PROTOCOL_VERSION = 8'd2;
+localparam [31:0] CAPS2 = {8'd0, PROTOCOL_VERSION, CBUF_AW[7:0], PW[7:0]};
+localparam [31:0] CLK_WORD = CLK_HZ;
 // Two reads: [0] the READ command's, [1] the read port's.
 wire [7:0] read_addr [0:1];
 assign read_addr[0] = cmd_data_i[7:0];
@@ -387,6 +404,9 @@ always @* begin
         8'h20: read_value[rp] = CAPS;
         8'h21: read_value[rp] = W_WORD;
         8'h22: read_value[rp] = UMAX_WORD;
+        8'h23: read_value[rp] = CAPS2;
+        8'h24: read_value[rp] = CLK_WORD;
+        8'h25: read_value[rp] = BUILD_ID;
         8'h01: read_value[rp] = stretch_cnt_q;
         8'h02: read_value[rp] = moves_done_q;
         8'h03: read_value[rp] = segs_done_q;
@@ -461,7 +481,9 @@ always @* begin
             p_state_d = P_H1;
         end
         OP_CONFIG: begin
-            if (running_q) begin
+            // Refused while running, and while a STEP pulse is still high (after ABORT,
+            // E-stop or the run's last move): a polarity or timing write never cuts it.
+            if (running_q || |pulse_busy) begin
                 fault_set = 1'b1;  fault_code = E_CONFIG_BUSY;
             end else if ({28'd0, cmd_data_i[27:24]} >= N || cmd_data_i[23:20] > 4'd4 ||
                          (cmd_data_i[23:20] <= 4'd1 && cmd_data_i[15:0] == 16'd0) ||

@@ -449,6 +449,159 @@ assign dbg_m2_lo_o  = dbg_iter_q ? dbg_m2_lo_q : {AW{1'b0}};
 assign dbg_m2_len_o = dbg_iter_q ? dbg_m2_len_q : {AW{1'b0}};
 assign dbg_m2_rev_o = dbg_iter_q && dbg_m2_rev_q;
 
+`ifdef FORMAL
+// ---------------------------------------------------------------- formal
+// Properties for yosys-smtbmc (docs/FORMAL.md, scripts/formal, row `engine` of
+// formal/proofs.tsv), written from docs/ENGINE.md. The environment is free: any
+// request and any move_ready_i on any cycle, reset in the first. A shadow keeps
+// what the ports say: the request in progress (u, k, rep, its refusal code) and
+// the moves transferred for it.
+reg f_past_valid = 1'b0;
+always @(posedge clk) f_past_valid <= 1'b1;
+always @* if (!f_past_valid) assume(rst);
+
+// The refusal table of docs/ENGINE.md "Refusal", first match wins.
+reg [2:0] f_code;
+always @* begin
+    if (ONE_PERIOD != 0)                f_code = 3'd0;
+    else if (in_u_i == 0)               f_code = 3'd1;   // U_ZERO
+    else if (in_v_i > in_u_i)           f_code = 3'd2;   // V_GT_U
+    else if (in_u_i > UMAX)             f_code = 3'd3;   // U_GT_UMAX
+    else if (in_k_i > KMAX)             f_code = 3'd4;   // K_GT_KMAX
+    else if (in_rep_i == 0)             f_code = 3'd5;   // REP_ZERO
+    else                                f_code = 3'd0;
+end
+
+localparam integer FW = AW + NW + RW + 4;     // wide enough for u * 2^k * rep
+wire f_accept = in_valid_i && in_ready_o;
+wire f_take   = move_valid_o && move_ready_i;
+wire f_err6   = err_o && err_code_o == ERR_PATTERN_GT_W;
+// The moves an accepted request owes: u * 2^k * rep (one period in ONE_PERIOD mode).
+wire [FW-1:0] f_u_in    = {{(FW-UW){1'b0}}, in_u_i};
+wire [FW-1:0] f_rep_in  = {{(FW-RW){1'b0}}, in_rep_i};
+
+reg          f_busy = 1'b0;   // a request taken, not refused, its last move not yet out
+reg          f_moved;         // a move of that request has been valid
+reg [FW-1:0] f_u, f_rep, f_total, f_cnt;
+reg [KW-1:0] f_k;
+always @(posedge clk) begin
+    if (f_take) f_cnt <= f_cnt + 1'b1;
+    if (move_valid_o) f_moved <= 1'b1;
+    if ((f_take && move_last_o) || f_err6) f_busy <= 1'b0;
+    if (f_accept && f_code == 3'd0) begin
+        f_busy  <= 1'b1;
+        f_moved <= 1'b0;
+        f_u     <= f_u_in;
+        f_k     <= in_k_i;
+        f_rep   <= f_rep_in;
+        f_total <= (f_u_in << in_k_i) * f_rep_in;
+        f_cnt   <= {FW{1'b0}};
+    end
+    if (rst) f_busy <= 1'b0;
+end
+
+// The engine's state as moves still owed (auxiliary, for induction): the output
+// register, the rest of the current pattern, then whole patterns of length P.
+wire [FW-1:0] f_len1 = {{(FW-AW){1'b0}}, m1_len_q};
+wire [FW-1:0] f_len2 = {{(FW-AW){1'b0}}, m2_len_q};
+wire [FW-1:0] f_rpc  = {{(FW-AW){1'b0}}, rd_cnt_q};
+wire [FW-1:0] f_rpn  = {{(FW-AW){1'b0}}, rp_cnt_q};
+wire [FW-1:0] f_x    = {{(FW-UW){1'b0}}, x_q};
+wire [FW-1:0] f_y    = {{(FW-UW){1'b0}}, y_q};
+wire [FW-1:0] f_xk   = {{(FW-NW){1'b0}}, shifted(x_q, k_q)};
+wire [FW-1:0] f_in   = {{(FW-NW){1'b0}}, inner_q};
+wire [FW-1:0] f_out  = {{(FW-RW){1'b0}}, outer_q};
+wire [FW-1:0] f_pat  = const_q ? 1 : f_len1 + f_len2;
+wire [FW-1:0] f_rest = const_q ? 1 : (ph_q ? f_rpn : f_rpn + f_len1);
+wire [FW-1:0] f_owed = {{(FW-1){1'b0}}, move_valid_q} + f_rest
+                     + f_pat * ((f_in - 1'b1) + (f_out - 1'b1) * f_xk);
+
+always @* if (f_past_valid) begin
+    // Nothing accepted while busy, and ready whenever not (docs/ENGINE.md
+    // "States and cycles": in_ready_o = IDLE && no move waiting).
+    assert(in_ready_o == (!f_busy || f_err6));
+    // No move without a request; nothing but zeros while not valid.
+    if (move_valid_o) assert(f_busy);
+    if (!move_valid_o) assert(!move_o && !move_last_o && !move_pend_o);
+    if (!err_o) assert(err_code_o == ERR_NONE);
+    // Exactly u * 2^k * rep moves: none beyond, and the last one says so.
+    if (move_valid_o) begin
+        assert(f_cnt < f_total);
+        assert(move_last_o == (f_cnt + 1'b1 == f_total));
+        if (move_last_o) assert(move_pend_o);
+    end
+
+    // Auxiliary invariants.
+    assert(state_q != 2'd3);
+    assert(f_busy == (state_q != S_IDLE || move_valid_q || (err_q && err_code_q == ERR_PATTERN_GT_W)));
+    if (err_q && err_code_q == ERR_PATTERN_GT_W) assert(state_q == S_IDLE && !move_valid_q && !f_moved);
+    if (wp_q) assert(state_q != S_IDLE && !move_valid_q);
+    if (state_q == S_IDLE && move_valid_q) assert(out_last_q && out_pend_q && f_cnt + 1'b1 == f_total);
+    if (f_busy) begin
+        assert(f_u != 0 && f_u <= UMAX && f_k <= KMAX && f_rep != 0);
+        assert(f_total == (f_u << f_k) * f_rep);
+    end
+    if (state_q != S_IDLE) assert(k_q == f_k && {{(FW-RW){1'b0}}, rep_q} == f_rep);
+    if (state_q == S_BUILD) begin
+        // Euclid's loop keeps x*len(M1) + y*len(M2) = u between iterations.
+        // Mid-iteration (target M2, say) the target has len(M1) - rd_cnt of the
+        // source's bits already and x is not yet reduced, so
+        // (x - y)*len(M1) + y*(len(M2) + rd_cnt) = u.
+        assert(!move_valid_q && !f_moved && f_cnt == 0 && !const_q);
+        assert(f_out == f_rep && x_q != 0 && y_q != 0 && x_q != y_q && rd_cnt_q != 0);
+        if (to2) begin
+            assert(rd_cnt_q <= m1_len_q);
+            assert((f_x - f_y) * f_len1 + f_y * (f_len2 + f_rpc) == f_u);
+        end else begin
+            assert(rd_cnt_q <= m2_len_q);
+            assert(f_x * (f_len1 + f_rpc) + (f_y - f_x) * f_len2 == f_u);
+        end
+        assert(pat_len <= W_L);
+    end
+    if (state_q == S_REPLAY) begin
+        assert(f_owed == f_total - f_cnt);
+        assert(f_in != 0 && f_in <= f_xk && f_out != 0 && f_out <= f_rep);
+        if (const_q) assert(f_x == f_u);
+        else begin
+            assert(x_q == y_q && f_x * (f_len1 + f_len2) == f_u);
+            assert(rp_cnt_q != 0 && m1_len_q != 0 && m2_len_q != 0);
+            if (ph_q) assert(rp_cnt_q <= m1_len_q);
+            else      assert(rp_cnt_q <= m2_len_q);
+        end
+        if (move_valid_q && !out_last_q) assert(!wp_q);
+    end
+end
+
+always @(posedge clk) if (f_past_valid && !$past(rst)) begin
+    // A request taken in the last cycle: refused (err_o and its code) or not.
+    if ($past(f_accept)) begin
+        assert(err_o == ($past(f_code) != 3'd0));
+        assert(err_code_o == $past(f_code));
+    end else if (err_o) begin
+        // The one later refusal: a pattern longer than W, during the build,
+        // before any move.
+        assert(err_code_o == ERR_PATTERN_GT_W && $past(f_busy) && !$past(f_moved));
+    end
+    // Valid/ready: while valid && !ready the move holds still.
+    if ($past(move_valid_o && !move_ready_i)) begin
+        assert(move_valid_o);
+        assert(move_o == $past(move_o) && move_last_o == $past(move_last_o)
+               && move_pend_o == $past(move_pend_o));
+    end
+    // No bubble: with move_ready_i high, the next move follows at once.
+    if ($past(f_take && !move_last_o)) assert(move_valid_o);
+end
+// Latency: when no loop iteration runs (v = 0, v = u or u = 2v), the first move
+// is valid two cycles after the handshake's cycle.
+reg f_trivial_q1 = 1'b0, f_trivial_q2 = 1'b0;
+always @(posedge clk) begin
+    f_trivial_q1 <= !rst && f_accept && f_code == 3'd0 &&
+                    (in_v_i == 0 || in_v_i == in_u_i || {1'b0, in_u_i} == {in_v_i, 1'b0});
+    f_trivial_q2 <= !rst && f_trivial_q1;
+end
+always @* if (f_trivial_q2) assert(move_valid_o);
+`endif
+
 endmodule
 
 `resetall

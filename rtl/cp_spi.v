@@ -116,6 +116,10 @@ wire bit_in  = mosi_q[1];
 // ---------------------------------------------------------------- command buffer
 wire [CBUF_AW:0] used, level;
 wire             full;
+`ifdef FORMAL
+wire             f_buf_wr, f_buf_commit, f_buf_rollback;
+wire [31:0]      f_buf_wdata;
+`endif
 reg              buf_wr, buf_commit, buf_rollback;
 wire [31:0]      rx_word;
 
@@ -123,7 +127,13 @@ cp_fifo #(.DW(32), .AW(CBUF_AW)) u_cbuf (
     .clk(clk), .rst(rst), .clear_i(1'b0),
     .wr_i(buf_wr), .wr_data_i(rx_word), .commit_i(buf_commit), .rollback_i(buf_rollback),
     .full_o(full), .used_o(used), .level_o(level),
-    .out_valid_o(cmd_valid_o), .out_ready_i(cmd_ready_i), .out_data_o(cmd_data_o));
+    .out_valid_o(cmd_valid_o), .out_ready_i(cmd_ready_i), .out_data_o(cmd_data_o)
+`ifdef FORMAL
+    // The buffer's own view of its write side (docs/FORMAL.md).
+    , .f_wr_o(f_buf_wr), .f_wr_data_o(f_buf_wdata), .f_commit_o(f_buf_commit),
+    .f_rollback_o(f_buf_rollback)
+`endif
+    );
 
 wire unused_buf = &{1'b0, full, level};
 
@@ -295,6 +305,154 @@ always @(posedge clk) begin
     cw_q <= cw_d;  seg_add2_q <= seg_add2_d;
     sr_q <= sr_d;
 end
+
+`ifdef FORMAL
+// ---------------------------------------------------------------- formal
+// Properties for yosys-smtbmc (docs/FORMAL.md, scripts/formal, row `spi` of
+// formal/proofs.tsv): a refused frame leaves no trace in the command buffer, an
+// accepted one puts exactly its command words there, in order. The shadow below
+// is a second frame decoder written from docs/PROTOCOL.md ("Host -> card", "What
+// the card does with a frame"), fed with the synchronized pins (cs_fall, cs_rise,
+// shift, bit_in: the sampling itself is checked to the cycle by tb/spi). It
+// counts words and bits instead of following phases, and parses commands by
+// their lengths instead of hdr_left/chunks_left/cw. The environment is free:
+// pins, core and reads, any value on any cycle, reset in the first.
+reg f_past_valid = 1'b0;
+always @(posedge clk) f_past_valid <= 1'b1;
+always @* if (!f_past_valid) assume(rst);
+
+reg          f_in = 1'b0;      // inside a frame: CS fall seen, CS rise not yet
+reg [16:0]   f_wc;             // whole 32-bit words received (saturates)
+reg [4:0]    f_b5;             // bits of the current word received
+reg [31:0]   f_sr;             // the last 32 bits received
+reg [31:0]   f_hdr;            // word 0: type, seq, nwords
+reg [15:0]   f_crc;            // CRC-16 over every bit up to the CRC's last
+reg [15:0]   f_free;           // free words announced when the header ended
+reg [17:0]   f_cl;             // words still due in the current command
+reg          f_bc;             // a command started with an unknown opcode
+reg [16:0]   f_nwr;            // command words this frame put into the buffer
+reg [CBUF_AW+1:0] f_lvl;       // committed words in the buffer (head included)
+
+wire [31:0] f_word    = {f_sr[30:0], bit_in};                // the word ending now
+wire        f_wend    = shift && f_b5 == 5'd31;
+wire [15:0] f_nwords  = f_hdr[15:0];
+wire [7:0]  f_type    = f_hdr[31:24];
+wire [16:0] f_nw17    = {1'b0, f_nwords};
+wire        f_hdr_ok  = f_wc != 17'd0;                       // the header has arrived
+// The CRC's last bit has arrived: words 0..nwords, then 16 bits.
+wire        f_done    = f_hdr_ok && (f_wc > f_nw17 + 17'd1 || (f_wc == f_nw17 + 17'd1 && f_b5 >= 5'd16));
+wire        f_cmdword = f_wend && f_hdr_ok && f_wc <= f_nw17; // a command word ends now
+wire        f_badtype = !(f_type == 8'h01 || (f_type == 8'h00 && f_nwords == 16'd0));
+wire        f_noroom  = f_type == 8'h01 && f_nwords > f_free;
+wire        f_wr_ok   = f_type == 8'h01 && !f_noroom;
+wire        f_pop     = cmd_valid_o && cmd_ready_i;
+wire [CBUF_AW+1:0] f_pop_w = {{(CBUF_AW+1){1'b0}}, f_pop};
+// Free words as reply word 1 states them: CBUF_WORDS - held, 0 at the least.
+wire [15:0] f_free_now = (used >= CBUF_WORDS) ? 16'd0 : CBUF_WORDS - used;
+// Words of a command starting with this word, after it (docs/PROTOCOL.md).
+wire [17:0] f_nchunks = {2'd0, f_word[15:0]};
+wire [17:0] f_seg_len = N + (f_word[22] ? 18'd3 * f_nchunks : 18'd2 * f_nchunks) + 18'd1;
+
+// The result of the frame ending now: the first failing check.
+reg [2:0] f_result;
+always @* begin
+    if (!f_done)                f_result = R_TRUNCATED;
+    else if (f_crc != 16'd0)    f_result = R_BAD_CRC;
+    else if (f_badtype)         f_result = R_BAD_TYPE;
+    else if (f_noroom)          f_result = R_NO_ROOM;
+    else if (f_bc)              f_result = R_BAD_CMD;
+    else if (f_cl != 18'd0)     f_result = R_SPLIT;
+    else                        f_result = R_OK;
+end
+
+always @(posedge clk) begin
+    f_lvl <= f_lvl - f_pop_w;
+    if (cs_fall) begin
+        f_in <= 1'b1;  f_wc <= 17'd0;  f_b5 <= 5'd0;  f_crc <= 16'hFFFF;
+        f_cl <= 18'd0;  f_bc <= 1'b0;  f_nwr <= 17'd0;
+    end
+    if (shift) begin
+        f_b5 <= f_b5 + 1'b1;
+        f_sr <= f_word;
+        if (!f_done) f_crc <= crc_bit(f_crc, bit_in);
+        if (f_wend && f_wc != 17'h1FFFF) f_wc <= f_wc + 1'b1;
+        if (f_wend && !f_hdr_ok) begin
+            f_hdr  <= f_word;
+            f_free <= f_free_now;
+        end
+        if (f_cmdword) begin
+            if (f_wr_ok) f_nwr <= f_nwr + 1'b1;
+            if (f_cl != 18'd0)                f_cl <= f_cl - 1'b1;
+            else if (f_word[31:28] == 4'h1)   f_cl <= f_seg_len;
+            else if (f_word[31:28] < 4'h2 || f_word[31:28] > 4'h4) f_bc <= 1'b1;
+        end
+    end
+    if (cs_rise) begin
+        f_in <= 1'b0;
+        if (f_result == R_OK) f_lvl <= f_lvl - f_pop_w + f_nwr[CBUF_AW+1:0];
+    end
+    if (rst) begin
+        f_in  <= 1'b0;
+        f_lvl <= {(CBUF_AW+2){1'b0}};
+    end
+end
+
+// RTL counterparts of the shadow's command parser.
+wire [17:0] f_cpc = seg_add2_q ? 18'd3 : 18'd2;             // words per chunk
+wire [17:0] f_rtl_cl = {14'd0, hdr_left_q} + f_cpc * {2'd0, chunks_left_q} - {16'd0, cw_q};
+wire [31:0] f_mask = (32'd1 << f_b5) - 32'd1;
+
+always @* if (f_past_valid) begin
+    // The buffer changes at a frame's end only, and then always: commit exactly
+    // when every check of the table passes, roll back otherwise.
+    // (As the buffer sees its write side: f_buf_* are cp_fifo's own inputs.)
+    if (f_buf_commit || f_buf_rollback) assert(cs_rise);
+    if (cs_rise) begin
+        assert(result_d == f_result);
+        assert(f_buf_commit == (f_result == R_OK));
+        assert(f_buf_rollback == (f_result != R_OK));
+    end
+    // A word goes into the buffer exactly when a command word of a frame that
+    // fits ends, it is the 32 bits just received, and the buffer has room.
+    assert(f_buf_wr == (f_in && f_cmdword && f_wr_ok));
+    if (f_buf_wr) assert(!full && f_buf_wdata == f_word);
+    // Committed words: those of accepted frames, less what the core took; the
+    // uncommitted ones: this frame's, and none between frames.
+    assert(level == f_lvl);
+    assert(used == f_lvl + (f_in ? f_nwr[CBUF_AW+1:0] : {(CBUF_AW+2){1'b0}}));
+
+    // Auxiliary invariants: the RTL's frame state as the shadow's.
+    assert(f_in == !cs_q[2]);
+    if (f_in) begin
+        assert(bit_q == f_b5);
+        assert(crc_rx_q == f_crc);
+        assert(((sr_q ^ f_sr) & f_mask) == 32'd0);
+        assert(bad_cmd_q == f_bc);
+        assert(f_rtl_cl == f_cl);
+        assert(cw_q < f_cpc[1:0] && hdr_left_q <= SEG_HDR_WORDS);
+        if (hdr_left_q != 4'd0 || chunks_left_q == 16'd0) assert(cw_q == 2'd0);
+        if (!f_hdr_ok) begin
+            assert(ph_q == PH_HDR && f_cl == 18'd0 && !f_bc && f_nwr == 17'd0);
+        end else begin
+            assert(bad_type_q == f_badtype && no_room_q == f_noroom && wr_ok_q == f_wr_ok);
+            if (f_wc <= f_nw17) begin
+                assert(ph_q == PH_WORDS && left_q == f_nwords + 16'd1 - f_wc[15:0]);
+            end else begin
+                assert(left_q == 16'd0 && ph_q == (f_done ? PH_DONE : PH_CRC));
+            end
+            if (f_wr_ok) begin
+                assert(f_nwr == f_nw17 - {1'b0, left_q});
+                // Room: the words still due fit beside every word held.
+                if (left_q != 16'd0)
+                    assert({16'd0, used} + {{(CBUF_AW+1){1'b0}}, left_q} <= {16'd0, CBUF_WORDS});
+            end else begin
+                assert(f_nwr == 17'd0);
+            end
+        end
+        assert(f_nwr <= CBUF_WORDS);
+    end
+end
+`endif
 
 // ---------------------------------------------------------------- outputs
 assign spi_miso_o    = sr_q[31];

@@ -270,6 +270,28 @@ size_t CardClient::send(std::span<const uint32_t> words, const KeepWaiting& keep
   }
 }
 
+uint32_t CardClient::read_register(Register r, unsigned axis, const KeepWaiting& keep) {
+  const auto gave_up = [&] { return CardError(link_.name() + ": gave up waiting to read a register"); };
+  if (!settle(keep)) throw gave_up();
+  if (!wait_for_room(1, keep)) throw gave_up();
+  std::vector<uint32_t> frame;
+  encode_read(r, axis, frame);
+  send_frame(std::move(frame), 1);
+  if (!settle(keep)) throw gave_up();
+  // Accepted: wait until the core has taken it (its READ count catches up).
+  for (;;) {
+    poll();
+    if (last_.reads == reads_expected_) return last_.last_read;
+    if (!pause(keep)) throw gave_up();
+  }
+}
+
+CardCaps read_caps(CardClient& client, const CardClient::KeepWaiting& keep) {
+  std::array<uint32_t, kCapsRegisters.size()> v{};
+  for (size_t i = 0; i < v.size(); ++i) v[i] = client.read_register(kCapsRegisters[i], 0, keep);
+  return decode_caps(v);
+}
+
 bool CardClient::wait_until_stopped(const KeepWaiting& keep) {
   for (;;) {
     if (!settle(keep)) return false;

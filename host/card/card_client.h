@@ -28,6 +28,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "card/caps.h"
 #include "card/frame.h"
 #include "card/link.h"
 
@@ -89,6 +90,14 @@ class CardClient {
   // damaged or for room. false: keep_waiting gave up.
   bool settle(const KeepWaiting& keep_waiting = nullptr);
 
+  // Reads one READ register: a frame of that READ alone (it is its own marker:
+  // the card's READ count tells that it ran, and running it twice is harmless),
+  // then POLLs until the READ has run; the reply's last_read is the register,
+  // read as the reply went out. The card's command port must be free to take it
+  // (true at connect). Throws CardError as send() does, or when keep_waiting
+  // gives up.
+  uint32_t read_register(Register r, unsigned axis = 0, const KeepWaiting& keep_waiting = nullptr);
+
   // Settles, then POLLs every poll_interval_s until the card is not running and
   // its command buffer is empty. false: keep_waiting gave up.
   bool wait_until_stopped(const KeepWaiting& keep_waiting = nullptr);
@@ -141,6 +150,9 @@ class CardClient {
   uint8_t next_seq_ = 1;
   unsigned bad_in_a_row_ = 0, damaged_in_a_row_ = 0;
 };
+
+// Reads the capability registers (card/caps.h) at connect.
+CardCaps read_caps(CardClient& client, const CardClient::KeepWaiting& keep_waiting = nullptr);
 
 // Whether a card is stalled: stopped, its command buffer holding words and its
 // free words unchanged for longer than `limit` (in the caller's unit of time:

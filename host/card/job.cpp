@@ -7,6 +7,16 @@
 
 namespace cpstep::card {
 
+CardLimits limits(const CardCaps& c) {
+  CardLimits l;
+  l.umax = c.umax;
+  l.kmax = c.kmax;
+  l.w = c.w;
+  l.chunk_queue = c.chunk_queue();
+  l.segment_queue = c.segment_queue();
+  return l;
+}
+
 plan::ChunkLimits chunk_limits(const CardLimits&) {
   plan::ChunkLimits l;
   l.max_count = 0xFFFF;
@@ -142,8 +152,8 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
   if (!out.segments.empty()) out.segments.back().end = true;
   // START once the first segments are queued, before they could fill the card.
   size_t chunks_queued = 0;
-  while (out.start_after < out.segments.size() && out.start_after < 4 &&
-         chunks_queued + out.segments[out.start_after].chunks.size() <= 64) {
+  while (out.start_after < out.segments.size() && out.start_after < card.segment_queue &&
+         chunks_queued + out.segments[out.start_after].chunks.size() <= card.chunk_queue) {
     chunks_queued += out.segments[out.start_after].chunks.size();
     ++out.start_after;
   }

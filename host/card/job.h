@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "card/caps.h"
 #include "card/protocol.h"
 #include "plan/chunks.h"
 #include "plan/common.h"
@@ -23,6 +24,9 @@ struct CardLimits {
   unsigned chunk_queue = 64;       // 2^CAW
   unsigned segment_queue = 4;      // 2^SAW
 };
+
+// The limits of a card that reported these capabilities.
+CardLimits limits(const CardCaps& caps);
 
 // The chunk form the card executes: 16-bit count, add and add2; the increments
 // add + j*add2 within 16 bits and of one sign (docs/CORE.md, SEG_ADD2).

@@ -62,7 +62,7 @@ ErrorName error_name(uint32_t code) {
       {"ESTOP", "the E-stop input"},
       {"ABORT", "CONTROL abort"},
       {"BAD_OPCODE", "an unknown command opcode"},
-      {"CONFIG_BUSY", "CONFIG while running"},
+      {"CONFIG_BUSY", "CONFIG while running or while a STEP pulse is on a pin"},
       {"CONFIG_VALUE", "a step high or step low time of 0"},
       {"SEG_ADD2", "a chunk whose increment add + j*add2 changes sign"},
   };

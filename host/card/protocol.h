@@ -38,6 +38,9 @@ enum class Register : uint32_t {
   caps = 0x20,          // [7:0] N, [15:8] KMAX, [19:16] CAW, [23:20] SAW, [28:24] TW
   pattern_capacity = 0x21,  // W
   umax = 0x22,          // UMAX
+  caps2 = 0x23,         // [7:0] PW, [15:8] CBUF_AW (0: no command buffer), [23:16] protocol version
+  clock_hz = 0x24,      // the card clock in Hz
+  build_id = 0x25,      // the build id (rtl/builds.json)
 };
 constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
 

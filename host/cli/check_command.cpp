@@ -1,3 +1,5 @@
+#include "card/caps.h"
+#include "cpstep/builds.h"
 #include "cli/check_command.h"
 
 #include <fmt/format.h>
@@ -33,6 +35,9 @@ CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
   c->add_option("--vcd", o.vcd, "the trace: a VCD from a simulation or a logic analyzer")->required();
   c->add_option("--job", o.job, "the G-code job the device ran")->required();
   c->add_option("--machine", o.machine, "the machine file it was planned for")->required();
+  c->add_option("--board", o.board,
+                "plan for this card build (rtl/builds.json: " + card::board_names() + "; default " +
+                    std::string(builds::kDefaultBoard) + "): its clock is the plan's time base");
   c->add_option("--map", o.map, "a pin map (TOML): signal names, polarity, time base");
   c->add_option("--json", o.json, "write the verdict with every finding to this JSON file");
   c->add_option("--time-tol-cycles", o.time_tol_cycles,
@@ -49,7 +54,13 @@ CLI::App* add_check_command(CLI::App& app, CheckOptions& o) {
 
 int run_check(const CheckOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  auto job = run::prepare_job(o.job, o.machine);
+  const std::string board = o.board.empty() ? std::string(builds::kDefaultBoard) : o.board;
+  const auto caps = card::board_caps(board);
+  if (!caps) {
+    fmt::print(stderr, "cpstep check: --board {}: no such board (boards: {})\n", board, card::board_names());
+    return kExitRefused;
+  }
+  auto job = run::prepare_job(o.job, o.machine, *caps);
   for (const plan::Diagnostic& w : job.warnings) {
     // A warning's text goes after its position, as `cpstep run` prints it.
     plan::Diagnostic d = w;

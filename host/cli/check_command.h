@@ -11,6 +11,7 @@ namespace cpstep::cli {
 
 struct CheckOptions {
   std::string vcd, job, machine, map, json;
+  std::string board;  // the card build the plan is made for ("": the default board)
   std::optional<double> time_tol_cycles, skew_cycles;
 };
 

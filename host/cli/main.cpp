@@ -1,7 +1,7 @@
 // cpstep — command-line front end.
 //
 //   cpstep moves U V [--k K] [--rep R] [--engine rtl|model|oracle] [--stats] [--table]
-//   cpstep sim FILE [--vcd OUT.vcd] [--max-cycles N] [--clock-hz HZ] [--sck-div N]
+//   cpstep sim FILE [--board B] [--vcd OUT.vcd] [--max-cycles N] [--sck-div N]
 //   cpstep run JOB.ngc --machine M.toml [--transport sim|spidev|file] [--out F] [--vcd F] [--report F]
 //              [--plots DIR] [--sck-div N] [--device /dev/spidevB.C] [--spi-hz HZ]
 //   cpstep plan JOB.ngc --machine M.toml [-o OUT.bin]
@@ -21,7 +21,9 @@
 #include "cli/check_command.h"
 #include "cli/run_command.h"
 #include "cli/vectors_command.h"
+#include "card/caps.h"
 #include "cli/sim_command.h"
+#include "cpstep/builds.h"
 #include "model/oracle.h"
 #include "sim/engine_configs.h"
 #include "sim/engine_session.h"
@@ -127,8 +129,9 @@ int main(int argc, char** argv) {
   simc->add_option("--max-cycles", so.max_cycles, "give up after this many clock cycles")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  simc->add_option("--clock-hz", so.clock_hz, "the card's clock, for the VCD's time axis")
-      ->capture_default_str()
+  simc->add_option("--board", so.board, "the board whose card build is simulated (rtl/builds.json: " +
+                   card::board_names() + "; default " + std::string(builds::kDefaultBoard) + ")");
+  simc->add_option("--clock-hz", so.clock_hz, "refused unless it is the board's clock (the VCD's time axis is the board's)")
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000'000)));
   simc->add_option("--sck-div", so.sck_div, "clock cycles per SCK period of the SPI link (8 or more)")
       ->capture_default_str()

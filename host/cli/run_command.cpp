@@ -10,7 +10,10 @@
 #include <fstream>
 #include <optional>
 
+#include "card/caps.h"
+#include "card/card_client.h"
 #include "card/spidev.h"
+#include "cpstep/builds.h"
 #include "run/card_job.h"
 #include "run/link_run.h"
 #include "run/measure.h"
@@ -26,6 +29,9 @@ namespace fs = std::filesystem;
 
 constexpr int kExitFault = 1;
 constexpr int kExitRefused = 2;
+// spidev: the SCK rate the host connects at before the card has said its clock
+// (clk/8 of any card clock of 8 MHz or more).
+constexpr uint64_t kConnectSpiHz = 1'000'000;
 
 void print_diagnostics(const plan::Result<run::CardJob>& r) {
   for (const plan::Diagnostic& w : r.warnings) {
@@ -37,9 +43,24 @@ void print_diagnostics(const plan::Result<run::CardJob>& r) {
   for (const plan::Diagnostic& e : r.errors) fmt::print(stderr, "{}\n", e.str());
 }
 
-// Plans the job; prints every diagnostic. nullopt when it is refused.
-std::optional<run::CardJob> prepare(const std::string& job, const std::string& machine) {
-  auto r = run::prepare_job(job, machine);
+// The capabilities of a board of rtl/builds.json, for planning without a card
+// (file transport, `cpstep plan`); nullopt (message printed) for no such board.
+std::optional<card::CardCaps> board_caps(const char* command, const std::string& board) {
+  const std::string name = board.empty() ? std::string(builds::kDefaultBoard) : board;
+  auto caps = card::board_caps(name);
+  if (!caps) fmt::print(stderr, "cpstep {}: --board {}: no such board (boards: {})\n", command, name, card::board_names());
+  return caps;
+}
+
+// Plans the job for the card with these capabilities; prints every diagnostic.
+// nullopt when it is refused.
+std::optional<run::CardJob> prepare(const std::string& job, const std::string& machine,
+                                    const card::CardCaps& caps) {
+  if (const std::string why = card::unusable(caps, plan::kAxes); !why.empty()) {
+    fmt::print(stderr, "cpstep: {}: cannot plan for this card\n", why);
+    return std::nullopt;
+  }
+  auto r = run::prepare_job(job, machine, caps);
   print_diagnostics(r);
   if (!r.ok()) return std::nullopt;
   return std::move(*r.value);
@@ -49,7 +70,8 @@ void print_plan_summary(const run::CardJob& j) {
   const plan::PlanStats& s = j.planned.stats;
   const uint64_t chunks = j.wire_chunks();
   fmt::print("job        {}\n", j.job_file);
-  fmt::print("machine    {} ({:.0f} Hz)\n", j.machine.file, j.clock_hz());
+  fmt::print("machine    {}\n", j.machine.file);
+  fmt::print("card       {}\n", card::describe(j.caps));
   fmt::print("segments   {} card segments ({} step segments)\n", j.wire.segments.size(), s.step_segments);
   fmt::print("moves      {}\n", j.moves());
   fmt::print("chunks     {}, {:.2f} moves per chunk\n", chunks,
@@ -225,7 +247,16 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
   return rc;
 }
 
-int run_sim_transport(const RunOptions& o, const run::CardJob& j) {
+int run_sim_transport(const RunOptions& o) {
+  // The simulated card of the board, asked what it is, as a real one is.
+  const std::string board = o.board.empty() ? std::string(builds::kDefaultBoard) : o.board;
+  if (!card::board_caps(board)) {
+    fmt::print(stderr, "cpstep run: --board {}: no such board (boards: {})\n", board, card::board_names());
+    return kExitRefused;
+  }
+  const auto job = prepare(o.job, o.machine, run::connect_sim(board));
+  if (!job) return kExitRefused;
+  const run::CardJob& j = *job;
   std::ofstream report_file;
   if (const int rc = open_outputs(o, report_file)) return rc;
   Progress progress(!o.no_progress);
@@ -233,6 +264,7 @@ int run_sim_transport(const RunOptions& o, const run::CardJob& j) {
   so.vcd = o.vcd;
   so.max_cycles = o.max_cycles;
   so.sck_div = o.sck_div;
+  so.board = board;
   so.progress = [&progress](uint64_t done, uint64_t total) { progress.update(done, total); };
   const auto began = std::chrono::steady_clock::now();
   const run::CardRun r = run::run_on_sim(j, so);
@@ -241,7 +273,26 @@ int run_sim_transport(const RunOptions& o, const run::CardJob& j) {
   return print_run(o, j, r, run::measure_run(j, r), wall_s, report_file);
 }
 
-int run_spidev_transport(const RunOptions& o, const run::CardJob& j) {
+int run_spidev_transport(const RunOptions& o) {
+  // Connect at the rate asked for, or at a rate every card takes (its clock is
+  // not known yet), read what the card is, plan for it, then run at the rate.
+  const std::string device = o.device.empty() ? "/dev/spidev0.0" : o.device;
+  std::unique_ptr<card::SpidevLink> link;
+  std::optional<card::CardCaps> caps;
+  try {
+    link = std::make_unique<card::SpidevLink>(device, uint32_t(o.spi_hz ? o.spi_hz : kConnectSpiHz));
+    card::ClientOptions co;
+    co.axes = plan::kAxes;
+    card::CardClient client(*link, co);
+    client.poll();
+    caps = card::read_caps(client);
+  } catch (const std::runtime_error& e) {
+    fmt::print(stderr, "cpstep run: {}; nothing was sent\n", e.what());
+    return kExitRefused;
+  }
+  const auto job = prepare(o.job, o.machine, *caps);
+  if (!job) return kExitRefused;
+  const run::CardJob& j = *job;
   const uint64_t limit = uint64_t(j.clock_hz() / 8);
   const uint64_t hz = o.spi_hz ? o.spi_hz : limit;
   if (hz > limit) {
@@ -251,9 +302,8 @@ int run_spidev_transport(const RunOptions& o, const run::CardJob& j) {
   }
   std::ofstream report_file;
   if (const int rc = open_outputs(o, report_file)) return rc;
-  std::unique_ptr<card::SpidevLink> link;
   try {
-    link = std::make_unique<card::SpidevLink>(o.device.empty() ? "/dev/spidev0.0" : o.device, uint32_t(hz));
+    if (!o.spi_hz) link = std::make_unique<card::SpidevLink>(device, uint32_t(hz));
   } catch (const card::LinkError& e) {
     fmt::print(stderr, "cpstep run: {}\n", e.what());
     report_file.close();
@@ -291,6 +341,10 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& o) {
                 "command words to --out")
       ->capture_default_str()
       ->check(CLI::IsMember({"sim", "spidev", "file"}));
+  c->add_option("--board", o.board,
+                "sim: the board whose card build is simulated; file: the board planned for (rtl/builds.json: " +
+                    card::board_names() + "; default " + std::string(builds::kDefaultBoard) +
+                    "). spidev asks the card.");
   c->add_option("--out", o.out, "file transport: the command stream (little-endian 32-bit words)");
   c->add_option("--vcd", o.vcd, "sim: write the STEP/DIR pins to this VCD file");
   c->add_option("--report", o.report, "sim: write the JSON report here");
@@ -312,6 +366,8 @@ CLI::App* add_plan_command(CLI::App& app, PlanOptions& o) {
   c->add_option("JOB", o.job, "the G-code file")->required();
   c->add_option("--machine", o.machine, "the machine file (TOML, docs/PLANNING.md)")->required();
   c->add_option("-o,--out", o.out, "write the command words (little-endian 32-bit) here");
+  c->add_option("--board", o.board, "the board planned for (rtl/builds.json: " + card::board_names() +
+                                        "; default " + std::string(builds::kDefaultBoard) + ")");
   return c;
 }
 
@@ -343,15 +399,23 @@ int run_job(const RunOptions& o) {
     fmt::print(stderr, "cpstep run: --device and --spi-hz are for --transport spidev\n");
     return kExitRefused;
   }
-  const auto j = prepare(o.job, o.machine);
+  if (o.transport == "spidev" && !o.board.empty()) {
+    fmt::print(stderr, "cpstep run: --board is for --transport sim and file (spidev asks the card what it is)\n");
+    return kExitRefused;
+  }
+  if (o.transport == "spidev") return run_spidev_transport(o);
+  if (o.transport == "sim") return run_sim_transport(o);
+  const auto caps = board_caps("run", o.board);
+  if (!caps) return kExitRefused;
+  const auto j = prepare(o.job, o.machine, *caps);
   if (!j) return kExitRefused;
-  if (o.transport == "file") return run_file_transport(o, *j);
-  if (o.transport == "spidev") return run_spidev_transport(o, *j);
-  return run_sim_transport(o, *j);
+  return run_file_transport(o, *j);
 }
 
 int plan_only(const PlanOptions& o) {
-  const auto j = prepare(o.job, o.machine);
+  const auto caps = board_caps("plan", o.board);
+  if (!caps) return kExitRefused;
+  const auto j = prepare(o.job, o.machine, *caps);
   if (!j) return kExitRefused;
   if (!o.out.empty() && !run::write_words(o.out, j->words)) {
     fmt::print(stderr, "cpstep plan: cannot write {}\n", o.out);

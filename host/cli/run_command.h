@@ -14,6 +14,7 @@ namespace cpstep::cli {
 struct RunOptions {
   std::string job, machine;
   std::string transport = "sim";   // sim | spidev | file
+  std::string board;               // sim: the board simulated; file: the board planned for ("": default)
   std::string out;                 // file transport: the command stream
   std::string vcd, report, plots;  // sim transport: optional outputs (spidev: the report)
   uint64_t max_cycles = 0;         // 0: twice the planned time plus 10^7 cycles
@@ -25,6 +26,7 @@ struct RunOptions {
 
 struct PlanOptions {
   std::string job, machine, out;
+  std::string board;               // the board planned for ("": the default board)
 };
 
 // Registers the subcommands on `app`; the options are filled when they parse.

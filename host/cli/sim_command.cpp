@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 
+#include "card/caps.h"
 #include "card/card_client.h"
 #include "card/protocol.h"
 #include "sim/card_configs.h"
@@ -18,9 +19,6 @@
 namespace cpstep::cli {
 
 namespace {
-
-using Dut = sim::RtlDut<sim::CardDefault>;
-static_assert(sim::CardDefault::kAxes == sim::kSimAxes);
 
 constexpr int kExitFault = 1;
 constexpr int kExitRefused = 2;
@@ -35,14 +33,19 @@ struct Stopped {
   std::string why;
 };
 
+template <class Card>
 class SimRun {
+  using Dut = sim::RtlDut<Card>;
+  static_assert(Card::kAxes == sim::kSimAxes);
+  static constexpr uint64_t kClockHz = Card::kBuild.clock_hz;
+
  public:
   SimRun(const SimOptions& o, sim::VcdWriter* vcd)
       : o_(o),
         vcd_(vcd),
         spi_(dut_, sim::spi_timing_for_divider(o.sck_div),
              [this](uint64_t c, const sim::CardIn& in, const sim::CardOut& out) { observe(c, in, out); }),
-        link_(spi_, double(o.clock_hz)),
+        link_(spi_, double(kClockHz)),
         client_(link_, client_options(o)) {
     link_.set_deadline(o.max_cycles);
     if (vcd_) {
@@ -124,7 +127,7 @@ class SimRun {
     card::ClientOptions c;
     c.axes = sim::kSimAxes;
     c.confirm_each_frame = false;  // the next frame's reply carries each result (pipelined)
-    c.poll_interval_s = kPollCycles / double(o.clock_hz);
+    c.poll_interval_s = kPollCycles / double(kClockHz);
     return c;
   }
 
@@ -138,7 +141,7 @@ class SimRun {
       vcd_->set(pins_[sim::kSimAxes + a], out.dir >> a & 1);
     }
     vcd_->set(estop_signal_, in.estop);
-    vcd_->sample(sim::cycle_start_ps(cycle, o_.clock_hz));
+    vcd_->sample(sim::cycle_start_ps(cycle, kClockHz));
   }
 
   std::string where() const {
@@ -206,8 +209,15 @@ int run_sim(const SimOptions& o) {
     fmt::print(stderr, "{}\n", e.what());
     return kExitRefused;
   }
-  if (o.clock_hz == 0 || o.clock_hz > 1'000'000'000'000u) {
-    fmt::print(stderr, "cpstep sim: --clock-hz must be 1..10^12\n");
+  const std::string board = o.board.empty() ? std::string(builds::kDefaultBoard) : o.board;
+  const builds::Build* build = builds::find(board);
+  if (!build || !build->board) {
+    fmt::print(stderr, "cpstep sim: --board {}: no such board (boards: {})\n", board, card::board_names());
+    return kExitRefused;
+  }
+  if (o.clock_hz != 0 && o.clock_hz != build->clock_hz) {
+    fmt::print(stderr, "cpstep sim: --clock-hz {}: the {} card runs at {} Hz\n", o.clock_hz, board,
+               build->clock_hz);
     return kExitRefused;
   }
   if (o.sck_div < 8) {
@@ -224,9 +234,14 @@ int run_sim(const SimOptions& o) {
     }
     vcd = std::make_unique<sim::VcdWriter>(vcd_file, "1ps", "cpstep");
   }
-  SimRun run(o, vcd.get());
-  const auto stopped = run.run(steps);
-  const int rc = run.report(stopped);
+  int rc = kExitRefused;
+#define CPSTEP_SIM_ON(name)                                                  \
+  if (board == #name) {                                                      \
+    SimRun<sim::CardOf<builds::name, Vcp_card_##name>> run(o, vcd.get());    \
+    rc = run.report(run.run(steps));                                         \
+  }
+  CPSTEP_FOR_EACH_BOARD(CPSTEP_SIM_ON)
+#undef CPSTEP_SIM_ON
   vcd_file.close();
   if (!o.vcd.empty() && !vcd_file) {
     fmt::print(stderr, "cpstep sim: writing {} failed\n", o.vcd);

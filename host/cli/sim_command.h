@@ -11,7 +11,8 @@ struct SimOptions {
   std::string file;
   std::string vcd;                      // "" for no waveform
   uint64_t max_cycles = 100'000'000;    // clock cycles, reset included
-  uint64_t clock_hz = 48'000'000;       // the VCD's time base
+  std::string board;                    // rtl/builds.json's board; "": the default board
+  uint64_t clock_hz = 0;                // 0: the board's; otherwise it must be the board's
   unsigned sck_div = 8;                 // clock cycles per SCK period (8 or more)
 };
 

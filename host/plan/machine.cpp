@@ -247,16 +247,24 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
     m.file = std::string(file);
     r.only_keys(root, "", {"card", "planner", "axes"});
 
-    if (const toml::table* card = r.table(root, "card", "card", true)) {
+    // [card] is optional: the card reports its clock, W and KMAX at connect
+    // (bind_card()); what is stated here is checked against it.
+    if (const toml::table* card = r.table(root, "card", "card", false)) {
         r.only_keys(*card, "card", {"clock_hz", "pattern_capacity", "max_doubling"});
-        m.card.clock_hz = r.number(*card, "card", "clock_hz", true, positive, "> 0").value_or(0);
-        m.card.pattern_capacity = static_cast<std::uint32_t>(
-            r.number(*card, "card", "pattern_capacity", false, capacity_ok,
-                     "an integer in 2..65536")
-                .value_or(m.card.pattern_capacity));
-        m.card.max_doubling = static_cast<std::uint32_t>(
-            r.number(*card, "card", "max_doubling", false, doubling_ok, "an integer in 0..16")
-                .value_or(m.card.max_doubling));
+        auto& c = m.card;
+        if (auto v = r.number(*card, "card", "clock_hz", false, positive, "> 0")) {
+            c.stated_clock_hz = c.clock_hz = *v;
+            c.clock_loc = loc_of(*card->get("clock_hz"));
+        }
+        if (auto v = r.number(*card, "card", "pattern_capacity", false, capacity_ok,
+                              "an integer in 2..65536")) {
+            c.stated_pattern_capacity = c.pattern_capacity = static_cast<std::uint32_t>(*v);
+            c.pattern_capacity_loc = loc_of(*card->get("pattern_capacity"));
+        }
+        if (auto v = r.number(*card, "card", "max_doubling", false, doubling_ok, "an integer in 0..16")) {
+            c.stated_max_doubling = c.max_doubling = static_cast<std::uint32_t>(*v);
+            c.max_doubling_loc = loc_of(*card->get("max_doubling"));
+        }
     }
 
     if (const toml::table* pl = r.table(root, "planner", "planner", false)) {
@@ -318,6 +326,55 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
     result.errors = std::move(r.errors());
     if (result.errors.empty()) result.value = std::move(m);
     return result;
+}
+
+std::vector<Diagnostic> bind_card(Machine& m, const CardFacts& card) {
+    std::vector<Diagnostic> errors;
+    const auto error = [&](SourceLoc loc, std::string message) {
+        errors.push_back({m.file, loc, std::move(message)});
+    };
+    const CardConfig& c = m.card;
+    if (c.stated_clock_hz > 0 && c.stated_clock_hz != card.clock_hz)
+        error(c.clock_loc, fmt::format("card.clock_hz = {}, but the card, {}, runs at {} Hz "
+                                       "(leave the key out to plan with the card's clock)",
+                                       c.stated_clock_hz, card.name, card.clock_hz));
+    if (c.stated_pattern_capacity > card.pattern_capacity)
+        error(c.pattern_capacity_loc,
+              fmt::format("card.pattern_capacity = {}, but the card, {}, builds patterns of at most {} moves",
+                          c.stated_pattern_capacity, card.name, card.pattern_capacity));
+    if (c.stated_max_doubling > card.max_doubling)
+        error(c.max_doubling_loc,
+              fmt::format("card.max_doubling = {}, but the card, {}, doubles at most k = {}",
+                          c.stated_max_doubling, card.name, card.max_doubling));
+    const double cycles = m.planner.chunk_tolerance_s * card.clock_hz;
+    if (cycles < 1.0)
+        error({}, fmt::format("planner.chunk_tolerance_us: {} us is less than one cycle of the card, {} ({} us)",
+                              m.planner.chunk_tolerance_s * 1e6, card.name, 1e6 / card.clock_hz));
+    const std::uint64_t max_cycles = card.timing_bits >= 32 ? UINT32_MAX : (std::uint64_t(1) << card.timing_bits) - 1;
+    PerAxis<PulseTimingCycles> pulse{};
+    for (int a = 0; a < kAxes; ++a) {
+        const AxisConfig& ax = m.axes[static_cast<std::size_t>(a)];
+        if (!ax.present) continue;
+        pulse[static_cast<std::size_t>(a)] = to_cycles(ax.pulse_ns, card.clock_hz);
+        const PulseTimingCycles& p = pulse[static_cast<std::size_t>(a)];
+        const std::pair<const char*, std::uint32_t> fields[] = {
+            {"step_high", p.step_high}, {"step_low", p.step_low}, {"dir_setup", p.dir_setup}, {"dir_hold", p.dir_hold}};
+        for (const auto& [name, v] : fields)
+            if (v > max_cycles)
+                error(ax.loc, fmt::format("axes.{}: {} is {} cycles at the card's {} Hz; the card, {}, times at "
+                                          "most {} cycles (TW = {} bits)",
+                                          kAxisLetters[static_cast<std::size_t>(a)], name, v, card.clock_hz,
+                                          card.name, max_cycles, card.timing_bits));
+    }
+    if (!errors.empty()) return errors;
+    m.card.clock_hz = card.clock_hz;
+    m.card.pattern_capacity = c.stated_pattern_capacity ? c.stated_pattern_capacity : card.pattern_capacity;
+    m.card.max_doubling = c.stated_max_doubling ? c.stated_max_doubling : card.max_doubling;
+    m.card.bound = true;
+    for (int a = 0; a < kAxes; ++a)
+        if (m.axes[static_cast<std::size_t>(a)].present)
+            m.axes[static_cast<std::size_t>(a)].pulse = pulse[static_cast<std::size_t>(a)];
+    return errors;
 }
 
 Result<Machine> load_machine(const std::filesystem::path& path) {

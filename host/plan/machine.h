@@ -65,10 +65,27 @@ struct AxisConfig {
     [[nodiscard]] double max_step_rate_hz(double clock_hz) const;
 };
 
+// The card the job is planned for. The values come from the card itself
+// (bind_card(), with what it reports at connect); the machine file's [card] keys
+// are optional and, where given, checked against the card, never trusted.
 struct CardConfig {
     double clock_hz = 0;
     std::uint32_t pattern_capacity = 1024;  // W: longest reduced pattern
     std::uint32_t max_doubling = 8;         // k: largest step-doubling exponent
+    bool bound = false;                     // set by bind_card()
+    // What the machine file says, and where (line 0: not given).
+    double stated_clock_hz = 0;
+    std::uint32_t stated_pattern_capacity = 0, stated_max_doubling = 0;
+    SourceLoc clock_loc, pattern_capacity_loc, max_doubling_loc;
+};
+
+// What a card reports of itself that the planner uses (card::CardCaps).
+struct CardFacts {
+    std::string name;            // e.g. "icebreaker (build b5ca169b)", for messages
+    double clock_hz = 0;
+    std::uint32_t pattern_capacity = 0;  // W
+    std::uint32_t max_doubling = 0;      // KMAX
+    unsigned timing_bits = 16;           // TW: pulse timing fields hold up to 2^TW - 1 cycles
 };
 
 enum class OnLimit { refuse, slow };
@@ -92,6 +109,14 @@ struct Machine {
         return planner.chunk_tolerance_s * card.clock_hz;
     }
 };
+
+// Plans `m` for this card: its clock, W and KMAX, and every axis's pulse timing
+// in its cycles. Errors (each at the machine file's line and column): a stated
+// [card] clock_hz other than the card's, a stated pattern_capacity or
+// max_doubling above the card's (a smaller one is kept: the planner uses it), a
+// pulse time longer than the card's timing fields hold, a chunk tolerance below
+// one card cycle. On error `m` is left as it was.
+std::vector<Diagnostic> bind_card(Machine& m, const CardFacts& card);
 
 // Parse a machine file held in memory; `file` names it in diagnostics.
 Result<Machine> parse_machine(std::string_view text, std::string_view file);

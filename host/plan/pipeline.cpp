@@ -10,6 +10,11 @@ namespace cpstep::plan {
 
 Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions& options) {
     Result<PlannedJob> result;
+    if (!(m.card.clock_hz > 0)) {
+        result.errors.push_back({m.file, {}, "no card clock: the machine file gives no [card] clock_hz and no "
+                                             "card was asked (plan::bind_card())"});
+        return result;
+    }
     auto segs = make_step_segments(job, m);
     result.warnings = segs.warnings;
     if (!segs.ok()) {

@@ -10,8 +10,12 @@ uint64_t CardJob::wire_chunks() const {
   return n;
 }
 
-plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode,
-                                  const std::filesystem::path& machine_file) {
+plan::CardFacts card_facts(const card::CardCaps& caps) {
+  return {card::card_name(caps), double(caps.clock_hz), caps.w, caps.kmax, caps.tw};
+}
+
+plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std::filesystem::path& machine_file,
+                                  const card::CardCaps& caps) {
   plan::Result<CardJob> r;
   auto machine = plan::load_machine(machine_file);
   r.warnings = machine.warnings;
@@ -19,6 +23,8 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode,
     r.errors = machine.errors;
     return r;
   }
+  r.errors = plan::bind_card(*machine.value, card_facts(caps));
+  if (!r.errors.empty()) return r;
   auto job = plan::load_gcode(gcode);
   r.warnings.insert(r.warnings.end(), job.warnings.begin(), job.warnings.end());
   if (!job.ok()) {
@@ -33,7 +39,7 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode,
     r.errors = planned.errors;
     return r;
   }
-  auto wire = card::to_wire(*planned, job->file);
+  auto wire = card::to_wire(*planned, job->file, card::limits(caps));
   if (!wire.ok()) {
     r.errors = wire.errors;
     return r;
@@ -42,6 +48,7 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode,
   CardJob& cj = r.value.emplace();
   cj.job_file = job->file;
   cj.machine = *machine;
+  cj.caps = caps;
   cj.planned = std::move(*planned.value);
   cj.wire = std::move(*wire.value);
   cj.words = card::encode_job(cj.machine, cj.wire);

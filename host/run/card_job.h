@@ -36,15 +36,22 @@ struct CardJob {
 
   [[nodiscard]] uint64_t moves() const { return planned.stats.moves; }
   [[nodiscard]] uint64_t wire_chunks() const;
+  card::CardCaps caps;                   // the card it is planned for
   [[nodiscard]] double clock_hz() const { return machine.card.clock_hz; }
 };
 
-// Loads the machine and the G-code, plans the job in the card's chunk form
+// The planner's view of a card's capabilities.
+plan::CardFacts card_facts(const card::CardCaps& caps);
+
+// Loads the machine and binds it to the card (plan::bind_card(): its clock, W,
+// KMAX, pulse timing in its cycles), loads the G-code, plans the job in the card's chunk form
 // (card::chunk_limits(): add2 unless the machine's planner.chunk_add2 is false)
 // and encodes it. Every error refuses the job;
 // warnings travel with the result.
-plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode,
-                                  const std::filesystem::path& machine);
+// and encodes it for that card (its UMAX, KMAX, chunk queue). Every error
+// refuses the job; warnings travel with the result.
+plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std::filesystem::path& machine,
+                                  const card::CardCaps& caps = card::default_caps());
 
 // The command stream as little-endian 32-bit words (the `file` transport and
 // `cpstep plan -o`). Returns false when the file cannot be written.

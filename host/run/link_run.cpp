@@ -43,6 +43,21 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
     run.faults.push_back(host_fault(HostFault::link, fmt::format("{}; nothing was sent", refuse)));
     return finish();
   }
+  // What the card says it is: the job must have been planned for it.
+  try {
+    const card::CardCaps caps = card::read_caps(client);
+    if (const std::string why = card::unusable(caps, plan::kAxes); !why.empty()) refuse = why;
+    else if (caps != job.caps)
+      refuse = fmt::format("the job was planned for {}, but the card is {}", card::describe(job.caps),
+                           card::describe(caps));
+  } catch (const card::CardError& e) {
+    refuse = fmt::format("reading the card's capabilities: {}", e.what());
+  }
+  if (!refuse.empty()) {
+    take_reply(run, client.last());
+    run.faults.push_back(host_fault(HostFault::link, fmt::format("{}; nothing was sent", refuse)));
+    return finish();
+  }
   std::vector<uint32_t> words;
   if (st0.fault) card::encode_control(false, false, true, words);  // CLEAR the fault left latched
   words.insert(words.end(), job.words.begin(), job.words.end());

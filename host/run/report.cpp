@@ -1,6 +1,11 @@
 #include "run/report.h"
 
+#include <fmt/format.h>
+
 #include <string>
+
+#include "card/caps.h"
+#include "cpstep/builds.h"
 
 namespace cpstep::run {
 
@@ -12,6 +17,19 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
   r["machine"] = job.machine.file;
   r["transport"] = run.link.transport.empty() ? "sim" : run.link.transport;
   r["clock_hz"] = job.clock_hz();
+  const card::CardCaps& c = job.caps;
+  const builds::Build* b = card::build_of(c);
+  r["card"] = {{"name", b ? std::string(b->name) : std::string()},
+               {"build_id", fmt::format("{:08x}", c.build_id)},
+               {"n", c.n},
+               {"w", c.w},
+               {"umax", c.umax},
+               {"kmax", c.kmax},
+               {"chunk_queue", c.chunk_queue()},
+               {"segment_queue", c.segment_queue()},
+               {"tw", c.tw},
+               {"command_buffer_words", c.command_buffer_words()},
+               {"protocol", c.protocol}};
   r["ok"] = run.ok();
   r["step_segments"] = st.step_segments;
   r["planned_card_segments"] = st.card_segments;

@@ -27,9 +27,6 @@ const char* host_fault_name(HostFault f) {
 
 namespace {
 
-using Dut = sim::RtlDut<sim::CardDefault>;
-static_assert(sim::CardDefault::kAxes == plan::kAxes);
-
 // Mismatching checkpoints listed one by one in the faults; the rest are counted.
 constexpr uint64_t kListedMismatches = 10;
 // A stopped card whose command buffer stays full this long has full queues and
@@ -177,9 +174,10 @@ class Recorder {
   plan::PerAxis<int64_t> pins_{};
 };
 
-}  // namespace
-
-CardRun run_on_sim(const CardJob& job, const SimRunOptions& o) {
+template <class Card>
+CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
+  using Dut = sim::RtlDut<Card>;
+  static_assert(Card::kAxes == plan::kAxes);
   CardRun run;
   std::ofstream vcd_file;
   std::unique_ptr<sim::VcdWriter> vcd;
@@ -194,7 +192,7 @@ CardRun run_on_sim(const CardJob& job, const SimRunOptions& o) {
   sim::SpiMaster<Dut> spi(dut, timing, [&rec](uint64_t c, const sim::CardIn& in, const sim::CardOut& out) {
     rec.observe(c, in, out);
   });
-  sim::SimLink<Dut> sim_link(spi, job.clock_hz());
+  sim::SimLink<Dut> sim_link(spi, double(Card::kBuild.clock_hz));
   const std::unique_ptr<card::Link> wrapped = o.wrap_link ? o.wrap_link(sim_link) : nullptr;
   card::ClientOptions co = o.client;
   co.axes = plan::kAxes;
@@ -219,6 +217,13 @@ CardRun run_on_sim(const CardJob& job, const SimRunOptions& o) {
   size_t sent = 0;
   try {
     client.poll();
+    // The card says what it is; the job must have been planned for exactly that.
+    const card::CardCaps caps = card::read_caps(client, keep_waiting);
+    if (const std::string why = card::unusable(caps, plan::kAxes); !why.empty())
+      throw card::CardError(why + "; nothing was sent");
+    if (caps != job.caps)
+      throw card::CardError(fmt::format("the job was planned for {}, but the card is {}; nothing was sent",
+                                        card::describe(job.caps), card::describe(caps)));
     sent = client.send(job.words, keep_waiting);
     if (sent == job.words.size()) client.wait_until_stopped(keep_waiting);
   } catch (const card::CardError& e) {
@@ -266,6 +271,45 @@ CardRun run_on_sim(const CardJob& job, const SimRunOptions& o) {
   vcd_file.close();
   if (!o.vcd.empty() && !vcd_file) throw std::runtime_error(fmt::format("writing {} failed", o.vcd));
   return run;
+}
+
+template <class Card>
+card::CardCaps connect_card() {
+  using Dut = sim::RtlDut<Card>;
+  Dut dut;
+  sim::SpiMaster<Dut> spi(dut, sim::spi_timing_for_divider(8));
+  sim::SimLink<Dut> link(spi, double(Card::kBuild.clock_hz));
+  card::ClientOptions co;
+  co.axes = Card::kAxes;
+  card::CardClient client(link, co);
+  spi.reset();
+  client.poll();
+  return card::read_caps(client);
+}
+
+}  // namespace
+
+std::string sim_board_for(const CardJob& job, const SimRunOptions& o) {
+  if (!o.board.empty()) return o.board;
+  const builds::Build* b = card::build_of(job.caps);
+  return b ? std::string(b->name) : std::string(builds::kDefaultBoard);
+}
+
+CardRun run_on_sim(const CardJob& job, const SimRunOptions& o) {
+  const std::string board = sim_board_for(job, o);
+#define CPSTEP_RUN_ON(name) \
+  if (board == #name) return run_on_card<sim::CardOf<builds::name, Vcp_card_##name>>(job, o);
+  CPSTEP_FOR_EACH_BOARD(CPSTEP_RUN_ON)
+#undef CPSTEP_RUN_ON
+  throw std::invalid_argument(fmt::format("no simulated board '{}' (boards: {})", board, card::board_names()));
+}
+
+card::CardCaps connect_sim(std::string_view board) {
+#define CPSTEP_CONNECT(name) \
+  if (board == #name) return connect_card<sim::CardOf<builds::name, Vcp_card_##name>>();
+  CPSTEP_FOR_EACH_BOARD(CPSTEP_CONNECT)
+#undef CPSTEP_CONNECT
+  throw std::invalid_argument(fmt::format("no simulated board '{}' (boards: {})", board, card::board_names()));
 }
 
 }  // namespace cpstep::run

@@ -72,6 +72,7 @@ struct CardRun {
 };
 
 struct SimRunOptions {
+  std::string board;                // rtl/builds.json's board to simulate; "": the job's (job.caps)
   std::string vcd;                  // "" for none: step_<axis>, dir_<axis> per pin
   uint64_t max_cycles = 0;          // 0: twice the planned job time plus 10^7
   unsigned sck_div = 8;             // clock cycles per SCK period (8 or more)
@@ -89,7 +90,19 @@ struct SimRunOptions {
 // (card::CardClient over the pin-level master), runs it to its end and takes
 // the final state from a POLL reply, while watching its pins every cycle.
 // Throws std::runtime_error when the VCD cannot be written.
+// First it reads the card's capabilities (READ 0x1F, 0x20..0x25) and refuses,
+// with a LINK fault and nothing sent, a card other than the one the job was
+// planned for (job.caps). The card simulated is the board options.board names
+// (rtl/builds.json), or else the build the job was planned for.
+// Throws std::invalid_argument for a board that is not in rtl/builds.json.
 CardRun run_on_sim(const CardJob& job, const SimRunOptions& options);
+
+// The board run_on_sim() simulates for this job and these options.
+std::string sim_board_for(const CardJob& job, const SimRunOptions& options);
+
+// Connects to a freshly reset simulated card of this board through its SPI pins
+// and reads its capabilities: what `cpstep run` plans with.
+card::CardCaps connect_sim(std::string_view board);
 
 // The parts of a run shared by every transport.
 Fault host_fault(HostFault f, std::string message);

@@ -26,12 +26,26 @@ struct Field {
   uint64_t (*get)(const Out&);
 };
 
+// The seed of the next RtlDut whose port adaptor asks for random initial values
+// (P::kRandomInit: a Verilated build with --x-initial unique); each such DUT takes
+// the current value and advances it, so runs are repeatable from the first seed.
+inline uint64_t& random_init_seed_state() {
+  thread_local uint64_t seed = 1;
+  return seed;
+}
+inline uint64_t random_init_seed() { return random_init_seed_state()++; }
+
 template <class P>
 class RtlDut {
  public:
   // trace_path: write an FST waveform of every signal there ("" for none).
   explicit RtlDut(const std::string& trace_path = "") : ctx_(std::make_unique<VerilatedContext>()) {
     ctx_->traceEverOn(!trace_path.empty());
+    // A build with random initial values (rtl/CMakeLists.txt XINIT) seeded per DUT.
+    if constexpr (requires { P::kRandomInit; }) {
+      ctx_->randReset(2);
+      ctx_->randSeed(int(random_init_seed()));
+    }
     rtl_ = std::make_unique<typename P::Rtl>(ctx_.get(), "top");
     if (!trace_path.empty()) {
       trace_ = std::make_unique<VerilatedFstC>();

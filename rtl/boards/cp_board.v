@@ -26,6 +26,15 @@ module cp_board #(
     parameter integer MUL_DSP = 0,
     // ENABLE pins: 1 = high enables the drivers (TMC2209, A4988 and most others
     // want low: their EN/ENABLE input is active low).
+    // Command buffer address width (docs/PROTOCOL.md).
+    parameter integer CBUF_AW = 9,
+    // Pin polarity after reset (docs/CORE.md).
+    parameter [0:0] STEP_POL_RESET = 1'b1,
+    parameter [0:0] DIR_POL_RESET = 1'b1,
+    // The card clock in Hz and the build id, reported in READ 0x24 / 0x25
+    // (scripts/synth sets both from rtl/builds.json).
+    parameter integer CLK_HZ = 48000000,
+    parameter [31:0] BUILD_ID = 32'h0,
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
     input  wire         osc_i,          // the 12 MHz oscillator's pin
@@ -34,7 +43,9 @@ module cp_board #(
     input  wire         spi_cs_n_i,
     input  wire         spi_mosi_i,
     inout  wire         spi_miso_io,    // driven only while CS is low
-    input  wire         estop_loop_i,   // E-stop loop: NC switch to ground, pulled up here
+    // E-stop loop: NC switch to ground, pulled up here. An inout as the SB_IO pad
+    // is (its output driver is configured off: PIN_TYPE 0000_01).
+    inout  wire         estop_loop_i,
     output wire [N-1:0] step_o,
     output wire [N-1:0] dir_o,
     output wire [N-1:0] enable_o,
@@ -67,11 +78,13 @@ generate
 endgenerate
 
 // ---------------------------------------------------------------- pads
-wire miso, miso_oe, estop;
+// Every pin of the cells tied explicitly (an input the pad does not use reads 0).
+wire miso, miso_oe, estop, miso_in;
 SB_IO #(.PIN_TYPE(6'b1010_01)) u_miso (
-    .PACKAGE_PIN(spi_miso_io), .OUTPUT_ENABLE(miso_oe), .D_OUT_0(miso));
+    .PACKAGE_PIN(spi_miso_io), .OUTPUT_ENABLE(miso_oe), .D_OUT_0(miso), .D_IN_0(miso_in));
 SB_IO #(.PIN_TYPE(6'b0000_01), .PULLUP(1'b1)) u_estop (
-    .PACKAGE_PIN(estop_loop_i), .D_IN_0(estop));
+    .PACKAGE_PIN(estop_loop_i), .OUTPUT_ENABLE(1'b0), .D_OUT_0(1'b0), .D_IN_0(estop));
+wire unused_pads = &{1'b0, miso_in};
 
 // ---------------------------------------------------------------- reset
 // Reset for 2^8 clocks after the PLL locks and while the button is held.
@@ -88,7 +101,8 @@ wire enable, running, fault, stretched;
 wire [7:0] err_code;
 wire [N*32-1:0] position;
 cp_card #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
-          .MUL_DSP(MUL_DSP)) u_card (
+          .MUL_DSP(MUL_DSP), .CBUF_AW(CBUF_AW), .STEP_POL_RESET(STEP_POL_RESET),
+          .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID)) u_card (
     .clk(clk), .rst(rst),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
     .spi_miso_o(miso), .spi_miso_oe_o(miso_oe),

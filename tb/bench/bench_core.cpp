@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "Vcp_core.h"
+#include "Vcp_core_hx8k.h"
 #include "sim/core_driver.h"
 #include "sim/core_port.h"
 
@@ -22,7 +22,7 @@ using namespace cpstep;
 namespace {
 
 constexpr unsigned kAxes = 4;
-struct CoreRtl : sim::CorePortBase<Vcp_core, kAxes> {};
+struct CoreRtl : sim::CorePortBase<Vcp_core_hx8k, kAxes> {};
 using Dut = sim::RtlDut<CoreRtl>;
 using Driver = sim::CoreDriver<Dut>;
 

@@ -312,7 +312,10 @@ class CoreHarness {
   void configure_all(const AxisTiming& t) {
     for (unsigned a = 0; a < params.n; ++a) configure(a, t);
   }
+  // CONFIG is refused while a STEP pulse is on a pin (docs/CORE.md, code 13): a
+  // host configures between jobs only once the last pulse has ended.
   void configure_random(uint32_t max_timing) {
+    for (uint64_t n = 0; chk.pulse_high() && n < 100000; ++n) idle(1);
     for (unsigned a = 0; a < params.n; ++a) configure(a, gen.timing(max_timing));
   }
   uint64_t control(bool start, bool abort, bool clear) {

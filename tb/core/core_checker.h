@@ -12,7 +12,8 @@
 //   from the START cycle), and is either exactly on time or counted late;
 // - every axis's pins obey its pulse timing and position_o counts its pulses
 //   (tb/pulse/pin_checker.h, one per axis);
-// - the configuration in force is decoded from the CONFIG words the core takes.
+// - the configuration in force is decoded from the CONFIG words the core takes
+//   (refused while running or while a STEP pin is at its active level).
 #pragma once
 
 #include <cstdint>
@@ -64,22 +65,29 @@ class CoreChecker {
       for (unsigned a = 0; a < p_.n; ++a) pins_[a].check(cycle, pulse_in(a, true), pins_of(out, a));
       return;
     }
+    // Leading edges as the pin checker classifies the raw pins (the polarity in force
+    // at the edge, a polarity edge is no pulse).
     uint32_t rise = 0;
     for (unsigned a = 0; a < p_.n; ++a) {
-      const auto po = pins_of(out, a);
-      pins_[a].check(cycle, pulse_in(a, false), po);
-      const bool active = po.step == cfg_[a].step_pol;
-      if (active && !active_[a]) {
+      pins_[a].check(cycle, pulse_in(a, false), pins_of(out, a));
+      if (pins_[a].leading()) {
         rise |= 1u << a;
-        const bool positive = po.dir == cfg_[a].dir_pol;
+        const bool positive = pins_[a].positive();
         pos_[a] += positive ? 1 : -1;
         dir_at_edge_[a] = positive;
       }
-      active_[a] = active;
     }
     if (rise) on_edges(rise, out);
     take_command(in, out);
     check_read_port(in, out);
+  }
+
+  // Some axis's STEP pin is at its active level in the cycle last observed (the core
+  // refuses CONFIG then: a host waits for this to fall before configuring).
+  bool pulse_high() const {
+    for (const PinChecker& c : pins_)
+      if (c.active()) return true;
+    return false;
   }
 
   // Figures.
@@ -131,7 +139,6 @@ class CoreChecker {
   void reset_state() {
     cfg_.assign(p_.n, AxisCfg{p_.step_high_reset, p_.step_low_reset, p_.dir_setup_reset,
                               p_.dir_hold_reset, p_.step_pol_reset, p_.dir_pol_reset});
-    active_.assign(p_.n, false);
     dir_at_edge_.assign(p_.n, false);
     pos_.assign(p_.n, 0);
     queue_.clear();
@@ -171,6 +178,7 @@ class CoreChecker {
     else if (r == 0x03) want = out.segments_done;
     else if (r == 0x1F) want = card::kCardId;
     else if (r == 0x20) return;  // the capabilities word: CoreFaults.DriversEnableAndCapabilities
+    else if (r >= 0x23 && r <= 0x25) return;  // more capability constants (docs/CORE.md): not checked here
     else if (r == 0x21) want = p_.w;
     else if (r == 0x22) want = p_.umax;
     else if (r >= 0x10 && r < 0x10 + p_.n) want = uint32_t(out.position[r - 0x10]);
@@ -263,8 +271,9 @@ class CoreChecker {
     anchored_ = true;
   }
 
-  // Command framing: CONFIG applies from the next cycle (unless refused), a START
-  // taken while stopped and without a fault anchors the timing.
+  // Command framing: CONFIG applies from the next cycle unless refused (while running,
+  // or while some axis's STEP pin is active: docs/CORE.md), a START taken while
+  // stopped and without a fault anchors the timing.
   void take_command(const model::CpCoreIn& in, const model::CpCoreOut& out) {
     if (!(in.cmd_valid && out.cmd_ready)) return;
     const uint32_t w = in.cmd_data;
@@ -276,7 +285,7 @@ class CoreChecker {
       case 0x1: words_left_ = 1 + p_.n + ((w >> 22 & 1) ? 3 : 2) * (w & 0xFFFF); break;
       case 0x2: {
         const uint32_t axis = w >> 24 & 0xF, field = w >> 20 & 0xF, value = w & 0xFFFF;
-        if (out.running || axis >= p_.n || field > 4 || (field <= 1 && value == 0)) break;
+        if (out.running || pulse_high() || axis >= p_.n || field > 4 || (field <= 1 && value == 0)) break;
         AxisCfg& c = cfg_[axis];
         switch (field) {
           case 0: c.high = value; break;
@@ -302,7 +311,7 @@ class CoreChecker {
   model::CpCoreParams p_;
   std::vector<PinChecker> pins_;
   std::vector<AxisCfg> cfg_;
-  std::vector<bool> active_, dir_at_edge_;
+  std::vector<bool> dir_at_edge_;
   std::vector<int64_t> pos_, origin_;
   std::deque<Seg> queue_;
   Cursor cursor_;

@@ -1,16 +1,19 @@
 // The core the validation benches (test_core_reject.cpp, test_core_add2.cpp) run
-// against: the default one, or with CPSTEP_TB_CORE_DSP (test_core_dsp in
-// CMakeLists.txt) the one whose chunk check multiplies in DSP blocks.
+// against: the HX8K's build (bit-serial multiplier), or with CPSTEP_TB_CORE_DSP
+// (test_core_dsp in CMakeLists.txt) the test build "dsp" of rtl/builds.json: the
+// same parameters with the chunk check multiplying in DSP blocks, as the
+// iCEBreaker's does (whose own core runs the random lockstep jobs and, as a
+// synthesized netlist, tb/netlist).
 #pragma once
 
 #include "sim/core_configs.h"
 #ifdef CPSTEP_TB_CORE_DSP
-#include "core/core_dsp.h"
+#include "Vcp_core_dsp.h"
 #endif
 
 namespace cpstep::tb {
 #ifdef CPSTEP_TB_CORE_DSP
-using ValidatedCore = sim::CoreDsp;
+using ValidatedCore = sim::CoreOf<builds::dsp, Vcp_core_dsp>;
 #else
 using ValidatedCore = sim::CoreDefault;
 #endif

@@ -200,8 +200,9 @@ TEST(CoreReject, LimitsAreAccepted) {
   ASSERT_EQ(s.k, p.kmax);
   s.chunks = {{3, uint16_t(1u << p.kmax), 0}};
   h.segment(s);
-  ASSERT_TRUE(h.gen.from_deltas({64, 0, 0, 13}, s));
-  s.chunks.assign(64, card::WireChunk{2, 1, 0});
+  const unsigned queue = 1u << p.caw;  // 2^CAW chunks: one move each
+  ASSERT_TRUE(h.gen.from_deltas({int64_t(queue), 0, 0, 13}, s));
+  s.chunks.assign(queue, card::WireChunk{2, 1, 0});
   s.end = true;
   h.segment(s);
   h.control(true, false, false);
@@ -210,7 +211,7 @@ TEST(CoreReject, LimitsAreAccepted) {
   // Not run: U = UMAX, and a chunk whose last delay is 2^32 - 1.
   h.expecting = false;
   std::vector<card::WireChunk> umax_chunks(p.umax / 65535, card::WireChunk{1, 65535, 0});
-  umax_chunks.push_back({1, uint16_t(p.umax % 65535), 0});
+  if (p.umax % 65535) umax_chunks.push_back({1, uint16_t(p.umax % 65535), 0});
   h.send(words_of(p.umax, 0, {p.umax, 0, p.umax / 5, 0}, umax_chunks));  // U/g = 5
   h.send(words_of(2, 0, {2, 1, 0, 0}, {{0xFFFFFFFEu, 2, 1}}));
   h.idle(100);

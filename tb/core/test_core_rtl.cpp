@@ -1,7 +1,7 @@
 // cp_core on its own (RTL): the paper's line as a 4-axis segment, from the pins.
 #include <gtest/gtest.h>
 
-#include "Vcp_core.h"
+#include "Vcp_core_hx8k.h"
 #include "model/oracle.h"
 #include "sim/core_driver.h"
 #include "sim/core_port.h"
@@ -9,7 +9,7 @@
 namespace cpstep::tb {
 namespace {
 
-struct CoreRtl : sim::CorePortBase<Vcp_core, 4> {};
+struct CoreRtl : sim::CorePortBase<Vcp_core_hx8k, 4> {};
 
 // Watches the pins: leading STEP edges per axis, and which axes stepped together.
 struct PinLog {

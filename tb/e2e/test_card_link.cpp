@@ -391,7 +391,7 @@ TEST_F(CardLink, TheSpidevPathRefusesABusyCard) {
 
 // rtl/CMakeLists.txt's small card: 2 axes, a chunk queue of 8, a command buffer
 // of 32 words.
-struct CardSmall : sim::CardPortBase<Vcp_card_small, 2> {};
+using CardSmall = sim::CardOf<builds::small, Vcp_card_small>;
 using SmallDut = sim::RtlDut<CardSmall>;
 constexpr unsigned kSmallBuffer = 32;
 

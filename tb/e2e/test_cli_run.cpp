@@ -176,7 +176,10 @@ TEST(CliRun, SmallJobOnTheSimulatedCard) {
   for (const char* key : {"clock_hz", "segments", "chunks", "moves", "max_timing_error_cycles", "faults",
                           "stretches", "job_time_s", "axes"})
     EXPECT_TRUE(rep.contains(key)) << key;
-  EXPECT_EQ(rep["clock_hz"].get<double>(), 48e6);  // plotter.toml: clock_hz = 48_000_000
+  // The default board's card (the iCEBreaker's, 18 MHz), as the card reported it.
+  EXPECT_EQ(rep["clock_hz"].get<double>(), 18e6);
+  EXPECT_EQ(rep["card"]["name"], "icebreaker");
+  EXPECT_EQ(rep["card"]["w"].get<int>(), 256);
   EXPECT_EQ(rep["faults"], json::array());
   EXPECT_EQ(rep["warnings"], json::array());
   EXPECT_EQ(rep["stretches"].get<int>(), 0);
@@ -187,18 +190,18 @@ TEST(CliRun, SmallJobOnTheSimulatedCard) {
   EXPECT_EQ(summary_number(p.out, "chunks"), d.chunks);
   EXPECT_EQ(summary_number(r.out, "segments"), d.segments);
   EXPECT_EQ(summary_number(r.out, "chunks"), d.chunks);
-  // Never late, at most the chunk tolerance (1 us = 48 cycles) early, plus the
+  // Never late, at most the chunk tolerance (1 us = 18 cycles) early, plus the
   // rounding of an ideal time to a whole cycle.
-  EXPECT_LE(rep["max_timing_error_cycles"].get<double>(), 48 + 1);
+  EXPECT_LE(rep["max_timing_error_cycles"].get<double>(), 18 + 1);
   EXPECT_GT(rep["job_time_s"].get<double>(), 0.1);
 
   // Per axis: positions, pulse timing from the driver presets (docs/PLANNING.md,
   // TMC2209 100/100/20/20 ns on x and y, A4988 1000/1000/200/200 ns on z, ns
-  // rounded up to 48 MHz cycles) and the realized peaks against the limits.
+  // rounded up to 18 MHz cycles) and the realized peaks against the limits.
   const json& axes = rep["axes"];
   ASSERT_EQ(axes.size(), 3u);
   const char* names[3] = {"x", "y", "z"};
-  const int high[3] = {5, 5, 48}, hold[3] = {1, 1, 10};
+  const int high[3] = {2, 2, 18}, hold[3] = {1, 1, 4};
   const double vmax[3] = {100, 100, 20}, amax[3] = {2000, 2000, 500}, jmax[3] = {50000, 50000, 10000};
   for (int a = 0; a < 3; ++a) {
     SCOPED_TRACE(names[a]);

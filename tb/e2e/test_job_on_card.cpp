@@ -5,22 +5,28 @@
 
 #include <numeric>
 
-#include "Vcp_core.h"
+#include "Vcp_core_hx8k.h"
 #include "card/job.h"
 #include "plan/gcode.h"
 #include "plan/pipeline.h"
 #include "sim/core_driver.h"
+#include "cpstep/builds.h"
 #include "sim/core_port.h"
 
 namespace cpstep::tb {
 namespace {
 
-struct CoreRtl : sim::CorePortBase<Vcp_core, 4> {};
+struct CoreRtl : sim::CorePortBase<Vcp_core_hx8k, 4> {};
 
 plan::Machine machine(const char* name) {
   auto m = plan::load_machine(std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/" + name);
   EXPECT_TRUE(m.ok()) << plan::join(m.errors);
-  return *m;
+  // Bound to the core these tests drive: the HX8K's build (rtl/builds.json).
+  plan::Machine bound = *m;
+  const builds::Build& b = builds::hx8k;
+  const auto errors = plan::bind_card(bound, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw});
+  EXPECT_TRUE(errors.empty()) << plan::join(errors);
+  return bound;
 }
 
 plan::PlannedJob plan_text(const std::string& gcode, const plan::Machine& m) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "cpstep/builds.h"
 #include "plan/pipeline.h"
 #include "plan/steptime.h"
 
@@ -63,8 +64,14 @@ void check_plan(const PlannedJob& pj, const Machine& m) {
 class Examples : public ::testing::TestWithParam<std::pair<const char*, const char*>> {};
 
 TEST_P(Examples, PlansWithinTheCardsRules) {
-    auto m = load_machine(kDir + "/machines/" + GetParam().first);
-    ASSERT_TRUE(m.ok()) << join(m.errors);
+    auto loaded = load_machine(kDir + "/machines/" + GetParam().first);
+    ASSERT_TRUE(loaded.ok()) << join(loaded.errors);
+    // Planned for the default board's card (rtl/builds.json), as `cpstep plan` does.
+    const cpstep::builds::Build& b = *cpstep::builds::find(cpstep::builds::kDefaultBoard);
+    Machine bound = *loaded;
+    const auto bind_errors = bind_card(bound, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw});
+    ASSERT_TRUE(bind_errors.empty()) << join(bind_errors);
+    const Machine* m = &bound;
     auto job = load_gcode(kDir + "/jobs/" + GetParam().second);
     ASSERT_TRUE(job.ok()) << join(job.errors);
     auto plan = plan_job(*job, *m);

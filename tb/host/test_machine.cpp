@@ -146,6 +146,46 @@ struct BadCase {
     std::string message;  // exact, whole diagnostic list
 };
 
+// [card] is optional (the card reports its clock, W and KMAX): without it the
+// machine is unbound until bind_card(), which takes the card's values.
+TEST(Machine, CardTableIsOptionalAndBindTakesTheCards) {
+    auto r = parse(edit("[card]\nclock_hz = 50_000_000\n", ""));
+    ASSERT_TRUE(r.ok()) << join(r.errors);
+    Machine m = *r;
+    EXPECT_EQ(m.card.clock_hz, 0.0);
+    EXPECT_FALSE(m.card.bound);
+    const auto errors = bind_card(m, {"test card", 20e6, 300, 5, 16});
+    ASSERT_TRUE(errors.empty()) << join(errors);
+    EXPECT_TRUE(m.card.bound);
+    EXPECT_EQ(m.card.clock_hz, 20e6);
+    EXPECT_EQ(m.card.pattern_capacity, 300u);
+    EXPECT_EQ(m.card.max_doubling, 5u);
+    // DM556 step_high 2500 ns at 20 MHz: 50 cycles.
+    EXPECT_EQ(m.axes[0].pulse.step_high, 50u);
+}
+
+// Stated [card] keys are checked against the card; pulse times against its TW.
+TEST(Machine, BindRefusesWhatTheCardCannotDo) {
+    auto r = parse(kGood);
+    ASSERT_TRUE(r.ok()) << join(r.errors);
+    Machine m = *r;  // states clock_hz = 50 MHz
+    auto errors = bind_card(m, {"card A", 40e6, 1024, 8, 16});
+    EXPECT_EQ(join(errors),
+              "mach.toml:2:12: card.clock_hz = 50000000, but the card, card A, runs at 40000000 Hz (leave the key "
+              "out to plan with the card's clock)");
+    EXPECT_FALSE(m.card.bound);
+    EXPECT_EQ(m.card.clock_hz, 50e6) << "a refused bind leaves the machine as it was";
+    // The card's clock, but timing fields of 6 bits (at most 63 cycles): DM556's
+    // 2500 ns is 125 cycles at 50 MHz.
+    errors = bind_card(m, {"card B", 50e6, 1024, 8, 6});
+    ASSERT_FALSE(errors.empty());
+    EXPECT_NE(join(errors).find("mach.toml:4:1: axes.x: step_high is 125 cycles at the card's 50000000 Hz; the card, "
+                                "card B, times at most 63 cycles (TW = 6 bits)"),
+              std::string::npos)
+        << join(errors);
+    EXPECT_TRUE(bind_card(m, {"card C", 50e6, 1024, 8, 16}).empty());
+}
+
 TEST(Machine, ErrorsNameFileLineColumn) {
     const BadCase cases[] = {
         {edit("steps_per_mm = 80", "steps_per_mm = 0"),
@@ -177,7 +217,6 @@ TEST(Machine, ErrorsNameFileLineColumn) {
         {edit("clock_hz = 50_000_000", "clock_hz = 5e7\nmax_doubling = 17"),
          "mach.toml:3:16: card.max_doubling: must be an integer in 0..16"},
         {edit("[axes.y]", "[axes.b]"), "mach.toml:13:7: axes.b: unknown key"},
-        {edit("[card]\nclock_hz = 50_000_000\n", ""), "mach.toml: card: missing table"},
         {std::string(kGood) + "[planner]\non_limit = \"fast\"\n",
          "mach.toml:27:12: planner.on_limit: must be \"refuse\" or \"slow\", not \"fast\""},
         {std::string(kGood) + "[planner]\nchunk_tolerance_us = 0.01\n",

@@ -35,14 +35,18 @@ class PulseBench {
     const Out o = ls_.step(in);
     checker_.check(c, in, o);
     if (!in.rst) {
-      const bool active = o.step == in.cfg_step_pol, dir = o.dir == in.cfg_dir_pol;
+      // Edges as the checker classifies them (raw pins, the polarity the edge was
+      // clocked with); a DIR edge is any change of the raw DIR pin.
+      const bool active = checker_.active();
       if (have_prev_) {
-        if (active && !prev_active_) leading.push_back(c);
+        if (checker_.leading()) leading.push_back(c);
         if (!active && prev_active_) trailing.push_back(c);
-        if (dir != prev_dir_) dir_edges.push_back(c);
+        if (o.step != prev_step_ && !active && !prev_active_) step_pol_edges.push_back(c);
+        if (o.dir != prev_dir_) dir_edges.push_back(c);
       }
       prev_active_ = active;
-      prev_dir_ = dir;
+      prev_step_ = o.step;
+      prev_dir_ = o.dir;
       have_prev_ = true;
     } else {
       have_prev_ = false;
@@ -94,12 +98,14 @@ class PulseBench {
   }
 
   Out last;
-  std::vector<uint64_t> leading, trailing, dir_edges;  // cycle of the first new level
+  // The cycle of the first new level: leading and trailing edges of pulses, STEP
+  // polarity edges (the pin moving between two gaps), raw DIR pin edges.
+  std::vector<uint64_t> leading, trailing, step_pol_edges, dir_edges;
 
  private:
   Lockstep<P> ls_{"pulse"};
   PinChecker checker_;
-  bool have_prev_ = false, prev_active_ = false, prev_dir_ = false;
+  bool have_prev_ = false, prev_active_ = false, prev_step_ = false, prev_dir_ = false;
 };
 
 inline uint64_t seed_from_env(uint64_t fallback) {

@@ -18,11 +18,10 @@
 
 namespace cpstep::tb {
 
-// The small card of rtl/CMakeLists.txt: 2 axes, W = 32, UMAX = 4095, KMAX = 3, a
+// The small card of rtl/builds.json: 2 axes, W = 32, UMAX = 4095, KMAX = 3, a
 // chunk queue of 8, a command buffer of 32 words, active-low STEP.
-struct CardSmall : sim::CardPortBase<Vcp_card_small, 2> {
-  static constexpr unsigned kCbufWords = 32;
-};
+using CardSmall = sim::CardOf<builds::small, Vcp_card_small>;
+static_assert(CardSmall::kCbufWords == 32);
 
 // One cycle of the pins, as the master drove them and the card answered.
 struct PinCycle {

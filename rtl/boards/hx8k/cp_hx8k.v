@@ -20,6 +20,15 @@ module cp_hx8k #(
     parameter integer TW = 16,
     // The HX8K has no DSP blocks: the chunk check multiplies bit-serially.
     parameter integer MUL_DSP = 0,
+    // Command buffer address width (docs/PROTOCOL.md).
+    parameter integer CBUF_AW = 9,
+    // Pin polarity after reset (docs/CORE.md).
+    parameter [0:0] STEP_POL_RESET = 1'b1,
+    parameter [0:0] DIR_POL_RESET = 1'b1,
+    // The card clock in Hz and the build id, reported in READ 0x24 / 0x25
+    // (scripts/synth sets both from rtl/builds.json).
+    parameter integer CLK_HZ = 48000000,
+    parameter [31:0] BUILD_ID = 32'h0,
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
     input  wire         CLK,
@@ -32,13 +41,15 @@ module cp_hx8k #(
     input  wire         SPI_CS_N,
     input  wire         SPI_MOSI,
     inout  wire         SPI_MISO,
-    input  wire         ESTOP_LOOP
+    inout  wire         ESTOP_LOOP     // an input: the pad's output driver is off
 );
 
 wire led_run_n, led_fault_n;
 cp_board #(.PLL_PAD(1'b0), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(PLL_DIVQ),
            .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
-           .SAW(SAW), .TW(TW), .MUL_DSP(MUL_DSP), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
+           .SAW(SAW), .TW(TW), .MUL_DSP(MUL_DSP), .CBUF_AW(CBUF_AW),
+           .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ),
+           .BUILD_ID(BUILD_ID), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
     .osc_i(CLK), .btn_n(1'b1),
     .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
     .estop_loop_i(ESTOP_LOOP),
