@@ -16,6 +16,7 @@
 #include "Vcp_core_icebreaker_netlist.h"
 #include "core/core_bench.h"
 #include "core/core_random.h"
+#include "core/core_reject_cases.h"
 #include "sim/core_configs.h"
 
 namespace cpstep::tb {
@@ -59,19 +60,6 @@ struct Rate {
   }
 };
 
-std::vector<uint32_t> words_of(uint32_t u, unsigned k, std::vector<uint32_t> v,
-                               std::vector<card::WireChunk> chunks, bool end = false) {
-  card::WireSegment s;
-  s.u = u;
-  s.k = k;
-  s.v = std::move(v);
-  s.dir_positive = {true, false, true, false};
-  s.chunks = std::move(chunks);
-  s.end = end;
-  std::vector<uint32_t> w;
-  card::encode_segment(s, w);
-  return w;
-}
 
 // Random jobs as the RTL benches run them (test_core_random.cpp), fewer and shorter:
 // the netlist simulates 15-20 times slower than the RTL (some 60,000 cycles/s).
@@ -124,43 +112,21 @@ TEST(CoreNetlist, IdentificationRegisters) {
   EXPECT_EQ(h.read(card::Register::build_id), b.build_id);
 }
 
-struct BadSegment {
-  const char* name;
-  uint32_t code;
-  std::vector<uint32_t> words;
-};
-
-// Bad commands (docs/CORE.md, "Validation"; tb/core/test_core_reject.cpp has them
-// all): the delay checks (codes 6 and 15) are the multiplier's products.
-std::vector<BadSegment> bad_segments() {
-  const auto p = CoreNetlist::model_params();
-  std::vector<card::WireChunk> many((1u << p.caw) + 1, card::WireChunk{10, 1, 0});
-  return {
-      {"v_above_U", 2, words_of(10, 0, {10, 0, 11, 0}, {{10, 10, 0}})},
-      {"k_above_KMAX", 3, words_of(2, p.kmax + 1, {2, 1, 0, 0}, {{10, uint16_t(2u << p.kmax), 0}})},
-      {"more_chunks_than_the_queue", 4, words_of(uint32_t(many.size()), 0, {uint32_t(many.size()), 3, 0, 0}, many)},
-      {"count_zero", 5, words_of(10, 0, {10, 3, 0, 0}, {{10, 10, 0}, {10, 0, 0}})},
-      {"delay_negative", 6, words_of(10, 0, {10, 3, 0, 0}, {{5, 10, -1}})},
-      {"delay_above_2pow32", 6, words_of(2, 0, {2, 1, 0, 0}, {{0xFFFFFFFFu, 2, 1}})},
-      {"add2_increments_change_sign", 15, words_of(10, 0, {10, 3, 0, 0}, {{50, 10, -5, 2}})},
-      {"add2_last_delay_negative", 6, words_of(20, 0, {20, 1, 0, 0}, {{100, 20, 0, -1}})},
-      {"add2_last_delay_far_above_2pow32", 6, words_of(65535, 0, {65535, 0, 0, 0}, {{1, 65535, 0, 3}})},
-      {"add2_last_delay_with_a_34_bit_product", 6,
-       words_of(65535, 0, {65535, 0, 0, 0}, {{0xFFFFFFFFu, 65535, 0, 4}})},
-      {"counts_short", 7, words_of(10, 0, {10, 3, 0, 0}, {{10, 9, 0}})},
-      {"pattern_above_W", 8, words_of(p.w + 1, 0, {p.w + 1, 1, 0, 0}, {{5, uint16_t(p.w + 1), 0}})},
-      {"opcode_5", 12, {0x50000001u}},
-  };
-}
-
-void expect_stopped_with(Harness& h, uint32_t code, const std::string& where) {
-  const card::Status st = h.status();
-  EXPECT_TRUE(st.fault) << where;
-  EXPECT_EQ(st.err_code, code) << where << ": error code";
-  EXPECT_FALSE(st.running) << where;
-  EXPECT_EQ(st.segments_queued, 0u) << where << ": queue not flushed";
-  EXPECT_EQ(st.chunks_queued, 0u) << where << ": chunks not flushed";
-  h.expect_counters(where);
+// The bad commands of tb/core/core_reject_cases.h (test_core_reject.cpp runs them all
+// on the RTL) that reach the synthesized logic's distinct paths: the delay checks
+// (codes 6 and 15) are the DSP multiplier's products.
+std::vector<BadInput> bad_segments() {
+  static const char* const kNames[] = {
+      "v_above_U", "k_above_KMAX", "more_chunks_than_the_queue", "count_zero", "delay_negative",
+      "delay_above_2pow32", "add2_increments_change_sign", "add2_last_delay_negative",
+      "add2_last_delay_far_above_2pow32", "add2_last_delay_with_a_34_bit_product", "counts_short",
+      "pattern_above_W", "opcode_5"};
+  std::vector<BadInput> picked;
+  for (const BadInput& b : bad_inputs(CoreNetlist::model_params()))
+    for (const char* n : kNames)
+      if (std::string(b.name) == n) picked.push_back(b);
+  EXPECT_EQ(picked.size(), std::size(kNames)) << "a name is not in the catalogue";
+  return picked;
 }
 
 // While a segment runs, a bad command: the running segment completes exactly, the bad
@@ -168,7 +134,7 @@ void expect_stopped_with(Harness& h, uint32_t code, const std::string& where) {
 TEST(CoreNetlist, RefusedWhileRunning) {
   Rate r;
   uint64_t cycles = 0;
-  for (const BadSegment& bad : bad_segments()) {
+  for (const BadInput& bad : bad_segments()) {
     Harness h(std::string("netlist_refused_") + bad.name, 11);
     const std::string where = std::string(bad.name) + " (running)";
     card::WireSegment a;
@@ -179,7 +145,7 @@ TEST(CoreNetlist, RefusedWhileRunning) {
     ASSERT_TRUE(h.wait_for([](const model::CpCoreOut& o) { return o.position[0] > 8; }, 5000))
         << where << ": the segment did not start";
     h.expecting = false;
-    h.send(bad.words);
+    h.send(bad.words());
     ASSERT_TRUE(h.wait_for([](const model::CpCoreOut& o) { return o.fault; }, 5000))
         << where << ": no fault latched";
     JobShape shape;
