@@ -29,23 +29,10 @@ namespace {
 // RTL (x-initial 0: p_state_q = 0 = P_CMD) and the model say 1. Outputs before the
 // first reset edge are not part of the contract (CoreNetlist.PowerUp shows which
 // differ, and that all agree from that edge on); the netlist the lockstep benches run
-// has had that one reset cycle (a board holds rst for 256 clocks after its PLL locks:
-// rtl/boards/cp_board.v).
-class NetlistAfterPowerUpReset : public Vcp_core_icebreaker_netlist {
- public:
-  explicit NetlistAfterPowerUpReset(VerilatedContext* ctx, const char* name = "TOP")
-      : Vcp_core_icebreaker_netlist(ctx, name) {
-    rst = 1;
-    clk = 0;
-    eval();
-    clk = 1;
-    eval();
-    clk = 0;
-    eval();
-  }
-};
+// has had that one reset cycle (AfterOneResetEdge; a board holds rst for 256 clocks
+// after its PLL locks: rtl/boards/cp_board.v).
 
-using CoreNetlist = sim::CoreOf<builds::icebreaker, NetlistAfterPowerUpReset>;
+using CoreNetlist = sim::CoreOf<builds::icebreaker, AfterOneResetEdge<Vcp_core_icebreaker_netlist>>;
 // The netlist straight from power-up.
 using CoreNetlistPowerUp = sim::CoreOf<builds::icebreaker, Vcp_core_icebreaker_netlist>;
 using Harness = CoreHarness<CoreNetlist>;
