@@ -1,0 +1,122 @@
+#include "model/cp_build.h"
+
+#include "model/bits.h"
+
+namespace cpstep::model {
+
+CpBuild::CpBuild(Params p)
+    : p_(p),
+      aw_(CpEngineParams{p.w}.aw()),
+      uw_(bits::clog2(uint64_t(p.umax) + 2)),
+      sqw_(p.saw + bits::clog2(p.n + 1)),
+      engine_(CpEngineParams{p.w, 0, 1, p.umax}) {}
+
+CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
+  const Regs& q = r_;
+  const CpEngineOut eo = engine_.outputs();
+  const uint32_t seg_mask = bits::mask(sqw_ + 1);
+  Out o;
+  d.segq = (q.segq + uint32_t(i.seg_commit)) & seg_mask;
+  const uint32_t val = uint32_t(i.seg_head) & 0xFFFFFF;
+  const uint32_t val_u = val & bits::mask(uw_);  // what the engine and b_u see
+  bool cap_done = false;
+  switch (q.state) {
+    case State::idle:
+      if (i.seg_valid && !i.fault && (i.run_level & 3) + uint32_t(i.cur_valid) <= 1) {
+        o.seg_pop = true;
+        d.segq = (d.segq - 1) & seg_mask;
+        d.u = val_u;
+        d.dir = uint32_t(i.seg_head >> 24) & bits::mask(p_.n);
+        d.end = (i.seg_head >> (28 + p_.n) & 1) != 0;
+        d.axis = 0;
+        d.moving = 0;
+        d.state = State::next_axis;
+      }
+      break;
+    case State::next_axis:
+      if (i.seg_valid && eo.in_ready) {
+        o.seg_pop = true;
+        d.moving = (q.moving | uint32_t(val != 0) << q.axis) & bits::mask(p_.n);
+        if (val == 0 || val_u == q.u) {
+          // A constant pattern: one move.
+          o.bank_we = true;
+          o.bank_waddr = 0;
+          o.bank_wbit = val != 0;
+          cap_done = true;
+        } else {
+          e.in_valid = true;
+          d.cap_addr = 0;
+          d.state = State::capture;
+        }
+      }
+      break;
+    case State::capture:
+      e.move_ready = true;
+      if (eo.move_valid) {
+        o.bank_we = true;
+        o.bank_waddr = q.cap_addr;
+        o.bank_wbit = eo.move;
+        d.cap_addr = (q.cap_addr + 1) & bits::mask(aw_);
+        cap_done = eo.move_pend;
+      }
+      if (eo.err) {
+        o.fault = true;
+        d.state = State::idle;
+      }
+      break;
+  }
+  if (cap_done) {
+    if (q.axis == p_.n - 1) {
+      o.run_wr = true;
+      o.run_data = uint64_t(q.build_lane) << (2 * p_.n + 1) | uint64_t(q.end) << (2 * p_.n) |
+                   uint64_t(d.moving) << p_.n | q.dir;
+      d.build_lane = !q.build_lane;
+      d.state = State::idle;
+    } else {
+      d.axis = (q.axis + 1) & 7;
+      d.state = State::next_axis;
+    }
+  }
+  if (i.flush) {
+    d.state = State::idle;
+    d.build_lane = false;
+    d.segq = 0;
+  }
+  // The engine is reset when a pattern's first period is in its bank, and by a flush.
+  e.rst = i.flush || (q.state == State::capture && cap_done);
+  o.len_we = cap_done;
+  o.len_m1 = q.state == State::capture ? q.cap_addr : 0;
+  o.bank_axis = q.axis;
+  o.build_lane = q.build_lane;
+  o.busy = q.state != State::idle;
+  o.segq = q.segq;
+  return o;
+}
+
+CpBuild::Out CpBuild::eval_outputs(const In& i) const {
+  Regs d = r_;
+  Engine e;
+  return eval(i, d, e);
+}
+
+void CpBuild::tick() {
+  Regs d = r_;
+  Engine e;
+  eval(in, d, e);
+  engine_.in.rst = in.rst || e.rst;
+  engine_.in.in_valid = e.in_valid;
+  engine_.in.in_u = r_.u;
+  engine_.in.in_v = uint32_t(in.seg_head) & 0xFFFFFF;
+  engine_.in.in_k = 0;
+  engine_.in.in_rep = 1;
+  engine_.in.move_ready = e.move_ready;
+  engine_.tick();
+  if (in.rst) {
+    d.state = State::idle;
+    d.build_lane = false;
+    d.segq = 0;
+  }
+  r_ = d;
+}
+
+}  // namespace cpstep::model

@@ -1,0 +1,78 @@
+// cp_build — cycle-accurate, bit-exact model of rtl/cp_build.v, the motion core's
+// pattern builder (docs/CORE.md "Structure" and "Builder"). It holds the one
+// CpEngine. Same ports as the RTL; outputs() before the edge, tick() the edge.
+#pragma once
+
+#include <cstdint>
+
+#include "model/cp_engine.h"
+
+namespace cpstep::model {
+
+struct CpBuildParams {
+  unsigned n = 4, w = 1024, umax = 1048575, saw = 2;
+};
+
+struct CpBuildIn {
+  bool rst = false, flush = false, fault = false;
+  bool seg_valid = false;
+  uint64_t seg_head = 0;  // 29 + N bits
+  bool seg_commit = false;
+  uint32_t run_level = 0;  // 2 bits
+  bool cur_valid = false;
+};
+
+struct CpBuildOut {
+  bool seg_pop = false;
+  bool run_wr = false;
+  uint64_t run_data = 0;  // {lane, end, moving[N], dir[N]}
+  bool bank_we = false;
+  uint32_t bank_axis = 0, bank_waddr = 0;
+  bool bank_wbit = false;
+  bool build_lane = false;
+  bool len_we = false;
+  uint32_t len_m1 = 0;
+  bool fault = false;  // the engine refused a pattern
+  bool busy = false;
+  uint32_t segq = 0;   // committed segments in the segment queue
+};
+
+class CpBuild {
+ public:
+  using Params = CpBuildParams;
+  using In = CpBuildIn;
+  using Out = CpBuildOut;
+
+  explicit CpBuild(Params p = {});
+  In in;
+  Out outputs() const { return eval_outputs(in); }
+  // The outputs for inputs `i` (the core settles its parts with it).
+  Out eval_outputs(const In& i) const;
+  void tick();
+
+  // Registered outputs, for the core's other parts.
+  bool busy() const { return r_.state != State::idle; }
+  uint32_t segq() const { return r_.segq; }
+
+ private:
+  enum class State { idle, next_axis, capture };
+  struct Regs {
+    State state = State::idle;  // reset
+    bool build_lane = false;    // reset
+    uint32_t segq = 0;          // reset
+    unsigned axis = 0;
+    uint32_t u = 0, dir = 0, moving = 0, cap_addr = 0;
+    bool end = false;
+  };
+  struct Engine {
+    bool in_valid = false, move_ready = false, rst = false;
+  };
+  Out eval(const In& i, Regs& d, Engine& e) const;
+
+  Params p_;
+  unsigned aw_, uw_, sqw_;
+  CpEngine engine_;
+  Regs r_;
+};
+
+}  // namespace cpstep::model

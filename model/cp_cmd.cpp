@@ -1,0 +1,250 @@
+#include "model/cp_cmd.h"
+
+#include "model/bits.h"
+
+namespace cpstep::model {
+namespace {
+
+constexpr uint32_t kOpSegment = 0x1, kOpConfig = 0x2, kOpControl = 0x3, kOpRead = 0x4;
+constexpr uint64_t kMask34 = (uint64_t(1) << 34) - 1;  // the count sum's width
+
+// Chunk queue word (81 bits): interval, add, count, add2, and the flag of a
+// segment's last chunk.
+FifoWord chunk_word(uint32_t interval, uint32_t add, uint32_t count, uint32_t add2, bool last) {
+  return {uint64_t(count & 0xFFFF) << 48 | uint64_t(add & 0xFFFF) << 32 | interval,
+          uint64_t(add2 & 0xFFFF) | uint64_t(last) << 16, 0, 0};
+}
+
+}  // namespace
+
+CpCmd::CpCmd(Params p) : p_(p), mask_tw_(bits::mask(p.tw)) {}
+
+bool CpCmd::ready(const In& i) const {
+  const bool keep = !r_.discard && !i.fault;
+  switch (r_.parse) {
+    case Parse::command:
+    case Parse::chunk_interval: return true;
+    case Parse::seg_h1:
+    case Parse::seg_v: return !keep || !i.seg_full;
+    case Parse::chunk_count: return r_.seg_add2 || !keep || !i.ch_full;
+    case Parse::chunk_add2: return !keep || !i.ch_full;
+    default: return false;  // checking a chunk, or a reply waits
+  }
+}
+
+// The chunk check's multiplier: one bit of mul_a a cycle; false when no bit is
+// left (the product is complete). The RTL's MUL_DSP build takes the same cycles
+// and ends with the same product.
+bool CpCmd::multiply_step(Regs& d) const {
+  const Regs& q = r_;
+  if (q.mul_a == 0) return false;
+  if (q.mul_a & 1) d.product = q.product + q.mul_b;
+  d.mul_a = q.mul_a >> 1;
+  d.mul_b = q.mul_b * 2;
+  return true;
+}
+
+CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
+  const Regs& q = r_;
+  Out o;
+  o.cmd_ready = ready(i);
+  o.rsp_valid = q.rsp_valid;
+  o.rsp_data = q.rsp_valid ? q.rsp_data : 0;
+  o.rsp_addr = q.rsp_valid ? q.rsp_addr : 0;
+  d.rsp_valid = q.rsp_valid && !i.rsp_ready;
+
+  const bool take = i.cmd_valid && o.cmd_ready;
+  const uint32_t word = i.cmd_data;
+  const bool keep = !q.discard && !i.fault;  // the segment being read is still good
+  auto refuse = [&](CoreError e) {
+    o.fault = true;
+    o.fault_code = uint32_t(e);
+  };
+  switch (q.parse) {
+    case Parse::command: {
+      if (!take) break;
+      switch (word >> 28) {
+        case kOpSegment:
+          d.hdr_end = (word >> 27 & 1) != 0;
+          d.hdr_k = word >> 23 & 0xF;
+          d.chunks_left = word & 0xFFFF;
+          d.seg_add2 = (word >> 22 & 1) != 0;
+          d.count_sum = 0;
+          d.discard = i.fault;
+          if (!i.fault) {
+            if (d.hdr_k > p_.kmax) {
+              refuse(CoreError::seg_k);
+              d.discard = true;
+            } else if (d.chunks_left == 0 || d.chunks_left > (1u << p_.caw)) {
+              refuse(CoreError::seg_chunks);
+              d.discard = true;
+            }
+          }
+          d.parse = Parse::seg_h1;
+          break;
+        case kOpConfig: {
+          const uint32_t axis = word >> 24 & 0xF, field = word >> 20 & 0xF, value = word & 0xFFFF;
+          // Refused while running, and while a STEP pulse is still high (after ABORT,
+          // E-stop or the run's last move): a polarity or timing write never cuts it.
+          if (i.running || i.pulse_busy) refuse(CoreError::config_busy);
+          else if (axis >= p_.n || field > 4 || (field <= 1 && value == 0) ||
+                   (field <= 3 && value > mask_tw_))  // must fit the TW-bit timing field
+            refuse(CoreError::config_value);
+          else o.cfg_write = true;
+          break;
+        }
+        case kOpControl:
+          o.start = (word & 1) != 0;
+          o.abort = (word >> 1 & 1) != 0;
+          o.clear = (word >> 2 & 1) != 0;
+          o.drivers_on = (word >> 3 & 1) != 0;
+          o.drivers_off = (word >> 4 & 1) != 0;
+          break;
+        case kOpRead:
+          d.rsp_valid = true;
+          d.rsp_data = i.read_data;
+          d.rsp_addr = word & 0xFF;
+          d.parse = Parse::reply;
+          break;
+        default: refuse(CoreError::bad_opcode); break;
+      }
+      break;
+    }
+    case Parse::seg_h1:
+      if (!take) break;
+      d.seg_u = word & 0xFFFFFF;
+      // The header word {end, k, dir, U} into the segment queue, uncommitted.
+      o.seg_wr = keep;
+      o.seg_data = uint64_t(q.hdr_end) << (28 + p_.n) | uint64_t(q.hdr_k) << (24 + p_.n) |
+                   uint64_t(word >> 24 & bits::mask(p_.n)) << 24 | d.seg_u;
+      if (keep && (d.seg_u == 0 || d.seg_u > p_.umax)) {
+        refuse(CoreError::seg_u);
+        d.discard = true;
+      }
+      d.v_index = 0;
+      d.parse = Parse::seg_v;
+      break;
+    case Parse::seg_v:
+      if (!take) break;
+      o.seg_wr = keep;
+      o.seg_data = word & 0xFFFFFF;
+      if (keep && (word & 0xFFFFFF) > q.seg_u) {
+        refuse(CoreError::seg_v_gt_u);
+        d.discard = true;
+      }
+      d.v_index = (q.v_index + 1) & 7;
+      // A segment announced with no chunk was refused at its header; it ends here.
+      if (q.v_index == p_.n - 1) d.parse = q.chunks_left == 0 ? Parse::command : Parse::chunk_interval;
+      break;
+    case Parse::chunk_interval:
+      if (!take) break;
+      d.interval = word;
+      d.parse = Parse::chunk_count;
+      break;
+    case Parse::chunk_count: {
+      if (!take) break;
+      const uint32_t count = word & 0xFFFF, add = word >> 16;
+      d.count = count;
+      d.add = add;
+      d.count_sum = (q.count_sum + count) & kMask34;
+      if (keep && (q.interval == 0 || count == 0)) {
+        refuse(CoreError::seg_chunk_zero);
+        d.discard = true;
+      }
+      d.product = 0;
+      if (q.seg_add2) {
+        d.parse = Parse::chunk_add2;
+      } else {
+        // The chunk's last word: add2 = 0, straight to pass 2 with 2·add.
+        d.add2 = 0;
+        o.ch_wr = keep;
+        d.mul_a = (count - 1) & 0xFFFF;
+        d.mul_b = 2 * bits::sext16(add);
+        d.parse = Parse::chunk_check;
+      }
+      break;
+    }
+    case Parse::chunk_add2: {
+      if (!take) break;
+      const uint32_t add2 = word & 0xFFFF;
+      d.add2 = add2;
+      o.ch_wr = keep;
+      d.product = 0;
+      if (add2 == 0) {
+        d.mul_a = (q.count - 1) & 0xFFFF;
+        d.mul_b = 2 * bits::sext16(q.add);
+        d.parse = Parse::chunk_check;
+      } else {
+        // Pass 1: (count-2)·add2, no multiplier bit when count < 2.
+        d.mul_a = q.count < 2 ? 0 : q.count - 2;
+        d.mul_b = bits::sext16(add2);
+        d.parse = Parse::chunk_inc;
+      }
+      break;
+    }
+    case Parse::chunk_inc: {
+      // Pass 1 done: the last increment add + (count-2)·add2 must not have the
+      // opposite sign of add; then pass 2's multiplicand add + last increment.
+      if (multiply_step(d)) break;
+      const int64_t add = bits::sext16(q.add), last_inc = add + q.product;
+      if (keep && ((add > 0 && last_inc < 0) || (add < 0 && last_inc > 0))) {
+        refuse(CoreError::seg_add2);
+        d.discard = true;
+      }
+      d.product = 0;
+      d.mul_a = (q.count - 1) & 0xFFFF;
+      d.mul_b = add + last_inc;
+      d.parse = Parse::chunk_check;
+      break;
+    }
+    case Parse::chunk_check: {
+      // Pass 2 done: the last delay interval + (count-1)·(add + last increment)/2;
+      // after the segment's last chunk, the count sum and the commit.
+      if (multiply_step(d)) break;
+      const int64_t last_delay = int64_t(q.interval) + (q.product >> 1);  // product is even
+      if (keep && (last_delay <= 0 || last_delay > int64_t(0xFFFFFFFF))) {
+        refuse(CoreError::seg_delay);
+        d.discard = true;
+      }
+      d.chunks_left = (q.chunks_left - 1) & 0xFFFF;
+      const uint64_t seg_moves = (uint64_t(q.seg_u) << q.hdr_k) & kMask34;
+      if (q.chunks_left != 1) {
+        d.parse = Parse::chunk_interval;
+      } else if (!keep || o.fault) {
+        o.ch_rollback = o.seg_rollback = true;
+        d.parse = Parse::command;
+      } else if (q.count_sum != seg_moves) {
+        refuse(CoreError::seg_count_sum);
+        o.ch_rollback = o.seg_rollback = true;
+        d.parse = Parse::command;
+      } else {
+        // The whole segment passed: its words and its chunks appear together.
+        o.seg_commit = o.ch_commit = true;
+        d.parse = Parse::command;
+      }
+      break;
+    }
+    case Parse::reply:
+      if (!q.rsp_valid || i.rsp_ready) d.parse = Parse::command;
+      break;
+  }
+  o.ch_data = chunk_word(q.interval, d.add, d.count, d.add2, q.chunks_left == 1);
+  return o;
+}
+
+CpCmd::Out CpCmd::eval_outputs(const In& i) const {
+  Regs d = r_;
+  return eval(i, d);
+}
+
+void CpCmd::tick() {
+  Regs d = r_;
+  eval(in, d);
+  if (in.rst) {
+    d.parse = Parse::command;
+    d.discard = d.rsp_valid = false;
+  }
+  r_ = d;
+}
+
+}  // namespace cpstep::model

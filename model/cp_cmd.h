@@ -1,0 +1,86 @@
+// cp_cmd — cycle-accurate, bit-exact model of rtl/cp_cmd.v, the motion core's
+// command parser and chunk check (docs/CORE.md "Structure" and "Cycle behaviour").
+// Same ports as the RTL; outputs() is what the RTL shows before the rising edge
+// for the inputs in `in`, tick() the edge.
+#pragma once
+
+#include <cstdint>
+
+#include "model/cp_core_ports.h"
+#include "model/cp_fifo.h"
+
+namespace cpstep::model {
+
+struct CpCmdParams {
+  unsigned n = 4, umax = 1048575, kmax = 8, caw = 6, tw = 16;
+};
+
+struct CpCmdIn {
+  bool rst = false;
+  bool cmd_valid = false;
+  uint32_t cmd_data = 0;
+  bool rsp_ready = false;
+  uint32_t read_data = 0;  // the register cmd_data[7:0] names, now
+  bool fault = false, running = false, pulse_busy = false;
+  bool seg_full = false, ch_full = false;
+};
+
+struct CpCmdOut {
+  bool cmd_ready = false;
+  bool rsp_valid = false;
+  uint32_t rsp_data = 0, rsp_addr = 0;
+  bool seg_wr = false, seg_commit = false, seg_rollback = false;
+  uint64_t seg_data = 0;  // 29 + N bits
+  bool ch_wr = false, ch_commit = false, ch_rollback = false;
+  FifoWord ch_data{};     // 81 bits: {last, add2, count, add, interval}
+  bool start = false, abort = false, clear = false, drivers_on = false, drivers_off = false;
+  bool cfg_write = false;
+  bool fault = false;
+  uint32_t fault_code = 0;
+};
+
+class CpCmd {
+ public:
+  using Params = CpCmdParams;
+  using In = CpCmdIn;
+  using Out = CpCmdOut;
+
+  explicit CpCmd(Params p = {});
+  In in;
+  Out outputs() const { return eval_outputs(in); }
+  // The outputs for inputs `i` (the core settles its parts with it).
+  Out eval_outputs(const In& i) const;
+  void tick();
+
+ private:
+  enum class Parse {
+    command, seg_h1, seg_v, chunk_interval, chunk_count, chunk_add2, chunk_inc, chunk_check, reply
+  };
+  struct Regs {
+    // Reset.
+    Parse parse = Parse::command;
+    bool discard = false;  // the segment being read is dropped
+    bool rsp_valid = false;
+    // Datapath.
+    bool hdr_end = false;  // the segment being read: end flag, k, U
+    uint32_t hdr_k = 0, seg_u = 0;
+    bool seg_add2 = false;  // its chunks carry add2 (three words)
+    uint32_t chunks_left = 0, v_index = 0;
+    uint32_t interval = 0, count = 0, add = 0, add2 = 0;
+    uint64_t count_sum = 0;
+    // The chunk check's products: pass 1 (count-2)·add2, pass 2
+    // (count-1)·(add + last increment); both fit 49 bits, never wrap.
+    int64_t product = 0, mul_b = 0;
+    uint32_t mul_a = 0;
+    uint32_t rsp_data = 0, rsp_addr = 0;
+  };
+  Out eval(const In& i, Regs& d) const;
+  bool multiply_step(Regs& d) const;
+  bool ready(const In& i) const;
+
+  Params p_;
+  uint32_t mask_tw_;
+  Regs r_;
+};
+
+}  // namespace cpstep::model

@@ -1,0 +1,102 @@
+// cp_run — cycle-accurate, bit-exact model of rtl/cp_run.v, the motion core's
+// runner: the pattern banks and the replay, the move-event timer, the fire
+// decision and the stretch count (docs/CORE.md "Structure", "Timing and stretch").
+// Same ports as the RTL; outputs() before the edge, tick() the edge.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "model/cp_core_ports.h"
+#include "model/cp_fifo.h"
+
+namespace cpstep::model {
+
+struct CpRunParams {
+  unsigned n = 4, w = 1024;
+};
+
+struct CpRunIn {
+  bool rst = false, flush = false, estop = false, start = false, abort = false, fault = false;
+  bool ch_valid = false;
+  FifoWord ch_head{};      // 81 bits: {last, add2, count, add, interval}
+  bool run_valid = false;
+  uint64_t run_head = 0;   // {lane, end, moving[N], dir[N]}
+  uint32_t run_level = 0;  // 2 bits
+  bool segq_empty = false, build_busy = false;
+  // The banks' write port (cp_build).
+  bool bank_we = false;
+  uint32_t bank_axis = 0, bank_waddr = 0;
+  bool bank_wbit = false, bank_lane = false;
+  bool len_we = false;
+  uint32_t len_m1 = 0;
+  uint32_t pulse_ready = 0;  // bit a: axis a's pulse timer is ready
+};
+
+struct CpRunOut {
+  bool ch_pop = false, run_pop = false;
+  uint32_t step = 0, dir = 0;  // bit a: axis a
+  bool running = false, cur_valid = false;
+  bool fire = false, seg_done = false, stretch = false, seg_active = false;
+  bool fault = false;  // underrun
+};
+
+class CpRun {
+ public:
+  using Params = CpRunParams;
+  using In = CpRunIn;
+  using Out = CpRunOut;
+
+  explicit CpRun(Params p = {});
+  In in;
+  Out outputs() const { return eval_outputs(in); }
+  // The outputs for inputs `i` (the core settles its parts with it).
+  Out eval_outputs(const In& i) const;
+  void tick();
+
+  // Registered outputs, for the core's other parts.
+  bool running() const { return r_.running; }
+  bool cur_valid() const { return r_.cur_valid; }
+  uint32_t dir() const { return r_.dir; }
+
+ private:
+  struct Regs {
+    // Reset.
+    bool running = false;
+    bool cur_valid = false;  // a segment is loaded for running
+    unsigned cur_lane = 0;
+    bool chunk_loaded = false;  // the timer holds a chunk
+    bool late = false;          // the pending move has been counted as stretched
+    bool rp_valid = false;      // the replay registers hold the next move
+    uint32_t dir = 0;
+    // Datapath.
+    bool cur_end = false;
+    uint32_t delay = 0, moves_left = 0, elapsed = 0;
+    uint32_t timer_inc = 0;   // the running increment, 32 bits (signed, mod 2^32)
+    uint32_t timer_add2 = 0;  // 16 bits
+    bool timer_last = false;  // the timer's chunk is its segment's last
+    // Replay: the address of the move in each axis's replay register, and each
+    // lane's pattern lengths minus one (lane, axis).
+    std::array<uint32_t, kCoreMaxAxes> rp_ptr{};
+    std::array<std::array<uint32_t, kCoreMaxAxes>, 2> lm1{};
+  };
+  // The replay's read of the banks this cycle.
+  struct Replay {
+    bool re = false;
+    unsigned lane = 0;
+    std::array<uint32_t, kCoreMaxAxes> next{};
+  };
+  Out eval(const In& i, Regs& d, Replay& rp) const;
+
+  Params p_;
+  unsigned aw_;
+  // Axis a's bank: lane l's pattern at l·2^AW + address; the replay registers
+  // (bit a: axis a's next move).
+  std::vector<std::vector<uint8_t>> banks_;
+  uint32_t rbits_ = 0;
+  Regs r_;
+};
+
+}  // namespace cpstep::model

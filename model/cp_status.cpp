@@ -1,0 +1,143 @@
+#include "model/cp_status.h"
+
+#include <algorithm>
+
+#include "model/bits.h"
+
+namespace cpstep::model {
+namespace {
+
+constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
+// The command set, register map and SPI frames version (READ 0x23 [23:16]).
+constexpr uint32_t kProtocolVersion = 2;
+
+}  // namespace
+
+FaultPick pick_fault(bool estop, bool abort, bool underrun, bool pattern, bool cmd_fault,
+                     uint32_t cmd_code) {
+  if (estop) return {true, uint32_t(CoreError::estop)};
+  if (abort) return {true, uint32_t(CoreError::abort)};
+  if (underrun) return {true, uint32_t(CoreError::underrun)};
+  if (pattern) return {true, uint32_t(CoreError::seg_pattern)};
+  if (cmd_fault) return {true, cmd_code & 0xFF};
+  return {};
+}
+
+CpStatus::CpStatus(Params p) : p_(p), mask_tw_(bits::mask(p.tw)) { r_ = reset_state(); }
+
+CpStatus::Regs CpStatus::reset_state() const {
+  Regs r;
+  for (PulseConfig& c : r.cfg) {
+    c.step_high = p_.step_high_reset & mask_tw_;
+    c.step_low = p_.step_low_reset & mask_tw_;
+    c.dir_setup = p_.dir_setup_reset & mask_tw_;
+    c.dir_hold = p_.dir_hold_reset & mask_tw_;
+    c.step_pol = p_.step_pol_reset;
+    c.dir_pol = p_.dir_pol_reset;
+  }
+  return r;
+}
+
+uint32_t CpStatus::status_word(const In& i) const {
+  const Regs& q = r_;
+  const uint32_t chunks = std::min<uint32_t>(i.ch_level & bits::mask(p_.caw + 1), 255);
+  const unsigned sqw = p_.saw + bits::clog2(p_.n + 1);
+  const uint32_t segments =
+      ((i.segq & bits::mask(sqw + 1)) + uint32_t(i.build_busy) + (i.run_level & 3) + uint32_t(i.cur_valid)) &
+      0xFF;
+  return chunks << 24 | segments << 16 | (q.err & 0xFF) << 8 | uint32_t(q.enable) << 4 |
+         uint32_t(i.estop) << 3 | uint32_t(q.stretched) << 2 | uint32_t(q.fault) << 1 |
+         uint32_t(i.running);
+}
+
+uint32_t CpStatus::read(const In& i, uint32_t reg) const {
+  const Regs& q = r_;
+  switch (reg & 0xFF) {
+    case 0x00: return status_word(i);
+    case 0x01: return q.stretch_count;
+    case 0x02: return q.moves_done;
+    case 0x03: return q.segments_done;
+    case 0x1F: return kCardId;
+    case 0x20: return (p_.tw & 0x1F) << 24 | (p_.saw & 0xF) << 20 | (p_.caw & 0xF) << 16 | (p_.kmax & 0xFF) << 8 |
+                      (p_.n & 0xFF);
+    case 0x21: return p_.w;
+    case 0x22: return p_.umax;
+    case 0x23: return kProtocolVersion << 16 | (p_.cbuf_aw & 0xFF) << 8 | (p_.pw & 0xFF);
+    case 0x24: return p_.clock_hz;
+    case 0x25: return p_.build_id;
+    default: {
+      const uint32_t r = reg & 0xFF;
+      if (r >= 0x10 && r < 0x10 + p_.n) return uint32_t(i.position[r - 0x10]);
+      return 0;
+    }
+  }
+}
+
+CpStatus::Out CpStatus::eval_outputs(const In& i) const {
+  const Regs& q = r_;
+  Out o;
+  o.rd_data0 = read(i, i.rd_addr0);
+  o.rd_data1 = read(i, i.rd_addr1);
+  o.fault = q.fault;
+  o.err = q.err;
+  // A latched fault lets the segment under way complete; E-stop and abort do not.
+  o.flush = i.estop || i.abort || (q.fault && !i.seg_active);
+  o.stretched = q.stretched;
+  o.enable = q.enable;
+  o.status = status_word(i);
+  o.stretch_count = q.stretch_count;
+  o.moves_done = q.moves_done;
+  o.segments_done = q.segments_done;
+  o.cfg = q.cfg;
+  return o;
+}
+
+void CpStatus::tick() {
+  if (in.rst) {
+    r_ = reset_state();
+    return;
+  }
+  const Regs& q = r_;
+  Regs d = q;
+  d.stretched = q.stretched || in.stretch;
+  d.stretch_count = q.stretch_count + uint32_t(in.stretch);
+  d.moves_done = q.moves_done + uint32_t(in.fire);
+  d.segments_done = q.segments_done + uint32_t(in.seg_done);
+  // Drivers: off wins over on; E-stop holds them off.
+  if (in.drivers_on) d.enable = true;
+  if (in.drivers_off || in.estop) d.enable = false;
+  // CLEAR drops what was latched before this cycle (a stretch in this very cycle
+  // stays); then the first fault latches.
+  const bool clearing = in.clear && !in.estop;
+  if (clearing) {
+    d.fault = false;
+    d.err = 0;
+    d.stretched = in.stretch;
+  }
+  const FaultPick f = pick_fault(in.estop, in.abort, in.run_fault, in.build_fault, in.cmd_fault, in.cmd_code);
+  if (f.set && (!q.fault || clearing)) {
+    d.fault = true;
+    d.err = f.code;
+  }
+  if (in.cfg_write) {
+    const uint32_t word = in.cfg_word;
+    const uint32_t axis = word >> 24 & 0xF;
+    if (axis < p_.n) {
+      PulseConfig& c = d.cfg[axis];
+      const uint32_t value = word & mask_tw_;
+      switch (word >> 20 & 0xF) {
+        case 0: c.step_high = value; break;
+        case 1: c.step_low = value; break;
+        case 2: c.dir_setup = value; break;
+        case 3: c.dir_hold = value; break;
+        default:
+          c.step_pol = (word & 1) != 0;
+          c.dir_pol = (word >> 1 & 1) != 0;
+          break;
+      }
+    }
+  }
+  r_ = d;
+}
+
+}  // namespace cpstep::model

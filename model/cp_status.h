@@ -1,0 +1,99 @@
+// cp_status — cycle-accurate, bit-exact model of rtl/cp_status.v, the motion
+// core's faults (one priority encoder), counters, pulse configuration and READ
+// registers (docs/CORE.md "Structure", "Faults"). Same ports as the RTL;
+// outputs() before the edge, tick() the edge.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "model/cp_core_ports.h"
+
+namespace cpstep::model {
+
+struct CpStatusParams {
+  unsigned n = 4, w = 1024, umax = 1048575, kmax = 8, caw = 6, saw = 2, tw = 16, pw = 32;
+  unsigned step_high_reset = 1, step_low_reset = 1, dir_setup_reset = 1, dir_hold_reset = 1;
+  bool step_pol_reset = true, dir_pol_reset = true;
+  unsigned cbuf_aw = 0;
+  uint32_t clock_hz = 48000000;
+  uint32_t build_id = 0;
+};
+
+struct CpStatusIn {
+  bool rst = false, estop = false;
+  bool abort = false, clear = false, drivers_on = false, drivers_off = false;
+  bool cfg_write = false;
+  uint32_t cfg_word = 0;
+  bool cmd_fault = false;
+  uint32_t cmd_code = 0;  // 8 bits
+  bool build_fault = false, run_fault = false;
+  bool stretch = false, fire = false, seg_done = false, seg_active = false;
+  bool running = false, cur_valid = false;
+  uint32_t segq = 0;
+  bool build_busy = false;
+  uint32_t run_level = 0, ch_level = 0;
+  std::array<uint64_t, kCoreMaxAxes> position{};  // PW bits each
+  uint32_t rd_addr0 = 0, rd_addr1 = 0;           // 8 bits each
+};
+
+struct PulseConfig {
+  uint32_t step_high = 1, step_low = 1, dir_setup = 1, dir_hold = 1;
+  bool step_pol = true, dir_pol = true;
+  bool operator==(const PulseConfig&) const = default;
+};
+
+struct CpStatusOut {
+  uint32_t rd_data0 = 0, rd_data1 = 0;
+  bool fault = false;
+  uint32_t err = 0;
+  bool flush = false, stretched = false, enable = false;
+  uint32_t status = 0, stretch_count = 0, moves_done = 0, segments_done = 0;
+  std::array<PulseConfig, kCoreMaxAxes> cfg{};
+};
+
+// The fault priority encoder: which fault (if any) a cycle raises. Highest
+// first: E-stop, abort, underrun, pattern, the command parser's refusal.
+struct FaultPick {
+  bool set = false;
+  uint32_t code = 0;
+};
+FaultPick pick_fault(bool estop, bool abort, bool underrun, bool pattern, bool cmd_fault,
+                     uint32_t cmd_code);
+
+class CpStatus {
+ public:
+  using Params = CpStatusParams;
+  using In = CpStatusIn;
+  using Out = CpStatusOut;
+
+  explicit CpStatus(Params p = {});
+  In in;
+  Out outputs() const { return eval_outputs(in); }
+  // The outputs for inputs `i` (the core settles its parts with it).
+  Out eval_outputs(const In& i) const;
+  void tick();
+
+  // Registered outputs, for the core's other parts.
+  bool fault() const { return r_.fault; }
+  const PulseConfig& config(unsigned axis) const { return r_.cfg[axis]; }
+  // Register `reg` as READ shows it for the inputs `i`.
+  uint32_t read(const In& i, uint32_t reg) const;
+
+ private:
+  struct Regs {
+    bool fault = false;
+    uint32_t err = 0;
+    bool stretched = false, enable = false;
+    uint32_t stretch_count = 0, moves_done = 0, segments_done = 0;
+    std::array<PulseConfig, kCoreMaxAxes> cfg{};
+  };
+  Regs reset_state() const;
+  uint32_t status_word(const In& i) const;
+
+  Params p_;
+  uint32_t mask_tw_;
+  Regs r_;
+};
+
+}  // namespace cpstep::model

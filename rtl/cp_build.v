@@ -1,0 +1,203 @@
+// cp_build — the motion core's pattern builder.
+//
+// Takes the next committed segment from the segment queue (its header, then v_i
+// for each axis in turn) once a lane is free, and writes each axis's pattern
+// into the build lane of that axis's bank (in cp_run): a constant pattern
+// (v = 0 or v = U) is one move; any other is built by the one Castle–Pitteway
+// engine from the unreduced (U, v_i), whose first period M2·reverse(M1) is
+// copied one move a clock. When the last axis is written, the segment (lane,
+// end flag, moving axes, directions) goes into the run queue and the build lane
+// flips. It also counts the committed segments waiting in the segment queue.
+//
+// Part of cp_core (docs/CORE.md "Structure"); model twin model/cp_build.*, bench
+// tb/core/test_core_parts.cpp.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module cp_build #(
+    parameter integer N = 4,
+    parameter integer W = 1024,
+    parameter integer UMAX = 1048575,
+    parameter integer SAW = 2
+) (
+    input  wire          clk,
+    input  wire          rst,
+    input  wire          flush_i,          // empty everything (cp_status)
+    input  wire          fault_i,          // a fault is latched: start nothing new
+
+    // Segment queue head, and the parser's commit of a whole segment.
+    input  wire          seg_valid_i,
+    input  wire [28+N:0] seg_head_i,
+    output reg           seg_pop_o,
+    input  wire          seg_commit_i,
+
+    // Lanes in use by the runner: built segments waiting, and the one loaded.
+    input  wire [1:0]    run_level_i,
+    input  wire          cur_valid_i,
+    output reg           run_wr_o,
+    output reg  [1+2*N:0] run_wdata_o,     // {lane, end, moving[N], dir[N]}
+
+    // Write port of the pattern banks (cp_run): axis, address, bit, in the build
+    // lane; and the pattern's length - 1 when an axis is done.
+    output reg           bank_we_o,
+    output wire [2:0]    bank_axis_o,
+    output reg  [AW-1:0] bank_waddr_o,
+    output reg           bank_wbit_o,
+    output wire          build_lane_o,
+    output reg           len_we_o,
+    output wire [AW-1:0] len_m1_o,
+
+    output reg           fault_o,          // the engine refused a pattern (too long)
+    output wire          busy_o,           // a segment is being built
+    output wire [SQW:0]  segq_o            // committed segments in the segment queue
+);
+
+localparam integer UW = $clog2(UMAX + 2);           // engine u/v width
+localparam integer AW = (W > 2) ? $clog2(W) : 1;
+localparam integer SQW = SAW + $clog2(N + 1);
+
+localparam [1:0] B_IDLE = 2'd0;   // waiting for a committed segment and a free lane
+localparam [1:0] B_V    = 2'd1;   // next axis: its v_i at the segment queue's head
+localparam [1:0] B_CAP  = 2'd2;   // the engine's first period into the bank
+
+reg [1:0]    b_state_q, b_state_d;       // reset
+reg          build_lane_q, build_lane_d; // reset
+reg [SQW:0]  segq_q, segq_d;             // reset
+reg [2:0]    b_axis_q, b_axis_d;
+reg [UW-1:0] b_u_q, b_u_d;
+reg          b_end_q, b_end_d;
+reg [N-1:0]  b_dir_q, b_dir_d, b_moving_q, b_moving_d;
+reg [AW-1:0] cap_addr_q, cap_addr_d;
+
+// Segment queue word fields.
+wire          head_end = seg_head_i[28 + N];
+wire [N-1:0]  head_dir = seg_head_i[24 +: N];
+wire [23:0]   head_val = seg_head_i[23:0];
+
+// ---------------------------------------------------------------- the engine
+reg            eng_in_valid, eng_move_ready, eng_rst, cap_done;
+wire           eng_in_ready, eng_err, eng_move_valid, eng_move, eng_move_last, eng_move_pend;
+wire [2:0]     eng_err_code;
+wire           dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter, dbg_m1_rev, dbg_m2_rev;
+wire [AW-1:0]  dbg_waddr1, dbg_waddr2, dbg_m1_lo, dbg_m1_len, dbg_m2_lo, dbg_m2_len;
+wire [UW-1:0]  dbg_x, dbg_y;
+
+cp_engine #(.W(W), .UMAX(UMAX), .KMAX(0), .RW(1), .ONE_PERIOD(1)) u_engine (
+    .clk(clk), .rst(rst || eng_rst),
+    .in_valid_i(eng_in_valid), .in_ready_o(eng_in_ready),
+    .in_u_i(b_u_q), .in_v_i(head_val[UW-1:0]), .in_k_i(1'b0), .in_rep_i(1'b1),
+    .err_o(eng_err), .err_code_o(eng_err_code),
+    .move_valid_o(eng_move_valid), .move_ready_i(eng_move_ready),
+    .move_o(eng_move), .move_last_o(eng_move_last), .move_pend_o(eng_move_pend),
+    .dbg_we1_o(dbg_we1), .dbg_waddr1_o(dbg_waddr1), .dbg_wbit1_o(dbg_wbit1),
+    .dbg_we2_o(dbg_we2), .dbg_waddr2_o(dbg_waddr2), .dbg_wbit2_o(dbg_wbit2),
+    .dbg_iter_o(dbg_iter), .dbg_x_o(dbg_x), .dbg_y_o(dbg_y),
+    .dbg_m1_lo_o(dbg_m1_lo), .dbg_m1_len_o(dbg_m1_len), .dbg_m1_rev_o(dbg_m1_rev),
+    .dbg_m2_lo_o(dbg_m2_lo), .dbg_m2_len_o(dbg_m2_len), .dbg_m2_rev_o(dbg_m2_rev));
+// The debug port is for the engine's own bench; the code is not needed (one refusal).
+wire unused = &{1'b0, dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter,
+                dbg_m1_rev, dbg_m2_rev, dbg_waddr1, dbg_waddr2, dbg_m1_lo,
+                dbg_m1_len, dbg_m2_lo, dbg_m2_len, dbg_x, dbg_y, eng_err_code, eng_move_last};
+
+// ---------------------------------------------------------------- next state
+always @* begin
+    b_state_d = b_state_q;  build_lane_d = build_lane_q;
+    segq_d = segq_q + {{SQW{1'b0}}, seg_commit_i};
+    b_axis_d = b_axis_q;  b_u_d = b_u_q;  b_end_d = b_end_q;
+    b_dir_d = b_dir_q;  b_moving_d = b_moving_q;  cap_addr_d = cap_addr_q;
+    seg_pop_o = 1'b0;  run_wr_o = 1'b0;  run_wdata_o = {(2+2*N){1'b0}};
+    bank_we_o = 1'b0;  bank_waddr_o = {AW{1'b0}};  bank_wbit_o = 1'b0;
+    eng_in_valid = 1'b0;  eng_move_ready = 1'b0;  cap_done = 1'b0;
+    fault_o = 1'b0;
+
+    case (b_state_q)
+    B_IDLE: if (seg_valid_i && !fault_i && {1'b0, run_level_i} + {2'd0, cur_valid_i} <= 3'd1) begin
+        seg_pop_o  = 1'b1;
+        segq_d     = segq_d - 1'b1;
+        b_u_d      = head_val[UW-1:0];
+        b_dir_d    = head_dir;
+        b_end_d    = head_end;
+        b_axis_d   = 3'd0;
+        b_moving_d = {N{1'b0}};
+        b_state_d  = B_V;
+    end
+    B_V: if (seg_valid_i && eng_in_ready) begin
+        seg_pop_o  = 1'b1;
+        b_moving_d = b_moving_q | ({{(N-1){1'b0}}, head_val != 24'd0} << b_axis_q);
+        if (head_val == 24'd0 || head_val[UW-1:0] == b_u_q) begin
+            // A constant pattern: one move.
+            bank_we_o    = 1'b1;
+            bank_waddr_o = {AW{1'b0}};
+            bank_wbit_o  = head_val != 24'd0;
+            cap_done     = 1'b1;
+        end else begin
+            eng_in_valid = 1'b1;
+            cap_addr_d   = {AW{1'b0}};
+            b_state_d    = B_CAP;
+        end
+    end
+    B_CAP: begin
+        eng_move_ready = 1'b1;
+        if (eng_move_valid) begin
+            bank_we_o    = 1'b1;
+            bank_waddr_o = cap_addr_q;
+            bank_wbit_o  = eng_move;
+            cap_addr_d   = cap_addr_q + 1'b1;
+            cap_done     = eng_move_pend;
+        end
+        if (eng_err) begin
+            fault_o   = 1'b1;
+            b_state_d = B_IDLE;
+        end
+    end
+    default: b_state_d = B_IDLE;
+    endcase
+    if (cap_done) begin
+        if ({29'd0, b_axis_q} == N - 1) begin
+            run_wr_o     = 1'b1;
+            run_wdata_o  = {build_lane_q, b_end_q, b_moving_d, b_dir_q};
+            build_lane_d = !build_lane_q;
+            b_state_d    = B_IDLE;
+        end else begin
+            b_axis_d  = b_axis_q + 1'b1;
+            b_state_d = B_V;
+        end
+    end
+    if (flush_i) begin
+        b_state_d    = B_IDLE;
+        build_lane_d = 1'b0;
+        segq_d       = {(SQW+1){1'b0}};
+    end
+    len_we_o = cap_done;
+end
+
+// The engine is reset when a pattern's first period is in its bank, and by a flush.
+always @* eng_rst = flush_i || (b_state_q == B_CAP && cap_done);
+
+// ---------------------------------------------------------------- registers
+always @(posedge clk) begin
+    if (rst) begin
+        b_state_q    <= B_IDLE;
+        build_lane_q <= 1'b0;
+        segq_q       <= {(SQW+1){1'b0}};
+    end else begin
+        b_state_q    <= b_state_d;
+        build_lane_q <= build_lane_d;
+        segq_q       <= segq_d;
+    end
+    b_axis_q <= b_axis_d;  b_u_q <= b_u_d;  b_end_q <= b_end_d;
+    b_dir_q <= b_dir_d;  b_moving_q <= b_moving_d;  cap_addr_q <= cap_addr_d;
+end
+
+// ---------------------------------------------------------------- outputs
+assign bank_axis_o  = b_axis_q;
+assign build_lane_o = build_lane_q;
+// The pattern's length - 1: the last address written (a constant pattern: 0).
+assign len_m1_o     = (b_state_q == B_CAP) ? cap_addr_q : {AW{1'b0}};
+assign busy_o       = b_state_q != B_IDLE;
+assign segq_o       = segq_q;
+
+endmodule
+
+`resetall

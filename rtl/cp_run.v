@@ -1,0 +1,244 @@
+// cp_run — the motion core's runner: pattern banks and replay, the move-event
+// timer, the fire decision and the stretch count.
+//
+// The banks hold two lanes of every axis's pattern: cp_build writes the build
+// lane while the replay reads the running one, one move a clock, into the replay
+// registers. The timer takes chunks from the chunk queue (interval, count, add,
+// add2) and counts the cycles since the last move event. A move fires when the
+// run is on, a segment is loaded, its move is due, the replay registers hold it
+// and every stepping axis's cp_pulse is ready; a move that is due and cannot
+// fire is counted late once. At a segment's last move the next built segment is
+// loaded from the run queue (its moving axes take their directions); with none
+// built and none coming, the run underruns.
+//
+// Part of cp_core (docs/CORE.md "Structure"); model twin model/cp_run.*, bench
+// tb/core/test_core_parts.cpp.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module cp_run #(
+    parameter integer N = 4,
+    parameter integer W = 1024
+) (
+    input  wire          clk,
+    input  wire          rst,
+    input  wire          flush_i,          // stop and empty (cp_status)
+    input  wire          estop_i,
+    input  wire          start_i,          // CONTROL start, this cycle
+    input  wire          abort_i,          // CONTROL abort, this cycle
+    input  wire          fault_i,          // a fault is latched
+
+    // Chunk queue head: {last, add2, count, add, interval}.
+    input  wire          ch_valid_i,
+    input  wire [80:0]   ch_head_i,
+    output reg           ch_pop_o,
+    // Run queue head: {lane, end, moving[N], dir[N]}.
+    input  wire          run_valid_i,
+    input  wire [1+2*N:0] run_head_i,
+    input  wire [1:0]    run_level_i,
+    output reg           run_pop_o,
+    // Whether more is coming: committed segments not yet built, one being built.
+    input  wire          segq_empty_i,
+    input  wire          build_busy_i,
+
+    // The banks' write port (cp_build).
+    input  wire          bank_we_i,
+    input  wire [2:0]    bank_axis_i,
+    input  wire [AW-1:0] bank_waddr_i,
+    input  wire          bank_wbit_i,
+    input  wire          bank_lane_i,
+    input  wire          len_we_i,
+    input  wire [AW-1:0] len_m1_i,
+
+    // Pulse timers: ready for a step; the steps of this move event and the
+    // direction each axis steps in.
+    input  wire [N-1:0]  pulse_ready_i,
+    output reg  [N-1:0]  step_o,
+    output wire [N-1:0]  dir_o,
+
+    output wire          running_o,
+    output wire          cur_valid_o,      // a segment is loaded
+    output wire          fire_o,           // a move event now
+    output wire          seg_done_o,       // the loaded segment's last move fires now
+    output wire          stretch_o,        // a move is counted late now
+    output wire          seg_active_o,     // a segment is under way and not ending now
+    output reg           fault_o           // underrun: the run ran out of segments
+);
+
+localparam integer AW = (W > 2) ? $clog2(W) : 1;
+
+reg          running_q, running_d;       // reset
+reg          cur_valid_q, cur_valid_d;   // reset: a segment is loaded for running
+reg          cur_lane_q, cur_lane_d;     // reset
+reg          ch_loaded_q, ch_loaded_d;   // reset: the timer holds a chunk
+reg          late_q, late_d;             // reset: the pending move has been counted as stretched
+reg          rp_valid_q, rp_valid_d;     // reset: the replay registers hold the next move
+reg [N-1:0]  dir_q, dir_d;               // reset
+reg          cur_end_q, cur_end_d;
+reg [31:0]   delay_q, delay_d;
+reg [15:0]   left_q, left_d;
+reg [31:0]   tinc_q, tinc_d;             // the running increment (signed)
+reg [15:0]   tadd2_q, tadd2_d;
+reg [31:0]   elapsed_q, elapsed_d;
+reg          tlast_q, tlast_d;           // the timer's chunk is its segment's last
+
+genvar ga;
+
+// ---------------------------------------------------------------- banks and replay
+// Axis a's bank holds lane l's pattern at {l, address}.
+reg            bank_re;
+reg  [AW-1:0]  rp_next [0:N-1];          // the address each axis reads next
+reg            rp_lane;                  // and the lane
+reg  [AW-1:0]  rp_ptr_q [0:N-1];         // the address of the move in the replay register
+reg  [AW-1:0]  lm1_q [0:15];             // lane l, axis a: pattern length - 1 at {l, a}
+wire [N-1:0]   lane_move;                // the replay registers: the next move's bits
+
+generate
+    for (ga = 0; ga < N; ga = ga + 1) begin : g_bank
+        localparam [2:0] AX = ga;
+        reg bank [0:2*(1<<AW)-1];
+        reg rbit_q;
+        always @(posedge clk) begin
+            if (bank_we_i && bank_axis_i == AX) bank[{bank_lane_i, bank_waddr_i}] <= bank_wbit_i;
+            if (bank_re) rbit_q <= bank[{rp_lane, rp_next[ga]}];
+        end
+        assign lane_move[ga] = rbit_q;
+    end
+endgenerate
+
+// ---------------------------------------------------------------- the decisions
+// A move fires when it is due, the replay registers hold it and every axis that
+// steps in it is ready; E-stop and abort stop it in the same cycle. A move is
+// counted late once: in the first cycle it is due and does not fire, or when it
+// fires after its time without having waited due (its chunk came late).
+wire due = ch_loaded_q && elapsed_q >= delay_q;
+assign fire_o = running_q && cur_valid_q && !estop_i && !abort_i && due && rp_valid_q &&
+                &(pulse_ready_i | ~lane_move);
+assign stretch_o = running_q && due && !late_q && !estop_i && !abort_i &&
+                   (!fire_o || elapsed_q != delay_q);
+assign seg_done_o = fire_o && left_q == 16'd1 && tlast_q;
+
+// ---------------------------------------------------------------- next state
+integer i;
+
+always @* begin
+    running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
+    ch_loaded_d = ch_loaded_q;  late_d = late_q;  rp_valid_d = rp_valid_q;  dir_d = dir_q;
+    cur_end_d = cur_end_q;  delay_d = delay_q;  left_d = left_q;  tinc_d = tinc_q;
+    tadd2_d = tadd2_q;  tlast_d = tlast_q;
+    elapsed_d = (elapsed_q == 32'hFFFF_FFFF) ? elapsed_q : elapsed_q + 1'b1;
+    ch_pop_o = 1'b0;  run_pop_o = 1'b0;  step_o = {N{1'b0}};  fault_o = 1'b0;
+    bank_re = 1'b0;  rp_lane = cur_lane_q;
+    for (i = 0; i < N; i = i + 1) rp_next[i] = rp_ptr_q[i];
+
+    if (stretch_o) late_d = 1'b1;
+    if (fire_o) late_d = 1'b0;
+
+    if (!ch_loaded_q && ch_valid_i) begin
+        ch_pop_o    = 1'b1;
+        ch_loaded_d = 1'b1;
+        delay_d     = ch_head_i[31:0];
+        tinc_d      = {{16{ch_head_i[47]}}, ch_head_i[47:32]};
+        left_d      = ch_head_i[63:48];
+        tadd2_d     = ch_head_i[79:64];
+        tlast_d     = ch_head_i[80];
+    end
+    if (fire_o) begin
+        step_o    = lane_move;
+        elapsed_d = 32'd1;
+        if (left_q != 16'd1) begin
+            left_d  = left_q - 1'b1;
+            delay_d = delay_q + tinc_q;
+            tinc_d  = tinc_q + {{16{tadd2_q[15]}}, tadd2_q};
+        end else if (ch_valid_i) begin
+            ch_pop_o = 1'b1;
+            delay_d  = ch_head_i[31:0];
+            tinc_d   = {{16{ch_head_i[47]}}, ch_head_i[47:32]};
+            left_d   = ch_head_i[63:48];
+            tadd2_d  = ch_head_i[79:64];
+            tlast_d  = ch_head_i[80];
+        end else begin
+            ch_loaded_d = 1'b0;
+        end
+        // The replay registers fetch the next move of the running lane's patterns.
+        if (!seg_done_o) begin
+            bank_re = 1'b1;
+            for (i = 0; i < N; i = i + 1)
+                rp_next[i] = (rp_ptr_q[i] == lm1_q[{cur_lane_q, i[2:0]}]) ? {AW{1'b0}} : rp_ptr_q[i] + 1'b1;
+        end
+    end
+    if (seg_done_o) begin
+        cur_valid_d = 1'b0;
+        rp_valid_d  = 1'b0;
+        if (cur_end_q) begin
+            running_d = 1'b0;
+        end else if (run_level_i == 2'd0 && segq_empty_i && !build_busy_i && !fault_i) begin
+            running_d = 1'b0;
+            fault_o   = 1'b1;
+        end
+    end
+    // Load the next built segment; its moving axes take their directions.
+    if ((!cur_valid_q || seg_done_o) && run_valid_i && !fault_i) begin
+        run_pop_o   = 1'b1;
+        cur_valid_d = 1'b1;
+        cur_lane_d  = run_head_i[1+2*N];
+        cur_end_d   = run_head_i[2*N];
+        for (i = 0; i < N; i = i + 1)
+            if (run_head_i[N + i]) dir_d[i] = run_head_i[i];
+        // The replay registers fetch each pattern's first move.
+        bank_re    = 1'b1;
+        rp_lane    = run_head_i[1+2*N];
+        rp_valid_d = 1'b1;
+        for (i = 0; i < N; i = i + 1) rp_next[i] = {AW{1'b0}};
+    end
+    if (start_i && !fault_i && !running_q) begin
+        running_d = 1'b1;
+        elapsed_d = 32'd1;
+    end
+    if (flush_i) begin
+        running_d   = 1'b0;
+        cur_valid_d = 1'b0;
+        ch_loaded_d = 1'b0;
+        cur_lane_d  = 1'b0;
+        late_d      = 1'b0;
+        rp_valid_d  = 1'b0;
+    end
+end
+
+// ---------------------------------------------------------------- registers
+integer a;
+always @(posedge clk) begin
+    if (rst) begin
+        running_q   <= 1'b0;
+        cur_valid_q <= 1'b0;
+        cur_lane_q  <= 1'b0;
+        ch_loaded_q <= 1'b0;
+        late_q      <= 1'b0;
+        rp_valid_q  <= 1'b0;
+        dir_q       <= {N{1'b0}};
+    end else begin
+        running_q   <= running_d;
+        cur_valid_q <= cur_valid_d;
+        cur_lane_q  <= cur_lane_d;
+        ch_loaded_q <= ch_loaded_d;
+        late_q      <= late_d;
+        rp_valid_q  <= rp_valid_d;
+        dir_q       <= dir_d;
+    end
+    cur_end_q <= cur_end_d;  delay_q <= delay_d;  left_q <= left_d;  tinc_q <= tinc_d;
+    tadd2_q <= tadd2_d;  tlast_q <= tlast_d;  elapsed_q <= elapsed_d;
+    for (a = 0; a < N; a = a + 1) if (bank_re) rp_ptr_q[a] <= rp_next[a];
+    // Only an axis that exists (the entries of others are never read: none are kept).
+    if (len_we_i && {29'd0, bank_axis_i} < N) lm1_q[{bank_lane_i, bank_axis_i}] <= len_m1_i;
+end
+
+// ---------------------------------------------------------------- outputs
+assign dir_o        = dir_q;
+assign running_o    = running_q;
+assign cur_valid_o  = cur_valid_q;
+assign seg_active_o = running_q && cur_valid_q && !seg_done_o;
+
+endmodule
+
+`resetall

@@ -1,0 +1,282 @@
+// cp_core's parts on their own: each Verilated part (cp_cmd, cp_build, cp_run,
+// cp_status) against its model twin every cycle, under random inputs shaped to
+// reach every state (whole legal segments among junk for the parser; segment
+// queue words for the builder; chunks, built segments and bank writes for the
+// runner; every fault request for the status). A part is a deterministic
+// function of its inputs, so any input sequence is a fair test of its twin; the
+// counters below check that the traffic reached what it is meant to reach.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <deque>
+#include <random>
+#include <set>
+
+#include "common/lockstep.h"
+#include "core/core_parts_ports.h"
+
+namespace cpstep::tb {
+namespace {
+
+using Rng = std::mt19937_64;
+
+uint32_t pick(Rng& rng, uint32_t lo, uint32_t hi) {
+  return std::uniform_int_distribution<uint32_t>(lo, hi)(rng);
+}
+bool chance(Rng& rng, unsigned pct) { return pick(rng, 0, 99) < pct; }
+
+// ---------------------------------------------------------------- cp_cmd
+// The words of one segment that passes every check (N = 3, UMAX 4095, KMAX 3,
+// 2^CAW = 8 chunks), sometimes with add2; or with one field broken.
+std::vector<uint32_t> segment_words(Rng& rng, bool legal) {
+  const uint32_t k = pick(rng, 0, 3), u = pick(rng, 1, 4095), nch = pick(rng, 1, 4);
+  const bool with_add2 = chance(rng, 40);
+  const uint32_t moves = u << k;
+  // Counts summing to u << k, each in 1..65535 (moves < 2^15, so any split fits).
+  std::vector<uint32_t> counts;
+  uint32_t left = moves;
+  for (uint32_t c = 0; c + 1 < nch && left > 1; ++c) {
+    const uint32_t take = pick(rng, 1, left - 1);
+    counts.push_back(take);
+    left -= take;
+  }
+  counts.push_back(left);
+  std::vector<uint32_t> w;
+  w.push_back(0x1u << 28 | uint32_t(chance(rng, 20)) << 27 | k << 23 | uint32_t(with_add2) << 22 |
+              uint32_t(counts.size()));
+  w.push_back(pick(rng, 0, 7) << 24 | u);
+  for (int a = 0; a < 3; ++a) w.push_back(chance(rng, 20) ? 0 : chance(rng, 20) ? u : pick(rng, 0, u));
+  for (uint32_t c : counts) {
+    w.push_back(pick(rng, 1, 5000));                            // interval
+    const uint32_t add = chance(rng, 50) ? pick(rng, 0, 3) : uint32_t(-int32_t(pick(rng, 0, 3)));
+    w.push_back((add & 0xFFFF) << 16 | c);
+    if (with_add2) w.push_back(chance(rng, 50) ? 0 : pick(rng, 0, 1));
+  }
+  if (!legal) {
+    // One field out of range: U, a v, a count, k, nchunks or an interval.
+    switch (pick(rng, 0, 5)) {
+      case 0: w[1] = (w[1] & 0xFF000000) | pick(rng, 4096, 0xFFFFFF); break;
+      case 1: w[2] = (w[1] & 0xFFFFFF) + 1; break;
+      case 2: w[6] ^= 1; break;
+      case 3: w[0] = (w[0] & ~(0xFu << 23)) | pick(rng, 4, 15) << 23; break;
+      case 4: w[0] = (w[0] & ~0xFFFFu) | (chance(rng, 50) ? 0 : pick(rng, 9, 0xFFFF)); break;
+      default: w[5] = 0; break;
+    }
+  }
+  return w;
+}
+
+uint32_t other_word(Rng& rng) {
+  switch (pick(rng, 0, 4)) {
+    case 0: return 0x2u << 28 | pick(rng, 0, 4) << 24 | pick(rng, 0, 5) << 20 | pick(rng, 0, 300);  // CONFIG
+    case 1: return 0x3u << 28 | pick(rng, 0, 31);                                                 // CONTROL
+    case 2: return 0x4u << 28 | pick(rng, 0, 0x30);                                               // READ
+    case 3: return pick(rng, 5, 15) << 28 | pick(rng, 0, 0xFFFFFFF);                              // bad op
+    default: return uint32_t(rng());                                                              // anything
+  }
+}
+
+template <class P>
+void cmd_traffic(uint64_t seed, int cycles) {
+  Rng rng(seed);
+  Lockstep<P> ls;
+  ls.reset();
+  std::deque<uint32_t> words;
+  model::CpCmdIn in;
+  uint64_t commits = 0, rollbacks = 0, replies = 0, cfg_writes = 0;
+  std::set<uint32_t> codes;
+  for (int c = 0; c < cycles; ++c) {
+    if (words.empty()) {
+      const uint32_t kind = pick(rng, 0, 99);
+      if (kind < 55) {
+        for (uint32_t w : segment_words(rng, true)) words.push_back(w);
+      } else if (kind < 75) {
+        for (uint32_t w : segment_words(rng, false)) words.push_back(w);
+      } else {
+        words.push_back(other_word(rng));
+      }
+    }
+    in.rst = pick(rng, 0, 9999) == 0;
+    in.cmd_valid = chance(rng, 80);
+    in.cmd_data = words.front();
+    in.rsp_ready = chance(rng, 50);
+    in.read_data = uint32_t(rng());
+    if (pick(rng, 0, 999) < (in.fault ? 20u : 2u)) in.fault = !in.fault;  // mostly clear
+    in.running = chance(rng, 10);
+    in.pulse_busy = chance(rng, 10);
+    in.seg_full = chance(rng, 10);
+    in.ch_full = chance(rng, 10);
+    const model::CpCmdOut o = ls.step(in);
+    if (in.cmd_valid && o.cmd_ready) words.pop_front();
+    commits += o.seg_commit;
+    rollbacks += o.seg_rollback;
+    replies += o.rsp_valid && in.rsp_ready;
+    cfg_writes += o.cfg_write;
+    if (o.fault) codes.insert(o.fault_code);
+  }
+  EXPECT_GT(commits, 100u) << "whole segments should pass";
+  EXPECT_GT(rollbacks, 100u);
+  EXPECT_GT(replies, 0u);
+  EXPECT_GT(cfg_writes, 0u);
+  // Every refusal the parser makes: 1..7, 12..15.
+  for (uint32_t code : {1u, 2u, 3u, 4u, 5u, 6u, 7u, 12u, 13u, 14u, 15u})
+    EXPECT_TRUE(codes.count(code)) << "refusal code " << code << " never raised";
+}
+
+TEST(CorePartCmd, RandomWordsMatchTheModel) { cmd_traffic<CmdPort>(11, 300000); }
+TEST(CorePartCmd, HardMultiplierMatchesTheBitSerialModel) { cmd_traffic<CmdDspPort>(12, 300000); }
+
+// ---------------------------------------------------------------- cp_build
+// Segment queue words as the parser commits them (N = 3): header {end, k, dir, U},
+// then v_0..v_2, 1 <= U <= UMAX = 200 and v <= U (cp_build's contract: its engine
+// runs in one-period mode, which checks nothing but the pattern's length); U up to
+// 200 against W = 32, so some patterns are too long.
+std::vector<uint64_t> build_words(Rng& rng) {
+  const uint32_t u = chance(rng, 30) ? pick(rng, 1, 8) : pick(rng, 1, 200);
+  std::vector<uint64_t> w;
+  w.push_back(uint64_t(chance(rng, 10)) << 31 | uint64_t(pick(rng, 0, 3)) << 27 |
+              uint64_t(pick(rng, 0, 7)) << 24 | u);
+  for (int a = 0; a < 3; ++a) {
+    const uint32_t r = pick(rng, 0, 9);
+    w.push_back(r < 2 ? 0 : r < 4 ? u : pick(rng, 0, u));
+  }
+  return w;
+}
+
+TEST(CorePartBuild, RandomSegmentsMatchTheModel) {
+  Rng rng(21);
+  Lockstep<BuildPort> ls;
+  ls.reset();
+  std::deque<uint64_t> words;
+  model::CpBuildIn in;
+  uint64_t built = 0, refused = 0, engine_moves = 0;
+  for (int c = 0; c < 300000; ++c) {
+    if (words.empty())
+      for (uint64_t w : build_words(rng)) words.push_back(w);
+    in.rst = pick(rng, 0, 9999) == 0;
+    in.flush = pick(rng, 0, 999) < 3;
+    if (chance(rng, 1)) in.fault = !in.fault;
+    in.seg_valid = chance(rng, 85);
+    in.seg_head = words.front();
+    in.seg_commit = chance(rng, 20);
+    in.run_level = chance(rng, 60) ? 0 : pick(rng, 0, 3);
+    in.cur_valid = chance(rng, 50);
+    const model::CpBuildOut o = ls.step(in);
+    if (o.seg_pop) words.pop_front();
+    // A flush or reset empties the segment queue: the next word is a header again.
+    // So does a refused pattern in the core (its fault latches and flushes).
+    if (in.flush || in.rst || o.fault) words.clear();
+    built += o.run_wr;
+    refused += o.fault;
+    engine_moves += o.bank_we && o.bank_waddr > 0;
+  }
+  EXPECT_GT(built, 500u);
+  EXPECT_GT(refused, 10u);
+  EXPECT_GT(engine_moves, 10000u);
+}
+
+// ---------------------------------------------------------------- cp_run
+TEST(CorePartRun, RandomChunksAndSegmentsMatchTheModel) {
+  Rng rng(31);
+  Lockstep<RunPort> ls;
+  ls.reset();
+  model::CpRunIn in;
+  uint64_t fires = 0, seg_done = 0, stretches = 0, underruns = 0;
+  for (int c = 0; c < 400000; ++c) {
+    in.rst = pick(rng, 0, 9999) == 0;
+    in.flush = pick(rng, 0, 999) < 5;
+    in.estop = pick(rng, 0, 999) < 2;
+    in.start = chance(rng, 5);
+    in.abort = pick(rng, 0, 999) < 2;
+    if (chance(rng, 1)) in.fault = !in.fault;
+    in.ch_valid = chance(rng, 70);
+    const uint32_t add = chance(rng, 50) ? pick(rng, 0, 3) : uint32_t(-int32_t(pick(rng, 0, 3)));
+    in.ch_head = {uint64_t(pick(rng, 1, 6)) << 48 | uint64_t(add & 0xFFFF) << 32 | pick(rng, 1, 12),
+                  uint64_t(chance(rng, 30)) << 16 | (chance(rng, 70) ? 0 : pick(rng, 0, 0xFFFF)), 0, 0};
+    in.run_valid = chance(rng, 60);
+    in.run_head = pick(rng, 0, 255);
+    in.run_level = pick(rng, 0, 2);
+    in.segq_empty = chance(rng, 50);
+    in.build_busy = chance(rng, 30);
+    in.bank_we = chance(rng, 60);
+    in.bank_axis = pick(rng, 0, 7);
+    in.bank_waddr = pick(rng, 0, 31);
+    in.bank_wbit = chance(rng, 50);
+    in.bank_lane = chance(rng, 50);
+    in.len_we = chance(rng, 15);
+    in.len_m1 = pick(rng, 0, 31);
+    in.pulse_ready = chance(rng, 70) ? 7 : pick(rng, 0, 7);
+    const model::CpRunOut o = ls.step(in);
+    fires += o.fire;
+    seg_done += o.seg_done;
+    stretches += o.stretch;
+    underruns += o.fault;
+  }
+  EXPECT_GT(fires, 5000u);
+  EXPECT_GT(seg_done, 500u);
+  EXPECT_GT(stretches, 1000u);
+  EXPECT_GT(underruns, 10u);
+}
+
+// ---------------------------------------------------------------- cp_status
+TEST(CorePartStatus, RandomRequestsMatchTheModel) {
+  Rng rng(41);
+  Lockstep<StatusPort> ls;
+  ls.reset();
+  model::CpStatusIn in;
+  std::set<uint32_t> codes;
+  uint64_t flushes = 0, cfg_changes = 0;
+  model::CpStatusOut last;
+  for (int c = 0; c < 300000; ++c) {
+    in.rst = pick(rng, 0, 9999) == 0;
+    in.estop = pick(rng, 0, 999) < 3;
+    in.abort = pick(rng, 0, 999) < 3;
+    in.clear = chance(rng, 3);
+    in.drivers_on = chance(rng, 3);
+    in.drivers_off = chance(rng, 2);
+    in.cfg_write = chance(rng, 5);
+    in.cfg_word = 0x2u << 28 | pick(rng, 0, 4) << 24 | pick(rng, 0, 5) << 20 | pick(rng, 0, 0xFFFF);
+    in.cmd_fault = chance(rng, 2);
+    in.cmd_code = pick(rng, 0, 255);
+    in.build_fault = pick(rng, 0, 999) < 5;
+    in.run_fault = pick(rng, 0, 999) < 5;
+    in.stretch = chance(rng, 5);
+    in.fire = chance(rng, 30);
+    in.seg_done = chance(rng, 5);
+    in.seg_active = chance(rng, 70);
+    in.running = chance(rng, 50);
+    in.cur_valid = chance(rng, 50);
+    in.segq = pick(rng, 0, 7);
+    in.build_busy = chance(rng, 50);
+    in.run_level = pick(rng, 0, 2);
+    in.ch_level = pick(rng, 0, 9);
+    for (unsigned a = 0; a < 3; ++a) in.position[a] = rng() & ((uint64_t(1) << 40) - 1);
+    // READ every register there is, and some that are not.
+    in.rd_addr0 = chance(rng, 50) ? pick(rng, 0, 0x27) : pick(rng, 0, 255);
+    in.rd_addr1 = chance(rng, 50) ? pick(rng, 0, 0x27) : pick(rng, 0, 255);
+    const model::CpStatusOut o = ls.step(in);
+    if (o.fault) codes.insert(o.err);
+    flushes += o.flush;
+    if (c > 0 && o.cfg != last.cfg) ++cfg_changes;
+    last = o;
+  }
+  for (uint32_t code : {8u, 9u, 10u, 11u}) EXPECT_TRUE(codes.count(code)) << "code " << code;
+  EXPECT_GT(codes.size(), 50u) << "the parser's codes pass through";
+  EXPECT_GT(flushes, 1000u);
+  EXPECT_GT(cfg_changes, 1000u);
+}
+
+// The priority encoder's order, written out from docs/CORE.md "Faults": E-stop,
+// abort, underrun, pattern, the parser's code; nothing raised, nothing set.
+TEST(CorePartStatus, FaultPriorityIsTheDocumentedOrder) {
+  for (unsigned m = 0; m < 32; ++m) {
+    const bool estop = m & 1, abort = m & 2, underrun = m & 4, pattern = m & 8, cmd = m & 16;
+    const model::FaultPick f = model::pick_fault(estop, abort, underrun, pattern, cmd, 6);
+    const uint32_t want = estop ? 10 : abort ? 11 : underrun ? 9 : pattern ? 8 : cmd ? 6 : 0;
+    EXPECT_EQ(f.set, m != 0) << m;
+    EXPECT_EQ(f.code, want) << m;
+  }
+}
+
+}  // namespace
+}  // namespace cpstep::tb
