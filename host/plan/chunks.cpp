@@ -16,6 +16,16 @@ std::int64_t floor_div(std::int64_t a, std::int64_t b) {  // b > 0
 }
 std::int64_t ceil_div(std::int64_t a, std::int64_t b) { return -floor_div(-a, b); }
 
+// The same through a double quotient corrected to the exact integer result
+// (|a| < 2^53): the division is the inner loop's cost.
+std::int64_t floor_div_fast(std::int64_t a, std::int64_t b) {  // b > 0
+    auto q = static_cast<std::int64_t>(std::floor(static_cast<double>(a) / static_cast<double>(b)));
+    while (q * b > a) --q;
+    while ((q + 1) * b <= a) ++q;
+    return q;
+}
+std::int64_t ceil_div_fast(std::int64_t a, std::int64_t b) { return -floor_div_fast(-a, b); }
+
 struct Best {
     std::uint32_t count = 0;
     std::int64_t interval = 0, add = 0, add2 = 0, last = 0;
@@ -37,11 +47,12 @@ void extend(std::span<const std::int64_t> lo, std::span<const std::int64_t> hi, 
         const auto jj = static_cast<std::int64_t>(j);
         const std::int64_t tri = jj * (jj + 1) / 2;
         const std::int64_t base = P + (jj + 1) * I + B * (jj + 1) * jj * (jj - 1) / 6;
-        std::int64_t new_lo = std::max(a_lo, ceil_div(lo[j] - base, tri));
-        std::int64_t new_hi = std::min(a_hi, floor_div(hi[j] - base, tri));
+        std::int64_t new_lo = std::max(a_lo, ceil_div_fast(lo[j] - base, tri));
+        std::int64_t new_hi = std::min(a_hi, floor_div_fast(hi[j] - base, tri));
         const std::int64_t dbase = I + B * jj * (jj - 1) / 2;
-        new_lo = std::max(new_lo, ceil_div(1 - dbase, jj));
-        new_hi = std::min(new_hi, floor_div(kMaxDelay - dbase, jj));
+        // delay_j = dbase + j A in [1, kMaxDelay]; divide only when the bound bites.
+        if (new_lo * jj + dbase < 1) new_lo = std::max(new_lo, ceil_div(1 - dbase, jj));
+        if (new_hi * jj + dbase > kMaxDelay) new_hi = std::min(new_hi, floor_div(kMaxDelay - dbase, jj));
         if (sign != 0) {
             // The last increment A + (j-1) B, and the sign of all of them.
             const std::int64_t shift = (jj - 1) * B;
@@ -102,6 +113,9 @@ ChunkResult compress(std::span<const double> ideal, std::int64_t prev_event, dou
             }
         }
         Best best;
+        // A chunk of every remaining move with add2 = 0 cannot be bettered (later
+        // candidates replace it only when longer): stop the search there.
+        const auto all = static_cast<std::uint32_t>(std::min<std::size_t>(L.size(), limits.max_count));
         for (std::int64_t I = i_hi; I >= i_lo; --I) {
             for (std::int64_t B : b_candidates) {
                 if (limits.monotone && B != 0) {
@@ -111,6 +125,7 @@ ChunkResult compress(std::span<const double> ideal, std::int64_t prev_event, dou
                     extend(L, H, P, I, B, limits, best);
                 }
             }
+            if (best.count == all && best.add2 == 0) break;
         }
         out.chunks.push_back({static_cast<std::uint32_t>(best.interval), best.count,
                               static_cast<std::int32_t>(best.add),

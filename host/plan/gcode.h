@@ -1,37 +1,63 @@
-// The G-code subset CAM post-processors emit, parsed into motion blocks in
-// machine millimetres with every modal state resolved.
+// RS274NGC as LinuxCNC and Grbl users write it (docs/PLANNING.md, G-code),
+// parsed into motion blocks in machine millimetres with every modal state,
+// offset, parameter and canned cycle resolved.
 #pragma once
 
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "plan/common.h"
+#include "plan/machine.h"
 
 namespace cpstep::plan {
 
 enum class MotionKind {
     rapid,    // G0: at the machine's limits
     linear,   // G1 at the feed rate
-    arc_cw,   // G2 in the XY plane (helical when Z/A move too)
+    arc_cw,   // G2 in the block's plane (helical when the other axes move too)
     arc_ccw,  // G3
-    dwell,    // G4 P<seconds>: zero motion, a real pause
+    dwell,    // G4 P<seconds>: zero motion, a real pause; M0/M1: a stop (see pause)
 };
+
+// The plane of an arc (G17 / G18 / G19), named by its first and second axis in
+// RS274NGC's order: the arc turns from the first towards the second for G3.
+enum class Plane { xy, zx, yz };
+
+// Why a dwell block stops (M0 / M1); none for G4 and canned-cycle dwells.
+enum class PauseKind { none, program_stop, optional_stop };
 
 struct MotionBlock {
     MotionKind kind = MotionKind::linear;
     SourceLoc loc;               // the block's first word
-    PerAxis<double> start{};     // machine mm
+    PerAxis<double> start{};     // machine mm (A: degrees)
     PerAxis<double> end{};       // machine mm
-    double center_x = 0;         // arcs: centre in machine mm
+    double center_x = 0;         // arcs: centre in machine mm (the two of the plane's axes)
     double center_y = 0;
     double feed = 0;             // mm/s (G1/G2/G3); 0 for G0 and G4
     double dwell_s = 0;          // G4 only
     bool spindle_on = false;     // M3/M4 ... M5 state while this block runs
     double spindle_speed = 0;    // last S word (recorded, not interpreted)
+    // Added with RS274NGC coverage (all default to the old meaning):
+    Plane plane = Plane::xy;     // arcs: G17 / G18 / G19
+    double center_z = 0;         // arcs in G18 / G19: the centre's Z, machine mm
+    PauseKind pause = PauseKind::none;  // dwell blocks from M0 / M1: dwell_s = 0, a full stop
+    bool spindle_ccw = false;    // M4 (true) or M3 while spindle_on
+    int tool = 0;                // tool in the spindle (T ... M6)
 };
+
+// An arc's plane as axis indices and its centre in those axes: the arc turns
+// from `first` towards `second` for G3 (counter-clockwise seen from the
+// positive end of the third axis). The remaining axes move linearly.
+struct ArcFrame {
+    std::size_t first = 0, second = 1;
+    double center_first = 0, center_second = 0;
+};
+ArcFrame arc_frame(const MotionBlock& b);
 
 struct Job {
     std::string file;
@@ -41,7 +67,22 @@ struct Job {
 struct GcodeOptions {
     // Machine position when the job starts (the card's counters at zero = 0 mm).
     PerAxis<double> start_position{};
+    // Axes the machine has; words for others are refused (Z by z_words). Unset:
+    // every axis is accepted here and the planner checks (make_step_segments).
+    std::optional<PerAxis<bool>> axes_present;
+    MissingZ z_words = MissingZ::refuse;
+    std::optional<PerAxis<double>> g28_position;  // machine mm; unset: the origin
+    std::optional<PerAxis<double>> g30_position;
+    std::map<int, double> tool_lengths;           // G43 H<n>, mm
+    std::size_t max_errors = 20;                  // reported; the rest are counted
 };
+
+// The options a machine file gives (its axes, [gcode] table), starting at `start`.
+GcodeOptions gcode_options(const Machine& machine, const PerAxis<double>& start = {});
+
+// Repeated diagnostics collapsed: messages that differ only in their numbers
+// become the first one with "(N times, lines A-B)". Order is kept.
+std::vector<Diagnostic> summarize_repeats(std::vector<Diagnostic> diags);
 
 // Codes that are accepted and deliberately do nothing (see docs/PLANNING.md).
 std::span<const std::string_view> ignored_codes();

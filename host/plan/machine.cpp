@@ -197,6 +197,53 @@ void read_axis(Reader& r, const toml::table& t, std::string_view path, AxisConfi
     ax.dir_positive_high = r.boolean(t, path, "dir_positive_high").value_or(true);
 }
 
+// [gcode]: z_words, g28_position, g30_position, [gcode.tool_lengths].
+void read_gcode(Reader& r, const toml::table& t, GcodeConfig& g) {
+    g.loc = loc_of(t);
+    r.only_keys(t, "gcode", {"z_words", "g28_position", "g30_position", "tool_lengths"});
+    if (auto s = r.string(t, "gcode", "z_words")) {
+        if (*s == "refuse") {
+            g.z_words = MissingZ::refuse;
+        } else if (*s == "ignore") {
+            g.z_words = MissingZ::ignore;
+        } else {
+            r.error(loc_of(*t.get("z_words")),
+                    fmt::format("gcode.z_words: must be \"refuse\" or \"ignore\", not \"{}\"", *s));
+        }
+    }
+    for (const char* key : {"g28_position", "g30_position"}) {
+        const std::string path = std::string("gcode.") + key;
+        if (const toml::table* pt = r.table(t, path, key, false)) {
+            r.only_keys(*pt, path, {"x", "y", "z", "a"});
+            PerAxis<double> p{};
+            for (std::size_t i = 0; i < kAxes; ++i) {
+                p[i] = r.number(*pt, path, std::string_view(&kAxisLetters[i], 1), false, any_value,
+                                "finite")
+                           .value_or(0.0);
+            }
+            (std::string_view(key) == "g28_position" ? g.g28_position : g.g30_position) = p;
+        }
+    }
+    if (const toml::table* tl = r.table(t, "gcode.tool_lengths", "tool_lengths", false)) {
+        for (auto&& [k, v] : *tl) {
+            const std::string key(k.str());
+            int n = -1;
+            if (!key.empty() && key.size() < 6 &&
+                std::all_of(key.begin(), key.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)) != 0; })) {
+                n = std::stoi(key);
+            }
+            if (n < 1) {
+                r.error(loc_of(v), fmt::format("gcode.tool_lengths.{}: the key must be a tool number "
+                                               "1..99999", key));
+                continue;
+            }
+            if (auto len = r.number(*tl, "gcode.tool_lengths", key, true, any_value, "finite")) {
+                g.tool_lengths[n] = *len;
+            }
+        }
+    }
+}
+
 }  // namespace
 
 std::span<const DriverPreset> driver_presets() { return kPresets; }
@@ -245,7 +292,7 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
 
     Machine m;
     m.file = std::string(file);
-    r.only_keys(root, "", {"card", "planner", "axes"});
+    r.only_keys(root, "", {"card", "planner", "axes", "gcode"});
 
     // [card] is optional: the card reports its clock, W and KMAX at connect
     // (bind_card()); what is stated here is checked against it.
@@ -301,6 +348,11 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
         p.split_epsilon_steps =
             r.number(*pl, "planner", "split_epsilon_steps", false, split_eps_ok, "in [0, 0.5)")
                 .value_or(p.split_epsilon_steps);
+    }
+
+    // [gcode] is optional: what the G-code reader takes from the machine.
+    if (const toml::table* gc = r.table(root, "gcode", "gcode", false)) {
+        read_gcode(r, *gc, m.gcode);
     }
 
     if (const toml::table* axes = r.table(root, "axes", "axes", true)) {

@@ -3,6 +3,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -99,11 +101,30 @@ struct PlannerConfig {
     double split_epsilon_steps = 0.02;      // target extra deviation of GCD splits
 };
 
+// What the G-code reader takes from the machine file: the optional [gcode]
+// table (docs/PLANNING.md, G-code). Every key is optional.
+enum class MissingZ { refuse, ignore };
+
+struct GcodeConfig {
+    // Z words on a machine without axes.z: an error (refuse) or dropped with one
+    // summarized warning (ignore). gcode.z_words = "refuse" | "ignore".
+    MissingZ z_words = MissingZ::refuse;
+    // G28 / G30 home positions in machine mm (A in degrees); axes not given are 0.
+    // gcode.g28_position = { x = 0, y = 0, z = 0 }. Unset: the machine origin.
+    std::optional<PerAxis<double>> g28_position;
+    std::optional<PerAxis<double>> g30_position;
+    // Tool lengths for G43 H<n>, mm: [gcode.tool_lengths] 1 = 25.4. Empty: G43
+    // with a tool other than 0 is refused.
+    std::map<int, double> tool_lengths;
+    SourceLoc loc;  // where [gcode] starts (line 0: not given)
+};
+
 struct Machine {
     std::string file;
     PerAxis<AxisConfig> axes;
     CardConfig card;
     PlannerConfig planner;
+    GcodeConfig gcode;
 
     [[nodiscard]] double chunk_tolerance_cycles() const {
         return planner.chunk_tolerance_s * card.clock_hz;

@@ -28,10 +28,19 @@ PerAxis<double> direction(const PerAxis<std::int64_t>& d, const Machine& m) {
     return u;
 }
 
-}  // namespace
+// Each axis's travel per mm of path when the segment is timed over `length`
+// mm (the unit direction when length is the quantized length).
+PerAxis<double> along(const PerAxis<std::int64_t>& d, double length, const Machine& m) {
+    if (!(length > 0)) return direction(d, m);
+    PerAxis<double> u{};
+    for (std::size_t a = 0; a < kAxes; ++a) {
+        if (!m.axes[a].present) continue;
+        u[a] = static_cast<double>(d[a]) / m.axes[a].steps_per_mm / length;
+    }
+    return u;
+}
 
-SegmentLimits project_limits(const PerAxis<std::int64_t>& delta, const Machine& m) {
-    const PerAxis<double> u = direction(delta, m);
+SegmentLimits limits_of(const PerAxis<double>& u, const Machine& m) {
     SegmentLimits l{kInf, kInf, kInf};
     for (std::size_t a = 0; a < kAxes; ++a) {
         const double c = std::abs(u[a]);
@@ -43,8 +52,7 @@ SegmentLimits project_limits(const PerAxis<std::int64_t>& delta, const Machine& 
     return l;
 }
 
-double card_speed_limit(const PerAxis<std::int64_t>& delta, const Machine& m) {
-    const PerAxis<double> u = direction(delta, m);
+double card_limit_of(const PerAxis<double>& u, const Machine& m) {
     double v = kInf;
     for (std::size_t a = 0; a < kAxes; ++a) {
         const double c = std::abs(u[a]);
@@ -55,6 +63,90 @@ double card_speed_limit(const PerAxis<std::int64_t>& delta, const Machine& m) {
         v = std::min(v, m.card.clock_hz / period / ax.steps_per_mm / c);
     }
     return v;
+}
+
+}  // namespace
+
+PerAxis<double> path_direction(const StepSegment& s, const Machine& m) {
+    PerAxis<double> d{};
+    double nn = 0;
+    for (std::size_t a = 0; a < kAxes; ++a) {
+        if (!m.axes[a].present) continue;
+        d[a] = s.to_mm[a] - s.from_mm[a];
+        nn += d[a] * d[a];
+    }
+    nn = std::sqrt(nn);
+    if (!(nn > 0)) return direction(s.delta(), m);
+    for (auto& x : d) x /= nn;
+    return d;
+}
+
+double time_lower_bound(const std::vector<StepSegment>& segs, const Machine& m, std::size_t first,
+                        std::size_t last) {
+    const std::size_t n = segs.size();
+    last = std::min(last, n);
+    if (first >= last) return 0;
+    double a_max = 0, j_max = 0;
+    for (const auto& ax : m.axes) {
+        if (!ax.present) continue;
+        a_max = std::max(a_max, ax.max_accel);
+        j_max = std::max(j_max, ax.max_jerk);
+    }
+    std::vector<double> L(n, 0), A(n, 0), cap(n, 0), jn(n + 1, 0), dwell(n, 0);
+    std::vector<PerAxis<double>> dir(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const StepSegment& s = segs[i];
+        if (s.kind == MotionKind::dwell) { dwell[i] = s.dwell_s; continue; }
+        L[i] = s.planned_length_mm(m);
+        const SegmentLimits l = project_limits(s.delta(), L[i], m);
+        A[i] = l.a;
+        double c = std::min(l.v, card_speed_limit(s.delta(), L[i], m));
+        if (s.kind != MotionKind::rapid) c = std::min(c, s.feed);
+        cap[i] = std::min(c, curvature_speed(s.radius_ends_max_mm, a_max, j_max));
+        dir[i] = path_direction(s, m);
+    }
+    for (std::size_t i = 1; i < n; ++i) {
+        const StepSegment& a = segs[i - 1];
+        const StepSegment& b = segs[i];
+        if (a.kind == MotionKind::dwell || b.kind == MotionKind::dwell || a.spindle_on != b.spindle_on) continue;
+        jn[i] = std::min({junction_speed(dir[i - 1], dir[i], std::min(A[i - 1], A[i]),
+                                         m.planner.junction_deviation_mm),
+                          cap[i - 1], cap[i]});
+    }
+    // Acceleration-limited (jerk relaxed) passes: v^2 changes by at most 2 A L.
+    // A part of the job starts and ends no faster than its junctions allow.
+    std::vector<double> e(n + 1, 0);
+    e[last] = last < n ? jn[last] : 0;
+    for (std::size_t k = last; k-- > first;) {
+        e[k] = dwell[k] > 0 || L[k] == 0 ? 0 : std::min(jn[k], std::sqrt(e[k + 1] * e[k + 1] + 2 * A[k] * L[k]));
+    }
+    double t = 0, v0 = first > 0 ? jn[first] : 0;
+    for (std::size_t k = first; k < last; ++k) {
+        if (L[k] == 0) { t += dwell[k]; v0 = 0; continue; }
+        v0 = std::min(v0, e[k]);
+        const double v1 = std::min(e[k + 1], std::sqrt(v0 * v0 + 2 * A[k] * L[k]));
+        const double vp = std::min(cap[k], std::sqrt((2 * A[k] * L[k] + v0 * v0 + v1 * v1) / 2));
+        const double d_up = (vp * vp - v0 * v0) / (2 * A[k]), d_dn = (vp * vp - v1 * v1) / (2 * A[k]);
+        t += (vp - v0) / A[k] + (vp - v1) / A[k] + std::max(0.0, L[k] - d_up - d_dn) / vp;
+        v0 = v1;
+    }
+    return t;
+}
+
+SegmentLimits project_limits(const PerAxis<std::int64_t>& delta, const Machine& m) {
+    return limits_of(direction(delta, m), m);
+}
+
+SegmentLimits project_limits(const PerAxis<std::int64_t>& delta, double length, const Machine& m) {
+    return limits_of(along(delta, length, m), m);
+}
+
+double card_speed_limit(const PerAxis<std::int64_t>& delta, const Machine& m) {
+    return card_limit_of(direction(delta, m), m);
+}
+
+double card_speed_limit(const PerAxis<std::int64_t>& delta, double length, const Machine& m) {
+    return card_limit_of(along(delta, length, m), m);
 }
 
 double curvature_speed(double r, double a, double j) {
@@ -81,21 +173,56 @@ double junction_speed(const PerAxis<double>& in, const PerAxis<double>& out, dou
     return std::sqrt(a * deviation * sin_half / (1 - sin_half));
 }
 
+CurvatureBudget curvature_budget(double r, double v, const SegmentLimits& tangent, double a_normal,
+                                 double j_normal) {
+    CurvatureBudget b{v, tangent.a, tangent.j};
+    if (!(r < kInf)) return b;
+    const double k = 1 / r;
+    b.v = std::min(v, curvature_speed(r, kCurvatureShare * a_normal, kCurvatureShare * j_normal));
+    // Along a path of curvature k at speed v the acceleration is a_t T + k v^2 N
+    // and the jerk (j_t - k^2 v^3) T + 3 k v a_t N (the change of k itself left
+    // out). T and N are orthogonal unit vectors, so every axis stays within its
+    // limits when the vectors' lengths stay within the smallest axis limits.
+    const double an = k * b.v * b.v;
+    b.a = std::min(tangent.a, std::sqrt(std::max(0.0, a_normal * a_normal - an * an)));
+    const double fj = k * k * b.v * b.v * b.v / j_normal;  // <= kCurvatureShare
+    // (J_t + k^2 v^3)^2 + (3 k v A_t)^2 <= J^2: on the circle J_t = J (cos phi - fj),
+    // 3 k v A_t = J sin phi; phi keeps A_t / J_t at the axes' own ratio.
+    const double ra = 3 * k * b.v;
+    const double q = ra * tangent.a / tangent.j;
+    const double phi = std::atan(q) - std::asin(std::min(1.0, q * fj / std::sqrt(1 + q * q)));
+    b.a = std::min(b.a, j_normal * std::sin(phi) / ra);
+    b.j = std::min(tangent.j, j_normal * std::max(0.0, std::cos(phi) - fj));
+    return b;
+}
+
+double stop_distance(double v, double A, double J) { return ramp(v, 0, A, J).distance; }
+
 Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& segs,
-                                               const Machine& m, const std::string& job_file) {
+                                               const Machine& m, const std::string& job_file,
+                                               const FeedOptions& options, FeedStats* stats) {
+    FeedStats stats_;
     Result<std::vector<PlannedSegment>> result;
     const std::size_t n = segs.size();
     std::vector<PlannedSegment> out(n);
-    std::vector<double> junction(n + 1, 0.0);  // speed limit at the start of segment i
     std::set<std::size_t> warned_feed, warned_card;
+    // The smallest acceleration and jerk of any present axis: the centripetal
+    // terms point across the path, along any axis.
+    double a_normal = kInf, j_normal = kInf;
+    for (const auto& ax : m.axes) {
+        if (!ax.present) continue;
+        a_normal = std::min(a_normal, ax.max_accel);
+        j_normal = std::min(j_normal, ax.max_jerk);
+    }
 
+    std::vector<PerAxis<double>> dir(n);  // unrounded direction, mm
     for (std::size_t i = 0; i < n; ++i) {
         const StepSegment& s = segs[i];
         PlannedSegment& p = out[i];
         if (s.kind == MotionKind::dwell) continue;
-        p.length = s.length_mm(m);
-        p.limits = project_limits(s.delta(), m);
-        double v = p.limits.v;
+        p.length = s.planned_length_mm(m);
+        const SegmentLimits proj = project_limits(s.delta(), p.length, m);
+        double v = proj.v;
         if (s.kind != MotionKind::rapid) {
             if (s.feed > v * (1 + 1e-9) && warned_feed.insert(s.block).second) {
                 result.warnings.push_back(
@@ -105,7 +232,7 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
             }
             v = std::min(v, s.feed);
         }
-        const double card = card_speed_limit(s.delta(), m);
+        const double card = card_speed_limit(s.delta(), p.length, m);
         if (v > card) {
             if (m.planner.on_limit == OnLimit::refuse) {
                 if (warned_card.insert(s.block).second) {
@@ -124,27 +251,23 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
             }
             v = std::min(v, card);
         }
-        p.cruise = v;
+        // Curvature from the true geometry: speed cap and what is left for the
+        // tangential acceleration and jerk.
+        const CurvatureBudget b = curvature_budget(s.radius_mm, v, proj, a_normal, j_normal);
+        p.radius = s.radius_mm;
+        p.cruise = b.v;
+        p.limits = {proj.v, b.a, b.j};
+        // The unrounded direction (steps would make a one-step segment point along an axis).
+        dir[i] = path_direction(s, m);
     }
     if (!result.errors.empty()) return result;
 
-    // Curvature: a chain of short chords (an arc) bends the path with the radius
-    // its chords and turns imply; junction deviation alone would not see it.
-    const double inf = std::numeric_limits<double>::infinity();
-    std::vector<double> bend(n + 1, inf);  // curvature speed at the start of segment i
-    for (std::size_t i = 1; i < n; ++i) {
-        const StepSegment& a = segs[i - 1];
-        const StepSegment& b = segs[i];
-        if (a.kind == MotionKind::dwell || b.kind == MotionKind::dwell) continue;
-        const double r = polyline_radius(direction(a.delta(), m), direction(b.delta(), m),
-                                         std::min(out[i - 1].length, out[i].length));
-        bend[i] = curvature_speed(r, std::min(out[i - 1].limits.a, out[i].limits.a),
-                                  std::min(out[i - 1].limits.j, out[i].limits.j));
-    }
-    // A segment inside a bend (both ends limited) cruises no faster than its ends.
-    for (std::size_t i = 0; i < n; ++i) out[i].cruise = std::min(out[i].cruise, std::max(bend[i], bend[i + 1]));
-
-    // Junction limits; zero at the ends, around dwells and where the spindle switches.
+    // Junctions: the speed cap at the start of segment i, and whether the path
+    // goes on smoothly there (acceleration carried) or turns a corner / stops
+    // (acceleration zero). Zero at the ends, around dwells and where the spindle
+    // switches (the pierce must start at rest).
+    std::vector<double> junction(n + 1, 0.0);
+    std::vector<char> smooth(n + 1, 0);
     for (std::size_t i = 1; i < n; ++i) {
         const StepSegment& a = segs[i - 1];
         const StepSegment& b = segs[i];
@@ -152,43 +275,260 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
             a.spindle_on != b.spindle_on) {
             continue;
         }
-        const double jv = junction_speed(direction(a.delta(), m), direction(b.delta(), m),
+        double c = 0;
+        for (std::size_t k = 0; k < kAxes; ++k) c += dir[i - 1][k] * dir[i][k];
+        smooth[i] = std::acos(std::clamp(c, -1.0, 1.0)) <= kSmoothTurnRad;
+        const double jv = junction_speed(dir[i - 1], dir[i],
                                          std::min(out[i - 1].limits.a, out[i].limits.a),
                                          m.planner.junction_deviation_mm);
-        junction[i] = std::min({jv, bend[i], out[i - 1].cruise, out[i].cruise});
+        // The path's own bend at the junction point (a line running into an arc).
+        const double bend = curvature_speed(b.radius_start_mm, kCurvatureShare * a_normal,
+                                            kCurvatureShare * j_normal);
+        junction[i] = std::min({jv, bend, out[i - 1].cruise, out[i].cruise});
     }
-    // Backward pass: each entry no faster than the segment can shed before its exit.
-    std::vector<double> entry(n + 1, 0.0);
-    entry[n] = 0;
-    for (std::size_t k = n; k-- > 0;) {
-        if (segs[k].kind == MotionKind::dwell) {
-            entry[k] = 0;
+
+    // Spans: runs of segments joined smoothly whose cruise caps lie within a
+    // ratio 1 + kSpanRatio, and whose inner junction caps are no lower than the
+    // span's speed. One 7-phase profile covers a span, so speed and
+    // acceleration carry across the junctions inside it. A junction's cap
+    // limits the speed at that point only: it lowers the span's speed when the
+    // segment joins, but is not the cap of the segment after it (a line leaving
+    // an arc keeps its own cruise).
+    struct Span {
+        std::size_t first = 0, last = 0;  // segments [first, last)
+        double length = 0, vmax = kInf, a = kInf, j = kInf;
+    };
+    std::vector<Span> spans;
+    for (std::size_t i = 0; i < n;) {
+        if (segs[i].kind == MotionKind::dwell) {
+            spans.push_back({i, i + 1, 0, 0, 0, 0});
+            ++i;
             continue;
         }
-        entry[k] = reachable_speed(entry[k + 1], out[k].length, out[k].limits.a, out[k].limits.j,
-                                   junction[k]);
+        Span sp{i, i, 0, kInf, kInf, kInf};
+        double lo = kInf, hi = 0, sum_l = 0, sum_t = 0;
+        std::size_t k = i;
+        while (k < n && segs[k].kind != MotionKind::dwell && (k == i || smooth[k])) {
+            const double cap = out[k].cruise;
+            double nlo = std::min(lo, cap);
+            if (k > i) nlo = std::min(nlo, junction[k]);
+            const double nhi = std::max(hi, cap);
+            // The time the span loses by running at its lowest cap, against each cap.
+            const double loss = (sum_l + out[k].length) / nlo - (sum_t + out[k].length / cap);
+            if (k > i && (nhi > nlo * (1 + kSpanRatio) || loss > kSpanLossS)) break;
+            lo = nlo;
+            hi = nhi;
+            sum_l += out[k].length;
+            sum_t += out[k].length / cap;
+            sp.length += out[k].length;
+            sp.a = std::min(sp.a, out[k].limits.a);
+            sp.j = std::min(sp.j, out[k].limits.j);
+            ++k;
+        }
+        sp.last = k;
+        sp.vmax = lo;
+        spans.push_back(sp);
+        i = k;
     }
-    // Forward pass: each exit no faster than reachable from the entry.
-    double v_in = 0;
-    for (std::size_t k = 0; k < n; ++k) {
-        PlannedSegment& p = out[k];
-        p.t_start = k == 0 ? 0.0 : out[k - 1].t_start + out[k - 1].duration;
-        if (segs[k].kind == MotionKind::dwell) {
-            p.duration = segs[k].dwell_s;
+    const std::size_t ns = spans.size();
+    // joined[k]: span k continues span k - 1 smoothly (a group may cover both).
+    std::vector<char> joined(ns, 0);
+    for (std::size_t k = 1; k < ns; ++k) {
+        joined[k] = spans[k].length > 0 && spans[k - 1].length > 0 && smooth[spans[k].first];
+    }
+
+    // Backward pass over spans, streaming: entry[k] is the fastest speed at the
+    // start of span k from which every later span can still be planned. It is
+    // computed over a lookahead window that ends at rest; an entry that equals
+    // its own cap (cap_at) does not depend on anything after it, so it and every
+    // entry before it are final. The window grows by at least the stopping
+    // distance from its highest speed at a time until such a final entry lies
+    // beyond what the forward pass needs (docs/PLANNING.md, "Lookahead").
+    std::vector<double> entry(ns + 1, 0.0);
+    auto cap_at = [&](std::size_t si) {  // speed cap where span si starts
+        const Span& sp = spans[si];
+        if (sp.length == 0) return 0.0;
+        double c = std::min(junction[sp.first], sp.vmax);
+        if (si > 0) c = std::min(c, spans[si - 1].vmax);
+        return c;
+    };
+    std::size_t final_upto = 0;  // entry[0..final_upto] are final
+    std::size_t horizon = 0;     // the window ends at the start of span `horizon`
+    const double window_stop = options.window_stop_factor;
+    auto make_final = [&](std::size_t need) {
+        need = std::min(need, ns);
+        while (final_upto < need) {
+            // Grow the window by the stopping distance from its highest cap.
+            std::size_t h = std::max(horizon, final_upto);
+            double dist = 0, vhi = 0, amin = kInf, jmin = kInf;
+            do {
+                const Span& sp = spans[h];
+                dist += sp.length;
+                if (sp.length > 0) {
+                    vhi = std::max(vhi, sp.vmax);
+                    amin = std::min(amin, sp.a);
+                    jmin = std::min(jmin, sp.j);
+                }
+                ++h;
+            } while (h < ns && (h < need + 1 || !(dist >= window_stop * stop_distance(vhi, amin, jmin))));
+            horizon = h;
+            ++stats_.windows;
+            {
+                double mm = 0, sec = 0;
+                for (std::size_t q = need - 1 < h ? need - 1 : h; q < h; ++q) {
+                    mm += spans[q].length;
+                    if (spans[q].length > 0) sec += spans[q].length / spans[q].vmax;
+                }
+                const std::size_t from = std::min(need - 1, h);
+                stats_.max_lookahead_spans = std::max(stats_.max_lookahead_spans, h - from);
+                stats_.max_lookahead_mm = std::max(stats_.max_lookahead_mm, mm);
+                stats_.max_lookahead_s = std::max(stats_.max_lookahead_s, sec);
+            }
+            entry[horizon] = 0;  // at rest at the window's end (the job's end when horizon = ns)
+            std::size_t q = final_upto;
+            for (std::size_t k = horizon; k-- > final_upto;) {
+                const Span& sp = spans[k];
+                ++stats_.backward_steps;
+                if (sp.length == 0) {
+                    entry[k] = 0;
+                } else {
+                    const double c = cap_at(k);
+                    entry[k] = reachable_speed(entry[k + 1], sp.length, sp.a, sp.j, c);
+                    if (entry[k] < c) continue;
+                }
+                q = std::max(q, k);  // bound by its own cap: final
+            }
+            final_upto = horizon == ns ? ns : q;
+        }
+    };
+
+    // Forward pass. Where spans k..m-1 join smoothly, one profile may cover them
+    // all (a group): from the entry speed to entry[m] with the smallest
+    // acceleration that fills the group, so that the speed follows a rising or
+    // falling cap with its acceleration carried across the span boundaries; it is
+    // taken when it stays under every segment's cap and junction cap and beats
+    // the spans one by one. Otherwise each span gets its own profile (zero
+    // acceleration at its ends).
+    std::vector<double> t_ends, best_t_ends;  // group candidate: time at each segment end
+    auto try_group = [&](std::size_t k, std::size_t me, double v0, Profile& prof,
+                         std::vector<double>& ends) -> bool {
+        double L = 0, A = kInf, J = kInf;
+        for (std::size_t q = k; q < me; ++q) {
+            L += spans[q].length;
+            A = std::min(A, spans[q].a);
+            J = std::min(J, spans[q].j);
+        }
+        const double v1 = reachable_speed(v0, L, A, J, entry[me]);
+        const double dv = std::abs(v1 - v0);
+        double Ap = A;
+        if (dv > 0) {
+            // The ramp v0 -> v1 lasting the whole group: dv/A' + A'/J = T with
+            // T = 2 L / (v0 + v1); the smaller root (longest constant phase).
+            const double T = 2 * L / (v0 + v1);
+            const double disc = J * J * T * T - 4 * J * dv;
+            if (disc > 0) Ap = std::min(A, 2 * J * dv / (J * T + std::sqrt(disc)) * (1 + 1e-9));
+        }
+        auto p = make_profile(L, v0, v1, std::max(v0, v1), Ap, J);
+        if (!p) return false;
+        // Under every cap: the profile is monotone, so a segment's highest speed is at an end.
+        ends.clear();
+        double s_at = 0, v_at = v0;
+        for (std::size_t q = k; q < me; ++q) {
+            for (std::size_t i = spans[q].first; i < spans[q].last; ++i) {
+                const double c = out[i].cruise * (1 + 1e-9);
+                if (v_at > c || (i > spans[k].first && v_at > junction[i] * (1 + 1e-9))) return false;
+                const bool last = q + 1 == me && i + 1 == spans[q].last;
+                s_at = last ? L : s_at + out[i].length;
+                const double te = last ? p->duration : p->time_at(s_at);
+                v_at = last ? p->v_exit : p->at(te).v;
+                if (v_at > c) return false;
+                ends.push_back(te);
+            }
+        }
+        prof = *p;
+        return true;
+    };
+    auto span_time = [&](std::size_t k, double v0, double& v1) {
+        const Span& sp = spans[k];
+        v1 = reachable_speed(v0, sp.length, sp.a, sp.j, entry[k + 1]);
+        auto p = make_profile(sp.length, v0, v1, sp.vmax, sp.a, sp.j);
+        return p ? p->duration : kInf;
+    };
+    double v_in = 0, t = 0;
+    for (std::size_t k = 0; k < ns;) {
+        make_final(k + kMaxGroupSpans + 1);
+        const Span& sp = spans[k];
+        if (sp.length == 0) {
+            PlannedSegment& p = out[sp.first];
+            p.t_start = t;
+            p.duration = segs[sp.first].dwell_s;
+            t += p.duration;
             v_in = 0;
+            ++k;
             continue;
         }
         const double v0 = std::min(v_in, entry[k]);
-        const double v1 = reachable_speed(v0, p.length, p.limits.a, p.limits.j, entry[k + 1]);
-        auto prof = make_profile(p.length, v0, v1, p.cruise, p.limits.a, p.limits.j);
-        if (!prof) {  // cannot happen after both passes; kept as a guard
-            result.errors.push_back({job_file, segs[k].loc, "internal: no feasible profile"});
-            return result;
+        // The longest group (2, 4, 8, ... spans) that stays under the caps.
+        std::size_t m_best = k + 1;
+        Profile prof;
+        Profile cand;
+        for (std::size_t g = 2; g <= kMaxGroupSpans; g *= 2) {
+            const std::size_t mg = k + g;
+            if (mg > final_upto || mg > ns) break;
+            bool ok = true;
+            for (std::size_t q = k + 1; q < mg && ok; ++q) ok = joined[q];
+            if (!ok || !try_group(k, mg, v0, cand, t_ends)) break;
+            // Taken only when faster than the spans one by one.
+            double tt = 0, vv = v0;
+            for (std::size_t q = k; q < mg; ++q) {
+                double v1;
+                tt += span_time(q, vv, v1);
+                vv = v1;
+            }
+            if (cand.duration > tt * (1 + 1e-12)) break;
+            m_best = mg;
+            prof = cand;
+            best_t_ends.swap(t_ends);
         }
-        p.profile = *prof;
-        p.duration = prof->duration;
-        v_in = v1;
+        if (m_best == k + 1) {
+            const double v1 = reachable_speed(v0, sp.length, sp.a, sp.j, entry[k + 1]);
+            auto p = make_profile(sp.length, v0, v1, sp.vmax, sp.a, sp.j);
+            if (!p) {  // cannot happen after both passes; kept as a guard
+                result.errors.push_back({job_file, segs[sp.first].loc, "internal: no feasible profile"});
+                return result;
+            }
+            prof = *p;
+            best_t_ends.clear();
+            double s_at = 0;
+            for (std::size_t i = sp.first; i < sp.last; ++i) {
+                s_at += out[i].length;
+                best_t_ends.push_back(i + 1 == sp.last ? prof.duration : prof.time_at(s_at));
+            }
+        } else {
+            ++stats_.groups;
+        }
+        // Cut the profile at its segments' ends.
+        double s_at = 0, t_at = 0;
+        std::size_t e = 0;
+        for (std::size_t i = spans[k].first; i < spans[m_best - 1].last; ++i, ++e) {
+            PlannedSegment& p = out[i];
+            const double t_end = best_t_ends[e];
+            p.profile = prof.slice(t_at, t_end, s_at, p.length);
+            p.duration = p.profile.duration;
+            if (!(p.duration > 0) && p.length > 0) {  // a path that moves takes time; kept as a guard
+                result.errors.push_back({job_file, segs[i].loc, "internal: a segment planned with no duration"});
+                return result;
+            }
+            p.t_start = t;
+            t += p.duration;
+            s_at += p.length;
+            t_at = t_end;
+        }
+        v_in = prof.v_exit;
+        k = m_best;
     }
+    stats_.spans = ns;
+    if (stats) *stats = stats_;
     result.value = std::move(out);
     return result;
 }

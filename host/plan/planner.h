@@ -4,6 +4,7 @@
 // segment. Each segment then gets its 7-phase profile.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "plan/machine.h"
@@ -19,10 +20,15 @@ struct SegmentLimits {
 // The path limits of a move along `delta` (steps): the tightest of every
 // moving axis's limit divided by that axis's share of the direction.
 SegmentLimits project_limits(const PerAxis<std::int64_t>& delta, const Machine& m);
+// The same for a segment timed over `length` mm of path (StepSegment::
+// planned_length_mm): each axis moves |delta_j| / length of its mm per mm of
+// path, which need not be a unit vector when length is the unrounded chord's.
+SegmentLimits project_limits(const PerAxis<std::int64_t>& delta, double length, const Machine& m);
 
 // Fastest path speed at which no axis exceeds the card's step rate, with the
 // chunk tolerance as margin (a move may be that much early).
 double card_speed_limit(const PerAxis<std::int64_t>& delta, const Machine& m);
+double card_speed_limit(const PerAxis<std::int64_t>& delta, double length, const Machine& m);
 
 // Speed at which a path bending with radius r (mm) keeps its centripetal
 // acceleration v^2/r within a and its jerk v^3/r^2 within j: a polyline's
@@ -36,19 +42,72 @@ double polyline_radius(const PerAxis<double>& in, const PerAxis<double>& out, do
 double junction_speed(const PerAxis<double>& in, const PerAxis<double>& out, double a,
                       double deviation);
 
+// What a path bending with radius r leaves of the limits: the cruise cap v
+// (at most the given v, and the curvature speed with kCurvatureShare of the
+// axes' normal limits a_normal, j_normal), and the tangential acceleration and
+// jerk that, added to the centripetal v^2/r, its turning v^3/r^2 and the 3 v a_t / r
+// that tangential acceleration causes across the path, stay within the axes'
+// limits (docs/PLANNING.md, "Path-level planning").
+struct CurvatureBudget {
+    double v = 0, a = 0, j = 0;
+};
+inline constexpr double kCurvatureShare = 0.4;     // of a_normal, j_normal
+inline constexpr double kTangentJerkShare = 0.1;   // of the jerk, always left to the tangent
+inline constexpr double kSpanRatio = 0.02;         // caps within 2 % share one profile...
+inline constexpr double kSpanLossS = 0.002;        // ...while it costs at most 2 ms against them
+CurvatureBudget curvature_budget(double r, double v, const SegmentLimits& tangent, double a_normal,
+                                 double j_normal);
+
+// The unit direction of a segment in mm from its unrounded geometry (the
+// step delta's when that is empty).
+PerAxis<double> path_direction(const StepSegment& s, const Machine& m);
+
+// A lower bound on the duration of any plan of these segments within the
+// limits: each segment at most at its feed, its projected axis limit, the
+// card's step rate and the curvature speed min(sqrt(A r), cbrt(J r^2)) of the
+// larger radius at its ends (A, J: the largest axis limits); corners at their
+// junction-deviation speed, stops at zero; jerk relaxed: speed changes with
+// the projected acceleration only (v^2 by at most 2 A L). Dwells count whole.
+// Segments [first, last) only: a part of a job may start and end at its
+// junctions' speeds.
+double time_lower_bound(const std::vector<StepSegment>& segs, const Machine& m, std::size_t first = 0,
+                        std::size_t last = static_cast<std::size_t>(-1));
+
 struct PlannedSegment {
     double length = 0;     // mm
+    double radius = std::numeric_limits<double>::infinity();  // path radius used, mm
     double t_start = 0;    // s, absolute from the job start
     double duration = 0;   // s
     double cruise = 0;     // the speed limit used for the segment
-    SegmentLimits limits;
+    SegmentLimits limits;  // v: projected; a, j: the tangential budget the profile keeps
     Profile profile;       // empty for dwells
+};
+
+// A group covers at most this many spans (2, 4, ... are tried).
+inline constexpr std::size_t kMaxGroupSpans = 64;
+
+struct FeedOptions {
+    // The lookahead window grows by spans covering this many times the stopping
+    // distance from the window's highest cap at a time; infinity plans the
+    // whole job in one window. The result does not depend on it (only entries
+    // that no later span can change are used), only the work and the lookahead do.
+    double window_stop_factor = 1.0;
+};
+
+struct FeedStats {
+    std::size_t spans = 0, groups = 0;
+    std::size_t windows = 0;         // backward passes run
+    std::size_t backward_steps = 0;  // span entries computed over all windows
+    std::size_t max_lookahead_spans = 0;  // the farthest the backward pass looked past the span being planned
+    double max_lookahead_mm = 0, max_lookahead_s = 0;  // the same in path length and in time at the caps
 };
 
 // Profiles for every step segment (dwells become pauses of their length).
 // Feeds above an axis's limit are lowered with a warning; moves beyond the
 // card's step rate are refused or slowed according to planner.on_limit.
 Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& segs,
-                                               const Machine& m, const std::string& job_file);
+                                               const Machine& m, const std::string& job_file,
+                                               const FeedOptions& options = {},
+                                               FeedStats* stats = nullptr);
 
 }  // namespace cpstep::plan

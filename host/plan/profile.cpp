@@ -24,13 +24,36 @@ Ramp ramp(double va, double vb, double A, double J) {
 
 double reachable_speed(double v_from, double L, double A, double J, double cap) {
     if (cap <= v_from) return cap;
+    if (!(L > 0)) return v_from;
     if (ramp(v_from, cap, A, J).distance <= L) return cap;
-    double lo = v_from, hi = cap;
-    for (int i = 0; i < 200 && hi - lo > 1e-12 * hi; ++i) {
-        const double mid = (lo + hi) / 2;
-        (ramp(v_from, mid, A, J).distance <= L ? lo : hi) = mid;
+    // Closed form of ramp(v_from, v_from + x).distance = L for x:
+    // A not reached (x < A^2/J): (2 v0 + x) sqrt(x/J) = L, i.e. with y = sqrt(x)
+    // the depressed cubic y^3 + 2 v0 y - L sqrt(J) = 0 (one real root);
+    // A reached: (2 v0 + x)(x/A + A/J) = 2L, a quadratic in x.
+    const double v0 = v_from;
+    double x;
+    const double p = 2 * v0, q = L * std::sqrt(J);
+    double y;
+    if (p == 0) {
+        y = std::cbrt(q);
+    } else {
+        // y = 2 sqrt(p/3) sinh(asinh(3q/(2p) sqrt(3/p)) / 3), stable for every p > 0.
+        const double k = std::sqrt(p / 3);
+        y = 2 * k * std::sinh(std::asinh(q / (2 * k * k * k)) / 3);
     }
-    return lo;
+    x = y * y;
+    if (x >= A * A / J) {
+        // x^2/A + x (2 v0/A + A/J) + 2 v0 A/J - 2L = 0
+        const double a2 = 1 / A, b2 = 2 * v0 / A + A / J, c2 = 2 * v0 * A / J - 2 * L;
+        const double disc = std::max(0.0, b2 * b2 - 4 * a2 * c2);
+        x = (2 * (-c2)) / (b2 + std::sqrt(disc));  // the positive root, no cancellation
+    }
+    double v = std::min(cap, v0 + std::max(0.0, x));
+    // Rounding may put the distance a hair above L: step down until it fits.
+    for (int i = 0; i < 60 && v > v0 && ramp(v0, v, A, J).distance > L; ++i) {
+        v = v0 + (v - v0) * (1 - 1e-12 * (1 << std::min(i, 40)));
+    }
+    return std::max(v0, v);
 }
 
 namespace {
@@ -60,6 +83,12 @@ std::optional<Profile> make_profile(double L, double v0, double v1, double vmax,
         }
         vp = lo;
     }
+    // Standing still covers no length: a path from rest to rest with no speed
+    // allowed (vmax = v0 = v1 = 0) cannot be joined (it would be a profile of
+    // zero duration that claims to cover L).
+    if (!(vp > 0)) {
+        if (L > 0) return std::nullopt;
+    }
     const Ramp up = ramp(v0, vp, A, J);
     const Ramp down = ramp(vp, v1, A, J);
     const double cruise = vp > 0 ? std::max(0.0, (L - up.distance - down.distance) / vp) : 0.0;
@@ -87,6 +116,37 @@ std::optional<Profile> make_profile(double L, double v0, double v1, double vmax,
     }
     p.duration = t;
     return p;
+}
+
+Profile Profile::slice(double ta, double tb, double sa, double L) const {
+    Profile out;
+    out.length = L;
+    std::size_t n = 0;
+    for (const Phase& ph : phases) {
+        if (!(ph.duration > 0)) continue;
+        const double b = std::max(ph.t0, ta);
+        const double e = std::min(ph.t0 + ph.duration, tb);
+        if (!(e > b)) continue;
+        const KinState st = advance(ph, b - ph.t0);
+        Phase& q = out.phases[n++];
+        q.duration = e - b;
+        q.jerk = ph.jerk;
+        q.t0 = b - ta;
+        q.s0 = st.s - sa;
+        q.v0 = st.v;
+        q.a0 = st.a;
+        if (n == out.phases.size()) break;
+    }
+    if (n > 0) {
+        out.phases[0].t0 = 0;
+        out.phases[0].s0 = 0;
+    }
+    out.duration = tb - ta;
+    // The ends of this profile keep its exact speeds; inner cuts evaluate it.
+    out.v_entry = ta <= 0 ? v_entry : at(ta).v;
+    out.v_exit = tb >= duration ? v_exit : at(tb).v;
+    out.v_peak = v_peak;
+    return out;
 }
 
 KinState Profile::at(double t) const {

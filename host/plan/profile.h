@@ -1,6 +1,8 @@
 // Seed 002's 7-phase jerk-limited feed profile over one path segment, in
 // closed form per phase: jerk +J, 0, -J (accelerate), 0 (cruise), -J, 0, +J
-// (decelerate). Acceleration is zero at both ends of every profile.
+// (decelerate). Acceleration is zero at both ends of every profile that
+// make_profile() builds; a slice() of one (a segment's share of a profile over
+// several segments) may start and end with any acceleration.
 #pragma once
 
 #include <array>
@@ -47,12 +49,18 @@ struct Profile {
     [[nodiscard]] KinState at(double t) const;
     // The time at which the path reaches s in [0, length] (monotone inverse).
     [[nodiscard]] double time_at(double s) const;
+    // The part of this profile between times ta < tb, where the path stands at
+    // sa, re-based to start at t = 0, s = 0, of length L: a profile that may
+    // start and end with non-zero acceleration (a path-level profile cut at a
+    // segment's ends). At most 7 phases, as a 7-phase profile has.
+    [[nodiscard]] Profile slice(double ta, double tb, double sa, double L) const;
 };
 
 // The profile over length L from v0 to v1 with cruise limit vmax, acceleration
 // limit A and jerk limit J. The peak speed is vmax when it fits, else the
 // largest that fits (found by bisection over closed-form ramps). nullopt when
-// v0 and v1 cannot be joined within L at all.
+// v0 and v1 cannot be joined within L at all, or when no speed is allowed
+// (vmax, v0 and v1 all zero) over a length L > 0.
 std::optional<Profile> make_profile(double L, double v0, double v1, double vmax, double A, double J);
 
 }  // namespace cpstep::plan

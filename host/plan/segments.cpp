@@ -1,6 +1,8 @@
 #include "plan/segments.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -23,20 +25,35 @@ double StepSegment::length_mm(const Machine& m) const {
     return std::sqrt(sum);
 }
 
+double StepSegment::planned_length_mm(const Machine& m) const {
+    const double q = length_mm(m);
+    double sum = 0;
+    for (std::size_t a = 0; a < kAxes; ++a) {
+        if (!m.axes[a].present) continue;
+        const double mm = to_mm[a] - from_mm[a];
+        sum += mm * mm;
+    }
+    const double u = std::sqrt(sum);
+    return u >= kMinUnroundedLengthRatio * q ? u : q;
+}
+
 std::int64_t mm_to_steps(double mm, double steps_per_mm) {
     return static_cast<std::int64_t>(std::floor(mm * steps_per_mm + 0.5));
 }
 
 std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& b, double tol) {
-    const double cx = b.center_x, cy = b.center_y;
-    const double r0 = std::hypot(b.start[0] - cx, b.start[1] - cy);
-    const double r1 = std::hypot(b.end[0] - cx, b.end[1] - cy);
-    const double a0 = std::atan2(b.start[1] - cy, b.start[0] - cx);
-    const double a1 = std::atan2(b.end[1] - cy, b.end[0] - cx);
+    // The arc's plane (G17/G18/G19): u, v its two axes; the others move linearly.
+    const ArcFrame f = arc_frame(b);
+    const std::size_t u = f.first, v = f.second;
+    const double cx = f.center_first, cy = f.center_second;
+    const double r0 = std::hypot(b.start[u] - cx, b.start[v] - cy);
+    const double r1 = std::hypot(b.end[u] - cx, b.end[v] - cy);
+    const double a0 = std::atan2(b.start[v] - cy, b.start[u] - cx);
+    const double a1 = std::atan2(b.end[v] - cy, b.end[u] - cx);
     const bool cw = b.kind == MotionKind::arc_cw;
     constexpr double two_pi = 2 * std::numbers::pi;
     double sweep = cw ? a0 - a1 : a1 - a0;
-    const bool closed = std::hypot(b.end[0] - b.start[0], b.end[1] - b.start[1]) < 1e-9;
+    const bool closed = std::hypot(b.end[u] - b.start[u], b.end[v] - b.start[v]) < 1e-9;
     if (closed) {
         sweep = two_pi;
     } else {
@@ -51,17 +68,86 @@ std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& b, double tol) 
     std::vector<PerAxis<double>> pts;
     pts.reserve(n);
     for (std::size_t i = 1; i < n; ++i) {
-        const double f = static_cast<double>(i) / static_cast<double>(n);
-        const double ang = a0 + (cw ? -1 : 1) * sweep * f;
-        const double rad = r0 + (r1 - r0) * f;
+        const double frac = static_cast<double>(i) / static_cast<double>(n);
+        const double ang = a0 + (cw ? -1 : 1) * sweep * frac;
+        const double rad = r0 + (r1 - r0) * frac;
         PerAxis<double> p = b.start;
-        p[0] = cx + rad * std::cos(ang);
-        p[1] = cy + rad * std::sin(ang);
-        for (std::size_t a = 2; a < kAxes; ++a) p[a] = b.start[a] + (b.end[a] - b.start[a]) * f;
+        for (std::size_t a = 0; a < kAxes; ++a) p[a] = b.start[a] + (b.end[a] - b.start[a]) * frac;
+        p[u] = cx + rad * std::cos(ang);
+        p[v] = cy + rad * std::sin(ang);
         pts.push_back(p);
     }
     pts.push_back(b.end);
     return pts;
+}
+
+namespace {
+
+double norm(const PerAxis<double>& v) {
+    double s = 0;
+    for (double x : v) s += x * x;
+    return std::sqrt(s);
+}
+PerAxis<double> sub(const PerAxis<double>& a, const PerAxis<double>& b) {
+    PerAxis<double> d{};
+    for (std::size_t i = 0; i < kAxes; ++i) d[i] = a[i] - b[i];
+    return d;
+}
+double dot(const PerAxis<double>& a, const PerAxis<double>& b) {
+    double s = 0;
+    for (std::size_t i = 0; i < kAxes; ++i) s += a[i] * b[i];
+    return s;
+}
+
+// Turn angle (rad) at b of the polyline a-b-c.
+double turn(const PerAxis<double>& a, const PerAxis<double>& b, const PerAxis<double>& c) {
+    const auto u = sub(b, a), w = sub(c, b);
+    const double nu = norm(u), nw = norm(w);
+    if (nu == 0 || nw == 0) return 0;
+    return std::acos(std::clamp(dot(u, w) / (nu * nw), -1.0, 1.0));
+}
+
+}  // namespace
+
+std::vector<double> path_radii(const std::vector<PerAxis<double>>& pts,
+                               const std::vector<double>& arc_radius) {
+    const std::size_t n = pts.size();
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    std::vector<double> r(n, inf);
+    if (n < 3) return r;
+    // smooth[i]: the polyline goes on through point i with no corner.
+    std::vector<char> smooth(n, 0);
+    for (std::size_t i = 1; i + 1 < n; ++i) smooth[i] = turn(pts[i - 1], pts[i], pts[i + 1]) <= kSmoothTurnRad;
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+        if (!smooth[i]) continue;
+        if (arc_radius[i] < inf) { r[i] = arc_radius[i]; continue; }
+        // The smooth run around i, as far as fitting needs (at most 64 points a side).
+        std::size_t left = 1, right = 1;
+        double best = inf;
+        for (std::size_t m = 1;; m *= 2) {
+            // Widen each side to m points while the run stays smooth and straight-edged.
+            while (left < m && i >= left + 1 && smooth[i - left] && arc_radius[i - left] == inf) ++left;
+            while (right < m && i + right + 1 < n && smooth[i + right] && arc_radius[i + right] == inf) ++right;
+            const auto& A = pts[i - left];
+            const auto& B = pts[i + right];
+            const auto& P = pts[i];
+            const auto ab = sub(B, A), ap = sub(P, A), bp = sub(P, B);
+            const double lab = norm(ab);
+            double h = norm(ap);
+            if (lab > 0) {
+                const double t = dot(ap, ab) / (lab * lab);
+                PerAxis<double> off{};
+                for (std::size_t k = 0; k < kAxes; ++k) off[k] = ap[k] - t * ab[k];
+                h = norm(off);
+            }
+            // Circumradius |PA||PB| / (2h), with the noise added to h: never too large.
+            best = norm(ap) * norm(bp) / (2 * (h + kGeometryNoiseMm));
+            const bool grown = left == m || right == m;
+            if (h >= 10 * kGeometryNoiseMm || m >= 64 || !grown) break;
+        }
+        r[i] = best;
+    }
+    return r;
 }
 
 Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machine& m) {
@@ -102,11 +188,20 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
 
     PerAxis<std::int64_t> pos{};
     bool have_pos = false;
+    // Every polyline point in mm (chord ends included, rounded away or not),
+    // the arc radius around it, and the range of points each segment covers.
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    std::vector<PerAxis<double>> verts;
+    std::vector<double> arc_r;
+    std::vector<std::size_t> seg_first;  // per output segment: its start point
+    std::size_t cur_vertex = 0;
     for (std::size_t bi = 0; bi < job.blocks.size(); ++bi) {
         const MotionBlock& b = job.blocks[bi];
         if (!have_pos) {
             pos = to_steps(b.start);
             have_pos = true;
+            verts.push_back(b.start);
+            arc_r.push_back(inf);
         }
         StepSegment proto;
         proto.kind = b.kind;
@@ -117,22 +212,40 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
         if (b.kind == MotionKind::dwell) {
             proto.start = proto.end = pos;
             proto.dwell_s = b.dwell_s;
+            proto.from_mm = proto.to_mm = verts.back();
             out.push_back(proto);
+            seg_first.push_back(verts.size() - 1);
+            // A dwell is a stop: the polyline restarts after it (a repeated point).
+            verts.push_back(verts.back());
+            arc_r.push_back(inf);
+            cur_vertex = verts.size() - 1;
             continue;
         }
         std::vector<PerAxis<double>> pts;
-        if (b.kind == MotionKind::arc_cw || b.kind == MotionKind::arc_ccw) {
+        const bool is_arc = b.kind == MotionKind::arc_cw || b.kind == MotionKind::arc_ccw;
+        double radius = inf;
+        if (is_arc) {
             pts = arc_chord_points(b, m.planner.arc_tolerance_mm);
+            radius = std::min(std::hypot(b.start[0] - b.center_x, b.start[1] - b.center_y),
+                              std::hypot(b.end[0] - b.center_x, b.end[1] - b.center_y));
+            arc_r.back() = std::min(arc_r.back(), radius);  // the arc's start point
         } else {
             pts.push_back(b.end);
         }
-        for (const auto& p : pts) {
+        for (std::size_t pi = 0; pi < pts.size(); ++pi) {
+            const auto& p = pts[pi];
             if (!check(b, p)) break;
+            verts.push_back(p);
+            arc_r.push_back(radius);
             const auto target = to_steps(p);
             if (target == pos) continue;  // shorter than a step: merged into the next
             StepSegment s = proto;
             s.start = pos;
             s.end = target;
+            s.from_mm = verts[cur_vertex];
+            s.to_mm = p;
+            seg_first.push_back(cur_vertex);
+            cur_vertex = verts.size() - 1;
             bool too_long = false;
             for (std::size_t a = 0; a < kAxes; ++a) {
                 if (std::llabs(target[a] - pos[a]) >= (std::int64_t{1} << 31)) too_long = true;
@@ -145,7 +258,28 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
             pos = target;
         }
     }
-    if (result.errors.empty()) result.value = std::move(out);
+    if (result.errors.empty()) {
+        const auto r = path_radii(verts, arc_r);
+        for (std::size_t k = 0; k < out.size(); ++k) {
+            if (out[k].kind == MotionKind::dwell) continue;
+            const std::size_t last = k + 1 < out.size() ? seg_first[k + 1] : verts.size() - 1;
+            double rad = inf;
+            for (std::size_t v = seg_first[k] + 1; v < last && v < r.size(); ++v) rad = std::min(rad, r[v]);
+            const std::size_t v0 = seg_first[k], v1 = std::min(last, r.size() - 1);
+            const double r0 = r[v0], r1 = r[v1];
+            // A chord whose both ends are on a curve is part of it. A straight
+            // block (G0/G1) between two arcs is not: the arcs' radii at its ends
+            // are theirs (the junction caps take them), the line is straight.
+            const bool straight_between_arcs =
+                (out[k].kind == MotionKind::linear || out[k].kind == MotionKind::rapid) &&
+                (arc_r[v0] < inf || arc_r[v1] < inf);
+            if (r0 < inf && r1 < inf && !straight_between_arcs) rad = std::min({rad, r0, r1});
+            out[k].radius_mm = rad;
+            out[k].radius_ends_max_mm = std::max(r0, r1);
+            out[k].radius_start_mm = r0;
+        }
+        result.value = std::move(out);
+    }
     return result;
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "plan/gcode.h"
@@ -20,11 +21,33 @@ struct StepSegment {
     double feed = 0;                 // requested mm/s; 0 = as fast as the machine allows
     double dwell_s = 0;              // dwell segments: the pause, no motion
     bool spindle_on = false;
+    // The unrounded geometry (machine mm) the segment was rounded from: its
+    // start and end points, and the smallest path radius at the polyline
+    // points merged into it and, when both its ends are on a curve, at its
+    // ends (infinity: straight; a line ending on a curve is capped at that
+    // point only, by its junction). Arcs give their
+    // radius from the centre; G1 polylines a circle fitted through
+    // neighbouring points (path_radii()).
+    PerAxis<double> from_mm{};
+    PerAxis<double> to_mm{};
+    double radius_mm = std::numeric_limits<double>::infinity();
+    double radius_ends_max_mm = std::numeric_limits<double>::infinity();  // the larger of its two ends'
+    double radius_start_mm = std::numeric_limits<double>::infinity();     // at its start point
 
     [[nodiscard]] PerAxis<std::int64_t> delta() const;
     // Euclidean length of the quantized segment in mm (over the present axes).
     [[nodiscard]] double length_mm(const Machine& m) const;
+    // The length the feed planner times the segment over: the unrounded
+    // chord's (from_mm to to_mm), so that the planned speed is the speed along
+    // the G-code's geometry and rounding to steps adds no speed ripple from one
+    // chord to the next; the quantized length when the unrounded chord is
+    // shorter than kMinUnroundedLengthRatio of it (a point rounded across a
+    // step boundary). The axes' limits are projected with this length
+    // (planner.h, project_limits), so no axis exceeds them either way.
+    [[nodiscard]] double planned_length_mm(const Machine& m) const;
 };
+
+inline constexpr double kMinUnroundedLengthRatio = 0.5;
 
 // round(mm * steps_per_mm), halves away from -infinity (floor(x + 0.5)).
 std::int64_t mm_to_steps(double mm, double steps_per_mm);
@@ -32,6 +55,21 @@ std::int64_t mm_to_steps(double mm, double steps_per_mm);
 // The chord end points of an arc block (the block's start excluded, its exact
 // end included), each within `tolerance_mm` of the arc.
 std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& arc, double tolerance_mm);
+
+// A polyline turning by more than this (rad) at a point has a corner there
+// (junction deviation, acceleration zero); less is a smooth junction.
+inline constexpr double kSmoothTurnRad = 0.3;
+// The noise assumed on G-code coordinates (mm) when fitting a radius.
+inline constexpr double kGeometryNoiseMm = 1e-4;
+
+// Radius of the path at every point of a polyline (machine mm). `arc_radius`
+// gives, per point, the radius of an arc the point lies inside or ends
+// (infinity: none); other points of a smooth run get the circle through the
+// point and neighbours on each side, widened until the point stands at least
+// 10 noise widths off their chord, counted conservatively (the noise added to
+// the standoff). Corners (turn > kSmoothTurnRad) and the ends get infinity.
+std::vector<double> path_radii(const std::vector<PerAxis<double>>& pts,
+                               const std::vector<double>& arc_radius);
 
 // All blocks of a job as step segments. Moves outside an axis's travel, or
 // along an axis the machine does not have, refuse the job with file:line:col.

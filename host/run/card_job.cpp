@@ -25,7 +25,7 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
   }
   r.errors = plan::bind_card(*machine.value, card_facts(caps));
   if (!r.errors.empty()) return r;
-  auto job = plan::load_gcode(gcode);
+  auto job = plan::load_gcode(gcode, plan::gcode_options(*machine));
   r.warnings.insert(r.warnings.end(), job.warnings.begin(), job.warnings.end());
   if (!job.ok()) {
     r.errors = job.errors;
@@ -35,6 +35,7 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
   options.chunk_limits = card::chunk_limits();  // add2 as the machine's planner.chunk_add2 says
   auto planned = plan::plan_job(*job, *machine, options);
   r.warnings.insert(r.warnings.end(), planned.warnings.begin(), planned.warnings.end());
+  r.warnings = plan::summarize_repeats(std::move(r.warnings));  // e.g. "feed lowered" once, with a count
   if (!planned.ok()) {
     r.errors = planned.errors;
     return r;

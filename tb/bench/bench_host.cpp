@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "card/job.h"
+#include "cpstep/builds.h"
 #include "plan/gcode.h"
 #include "plan/pipeline.h"
 #include "plan/profile.h"
@@ -53,8 +54,15 @@ int main(int argc, char** argv) {
   for (auto [mach, job] : jobs) {
     const std::string mpath = root + "/examples/machines/" + mach + ".toml";
     const std::string jpath = root + "/examples/jobs/" + job + ".ngc";
-    const auto m = plan::load_machine(mpath);
+    auto m = plan::load_machine(mpath);
     if (!m.ok()) { fmt::print(stderr, "{}\n", plan::join(m.errors)); return 1; }
+    {
+      // Bound to the default board's card (rtl/builds.json), as `cpstep plan` does:
+      // the example machine files leave the card's clock to the card.
+      const builds::Build& b = *builds::find(builds::kDefaultBoard);
+      const auto errs = plan::bind_card(*m.value, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw});
+      if (!errs.empty()) { fmt::print(stderr, "{}\n", plan::join(errs)); return 1; }
+    }
     double best = 1e9;
     plan::PlanStats stats;
     size_t segments = 0;

@@ -302,7 +302,7 @@ void expect_refused(const std::string& name, const std::string& text, const std:
 
 TEST(CliRun, MalformedGcodeIsRefusedWithItsPosition) {
   // Line 3, column 7: a B word (a rotary axis the subset does not have).
-  expect_refused("malformed.ngc", "G21 G90\nG1 X1 F600\nG1 X2 B5\n", "3:7", "B5");
+  expect_refused("malformed.ngc", "G21 G90\nG1 X1 F600\nG1 X2 B5\n", "3:7", "axis B is not supported");
 }
 
 TEST(CliRun, MoveOutsideTheTravelIsRefusedNamingItsLine) {

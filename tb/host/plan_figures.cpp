@@ -1,6 +1,9 @@
 // Measurements quoted in docs/PLANNING.md (not a test).
 //   plan_figures chunks MACHINE JOB   moves per chunk with and without add2
 //   plan_figures split                worst split deviation, exhaustive + random
+//   plan_figures bounds MACHINE JOB   planned time beside the lower bound (whole job and its
+//                                     feed moves), groups, lookahead, windowed - whole-job time
+//   plan_figures speed MACHINE JOB [reps]  planning throughput, G-code lines per second
 #include <cstdio>
 #include <numeric>
 #include <random>
@@ -8,14 +11,70 @@
 
 #include <fmt/format.h>
 
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <map>
+#include <fstream>
+
+#include "cpstep/builds.h"
 #include "plan/pipeline.h"
+#include "plan/steptime.h"
 
 using namespace cpstep::plan;
 
 namespace {
 
+// The machine file bound to the default board's card (rtl/builds.json), as
+// `cpstep plan` does when it asks no card.
+Result<Machine> load_bound(const char* path) {
+    auto m = load_machine(path);
+    if (!m.ok()) return m;
+    const cpstep::builds::Build& b = *cpstep::builds::find(cpstep::builds::kDefaultBoard);
+    m.errors = bind_card(*m.value, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw});
+    return m;
+}
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Planning throughput, stage by stage, best of `reps` runs.
+int speed(const char* mpath, const char* jpath, int reps) {
+    auto m = load_bound(mpath);
+    if (!m.ok()) { fmt::print(stderr, "{}\n", join(m.errors)); return 1; }
+    std::ifstream f(jpath);
+    std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    std::size_t lines = 0;
+    for (char c : text) lines += c == '\n';
+    double best_parse = 1e9, best_segs = 1e9, best_feeds = 1e9, best_total = 1e9;
+    double duration = 0;
+    for (int r = 0; r < reps; ++r) {
+        auto t0 = Clock::now();
+        auto job = parse_gcode(text, jpath);
+        best_parse = std::min(best_parse, since(t0));
+        auto t1 = Clock::now();
+        auto segs = make_step_segments(*job, *m);
+        best_segs = std::min(best_segs, since(t1));
+        auto t2 = Clock::now();
+        auto feeds = plan_feeds(*segs.value, *m, jpath);
+        best_feeds = std::min(best_feeds, since(t2));
+        auto t3 = Clock::now();
+        auto p = plan_job(*job, *m);
+        best_total = std::min(best_total, since(t3) + since(t0) - since(t1));
+        if (!p.ok()) { fmt::print(stderr, "{}\n", join(p.errors)); return 1; }
+        duration = p->stats.duration_s;
+    }
+    fmt::print("{} {}: {} lines, planned {:.3f} s; parse {:.4f} s, segments {:.4f} s, feeds {:.4f} s, "
+               "parse + plan_job {:.4f} s = {:.0f} lines/s\n",
+               mpath, jpath, lines, duration, best_parse, best_segs, best_feeds, best_total,
+               static_cast<double>(lines) / best_total);
+    return 0;
+}
+
 int chunks(const char* mpath, const char* jpath) {
-    auto m = load_machine(mpath);
+    auto m = load_bound(mpath);
     auto job = load_gcode(jpath);
     if (!m.ok() || !job.ok()) {
         fmt::print(stderr, "{}\n{}\n", join(m.errors), join(job.errors));
@@ -81,12 +140,65 @@ int split() {
     return 0;
 }
 
+// Planned time beside the lower bound, for one machine and job.
+int bounds(const char* mpath, const char* jpath) {
+    auto m = load_bound(mpath);
+    auto job = load_gcode(jpath);
+    if (!m.ok() || !job.ok()) {
+        fmt::print(stderr, "{}\n{}\n", join(m.errors), join(job.errors));
+        return 1;
+    }
+    auto segs = make_step_segments(*job, *m);
+    FeedStats st;
+    auto feeds = plan_feeds(*segs.value, *m, jpath, {}, &st);
+    if (!feeds.ok()) { fmt::print(stderr, "{}\n", join(feeds.errors)); return 1; }
+    const double planned = feeds->back().t_start + feeds->back().duration;
+    const double lb = time_lower_bound(*segs.value, *m);
+    // The feed moves: from the first to the last G1/G2/G3 segment.
+    std::size_t first = segs->size(), last = 0;
+    for (std::size_t i = 0; i < segs->size(); ++i) {
+        const auto k = (*segs.value)[i].kind;
+        if (k == MotionKind::linear || k == MotionKind::arc_cw || k == MotionKind::arc_ccw) {
+            first = std::min(first, i);
+            last = i + 1;
+        }
+    }
+    const auto& fd = *feeds.value;
+    const double fplanned = first < last ? fd[last - 1].t_start + fd[last - 1].duration - fd[first].t_start : 0;
+    const double flb = first < last ? time_lower_bound(*segs.value, *m, first, last) : 0;
+    // The same job planned in one window (the whole job at once).
+    FeedOptions whole;
+    whole.window_stop_factor = std::numeric_limits<double>::infinity();
+    auto wf = plan_feeds(*segs.value, *m, jpath, whole);
+    const double wplanned = wf->back().t_start + wf->back().duration;
+    fmt::print("| {} | {} | {} | {:.3f} s | {:.3f} s | {:.3f} | {:.3f} s | {:.3f} s | {:.3f} | {} | {:.1f} mm, {:.2f} s | {:+.1e} s |\n",
+               mpath, jpath, segs->size(), planned, lb, planned / lb, fplanned, flb,
+               flb > 0 ? fplanned / flb : 0.0, st.groups, st.max_lookahead_mm, st.max_lookahead_s,
+               planned - wplanned);
+    if (std::getenv("PLAN_FIGURES_DETAIL")) {
+        // Planned time and bound-speed time per radius band (diagnostics).
+        std::map<int, std::array<double, 3>> band;
+        for (std::size_t i = 0; i < segs->size(); ++i) {
+            const auto& s = (*segs.value)[i];
+            const auto& f = (*feeds.value)[i];
+            const int b = std::isfinite(s.radius_mm) ? static_cast<int>(std::floor(std::log2(s.radius_mm))) : 99;
+            band[b][0] += f.duration;
+            band[b][1] += f.length;
+            band[b][2] += f.length / std::max(1e-9, f.cruise);
+        }
+        for (auto& [b, v] : band) fmt::print("  r 2^{}: planned {:.3f} s, {:.1f} mm, at cap {:.3f} s\n", b, v[0], v[1], v[2]);
+    }
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     const std::string cmd = argc > 1 ? argv[1] : "";
     if (cmd == "chunks" && argc == 4) return chunks(argv[2], argv[3]);
     if (cmd == "split") return split();
-    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | plan_figures split\n");
+    if (cmd == "bounds" && argc == 4) return bounds(argv[2], argv[3]);
+    if (cmd == "speed" && argc >= 4) return speed(argv[2], argv[3], argc > 4 ? std::atoi(argv[4]) : 5);
+    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps]\n");
     return 2;
 }

@@ -131,6 +131,14 @@ TEST(Profile, NonZeroEntryAndExit) {
 TEST(Profile, InfeasibleEntryExitIsRefused) {
     EXPECT_FALSE(make_profile(1, 60, 0, F, A, J));
     EXPECT_FALSE(make_profile(ramp(0, 60, A, J).distance * 0.99, 0, 60, F, A, J));
+    // No speed allowed, from rest to rest: nothing covers the length (a
+    // profile of zero duration over 1 mm would claim infinite speed).
+    EXPECT_FALSE(make_profile(1, 0, 0, 0, A, J));
+    EXPECT_FALSE(make_profile(1e-9, 0, 0, 0, A, J));
+    // A tiny allowed speed does cover it, at that speed.
+    auto slow = make_profile(1, 0, 0, 1e-3, A, J);
+    ASSERT_TRUE(slow);
+    EXPECT_GE(slow->duration, 1 / 1e-3);
 }
 
 TEST(Profile, ReachableSpeedInvertsRampDistance) {

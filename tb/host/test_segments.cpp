@@ -141,3 +141,50 @@ TEST(Segments, TravelAndAxisErrors) {
     EXPECT_EQ(e.rfind("job.ngc:2:1: Y -5", 0), 0u) << e;
     EXPECT_NE(e.find(" mm is outside the travel -50..100 mm of axis y"), std::string::npos) << e;
 }
+
+// The planner times a segment over its unrounded chord (so the planned speed
+// is the speed along the G-code's geometry, with no chord-to-chord ripple from
+// rounding), unless that chord is less than half the rounded one.
+TEST(Segments, PlannedLengthIsTheUnroundedChord) {
+    const Machine m = machine(80);
+    auto job = parse_gcode("G1 F600 X0.33 Y0.21\nX0.335\n", "job.ngc");
+    ASSERT_TRUE(job.ok()) << join(job.errors);
+    auto r = make_step_segments(*job, m);
+    ASSERT_TRUE(r.ok()) << join(r.errors);
+    ASSERT_EQ(r->size(), 2u);
+    // (0.33, 0.21) mm at 80 steps/mm rounds to (26, 17) steps.
+    EXPECT_NEAR((*r)[0].length_mm(m), std::hypot(26.0, 17.0) / 80, 1e-12);
+    EXPECT_NEAR((*r)[0].planned_length_mm(m), std::hypot(0.33, 0.21), 1e-12);
+    // X 0.33 -> 0.335: 0.005 mm of geometry, one step (0.0125 mm) after
+    // rounding (26.4 -> 26, 26.8 -> 27): the rounded length is used.
+    EXPECT_EQ((*r)[1].delta()[0], 1);
+    EXPECT_NEAR((*r)[1].planned_length_mm(m), 1.0 / 80, 1e-12);
+}
+
+// A straight block between two arcs is straight: the arcs' radii at its ends
+// belong to the arcs (and to the junctions), not to the line; the arcs' own
+// chords keep their radius.
+TEST(Segments, LineBetweenTwoArcsIsStraight) {
+    const Machine m = machine(80);
+    // Tangent everywhere from line 2 on: up along x = 10, a quarter circle
+    // (centre (16, 10)) onto y = 16, along it, a quarter circle (centre (40, 10))
+    // down onto x = 46, down along it.
+    auto job = parse_gcode("G1 F600 X10 Y4\nY10\nG2 X16 Y16 I6 J0\nG1 X40\nG2 X46 Y10 I0 J-6\nG1 Y4\n",
+                           "job.ngc");
+    ASSERT_TRUE(job.ok()) << join(job.errors);
+    auto r = make_step_segments(*job, m);
+    ASSERT_TRUE(r.ok()) << join(r.errors);
+    std::size_t arcs = 0, lines = 0;
+    for (const auto& s : *r) {
+        if (s.kind == MotionKind::arc_cw) {
+            ++arcs;
+            EXPECT_NEAR(s.radius_mm, 6.0, 1e-9);
+        } else if (s.loc.line == 4) {
+            ++lines;
+            EXPECT_TRUE(std::isinf(s.radius_mm)) << s.radius_mm;
+            EXPECT_NEAR(s.radius_start_mm, 6.0, 1e-9);  // the junction still sees the arc's bend
+        }
+    }
+    EXPECT_GT(arcs, 4u);
+    EXPECT_EQ(lines, 1u);
+}
