@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # cmake/builds.cmake — reads rtl/builds.json, the one table of cpstep's build
 # configurations (docs/BUILDS.md), for CMake and for scripts.
 #

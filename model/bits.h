@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Bit helpers shared by the golden model's parts: the RTL's fixed-width fields
 // and wide words (FifoWord: least significant 64-bit word first).
 #pragma once

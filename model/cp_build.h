@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_build — cycle-accurate, bit-exact model of rtl/cp_build.v, the motion core's
 // pattern builder (docs/CORE.md "Structure" and "Builder"). It holds the one
 // CpEngine. Same ports as the RTL; outputs() before the edge, tick() the edge.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "model/cp_cmd.h"
 
 #include "model/bits.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_cmd — cycle-accurate, bit-exact model of rtl/cp_cmd.v, the motion core's
 // command parser and chunk check (docs/CORE.md "Structure" and "Cycle behaviour").
 // Same ports as the RTL; outputs() is what the RTL shows before the rising edge

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core — cycle-accurate, bit-exact model of rtl/cp_core.v, the motion core.
 //
 // Written from docs/CORE.md ("Cycle behaviour" states every rule it follows). Like

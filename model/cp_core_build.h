@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The golden model's parameters for a build of rtl/builds.json: the same table
 // the Verilated cores and the synthesized boards are made from (docs/BUILDS.md).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ports of rtl/cp_core.v, shared by its golden model and the simulation adaptors.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "cp_engine.h"
 
 #include <bit>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_engine — cycle-accurate, bit-exact model of rtl/cp_engine.v.
 //
 // Written from docs/ENGINE.md (the engine's cycle contract), not from the RTL.

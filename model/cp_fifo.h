@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_fifo — cycle-accurate model of rtl/cp_fifo.v (first-word-fall-through FIFO
 // on a block RAM with commit/rollback). Written from the contract in docs/CORE.md.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "cp_pulse.h"
 
 #include <stdexcept>

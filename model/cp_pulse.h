@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_pulse — cycle-accurate, bit-exact model of rtl/cp_pulse.v.
 //
 // Written from docs/PULSE.md (the pulse timer's cycle contract), not from the RTL.

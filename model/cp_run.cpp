@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "model/cp_run.h"
 
 #include "model/bits.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_run — cycle-accurate, bit-exact model of rtl/cp_run.v, the motion core's
 // runner: the pattern banks and the replay, the move-event timer, the fire
 // decision and the stretch count (docs/CORE.md "Structure", "Timing and stretch").

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_status — cycle-accurate, bit-exact model of rtl/cp_status.v, the motion
 // core's faults (one priority encoder), counters, pulse configuration and READ
 // registers (docs/CORE.md "Structure", "Faults"). Same ports as the RTL;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Untimed oracle for the move string (SPEC §1). Deliberately tiny and independent
 // of the engine's design, so the two can disagree.
 #pragma once

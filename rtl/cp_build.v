@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_build — the motion core's pattern builder.
 //
 // Takes the next committed segment from the segment queue (its header, then v_i

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_card — the card, independent of the board: the SPI front end (cp_spi) feeding
 // the motion core (cp_core), and the E-stop input.
 //

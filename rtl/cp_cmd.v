@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_cmd — the motion core's command parser and chunk check.
 //
 // Takes the command words (docs/CORE.md "Command port"), one a clock, and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core — the motion core: four parts joined by three queues.
 //
 //   cp_cmd    command parser and chunk check ─► segment queue, chunk queue

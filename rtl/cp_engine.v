@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_engine — Castle–Pitteway move-string engine for one (major, minor) axis pair.
 //
 // Accepts (u, v, k, rep) on a valid/ready handshake, grows the register pair

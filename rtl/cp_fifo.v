@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_fifo — first-word-fall-through FIFO on a block RAM, with commit/rollback.
 //
 // Writes are invisible to the reader until committed: a producer that validates

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_pulse — one axis's STEP/DIR pins, with the driver's timing enforced.
 //
 // The motion core asks for a pulse with step_i, only in a cycle where ready_o is

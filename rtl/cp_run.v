@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_run — the motion core's runner: pattern banks and replay, the move-event
 // timer, the fire decision and the stretch count.
 //

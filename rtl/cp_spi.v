@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_spi — the card's SPI front end: frames in on MOSI, replies out on MISO, and
 // the command buffer between the frames and the motion core's command port.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_status — the motion core's status: faults, counters, configuration and
 // the READ registers.
 //

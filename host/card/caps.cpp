@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "card/caps.h"
 
 #include <fmt/format.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What a card says of itself: the capability registers (READ 0x1F, 0x20..0x25,
 // docs/CORE.md), read at connect, and what the host plans with from them.
 #pragma once

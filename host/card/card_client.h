@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The host's side of the card's SPI protocol (docs/PROTOCOL.md) over any Link:
 // command words go out as COMMANDS frames of whole commands that fit the room
 // the card announces, every reply is checked (CRC, magic, last_seq,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "card/frame.h"
 
 #include <algorithm>

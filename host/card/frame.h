@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The card's SPI frames and replies (docs/PROTOCOL.md), as bytes.
 //
 // A frame is what the host shifts out on MOSI in one CS-low period: type, seq,

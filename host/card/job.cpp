@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "card/job.h"
 
 #include <fmt/format.h>

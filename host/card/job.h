@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // From a planned job to the card's command words: choose each segment's
 // doubling exponent, split what exceeds the card's move count, and order the
 // configuration, the segments and START (docs/CORE.md).

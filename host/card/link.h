@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A byte link to the card: one call is one CS-low period of SPI (docs/PROTOCOL.md).
 // The frame-level host code (card_client.h) runs over any Link: the simulated
 // card's pins (host/sim/sim_link.h), a Linux spidev device (spidev.h), or a test

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The card's command words (docs/CORE.md), built from values.
 #pragma once
 

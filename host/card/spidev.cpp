@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "card/spidev.h"
 
 #include <fcntl.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A card on a Linux spidev device (/dev/spidevB.C): SPI mode 0, 8-bit words,
 // MSB first, at a given SCK rate; one full-duplex SPI_IOC_MESSAGE per frame.
 #pragma once

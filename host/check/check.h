@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `cpstep check`: a STEP/DIR trace of any device held against cpstep's own
 // plan of the same job (docs/VALIDATING.md, section 4).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "check/pin_map.h"
 
 #include <fmt/format.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Which trace signals are which axis's STEP and DIR, their polarity, and the
 // trace's time base: cpstep's own names by default (`cpstep run --vcd` writes
 // step_<axis> and dir_<axis>, polarity as the machine file says), or a map

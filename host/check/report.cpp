@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The verdict of check_trace as JSON and as the summary `cpstep check` prints.
 #include <fmt/format.h>
 

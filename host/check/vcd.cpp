@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "check/vcd.h"
 
 #include <fmt/format.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A small, strict reader of VCD (IEEE 1364 value change dump) files: what
 // simulators (`cpstep run --vcd`, Verilator, GHDL) and logic analyzers
 // (`sigrok-cli -O vcd`) write. It keeps every variable's declaration and its

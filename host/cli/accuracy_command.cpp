@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "cli/accuracy_command.h"
 
 #include <fmt/core.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `cpstep accuracy U V [--k K] [--engine rtl|model|oracle] [--grid fine|base]`:
 // the deviation of the stream an engine emitted from the ideal line, as the seed
 // paper computes it (docs/ACCURACY.md).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "card/caps.h"
 #include "cpstep/builds.h"
 #include "cli/check_command.h"

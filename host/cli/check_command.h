@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `cpstep check`: a STEP/DIR trace (VCD) of any device held against cpstep's
 // plan of the same job, with a JSON verdict (docs/VALIDATING.md, section 4).
 #pragma once

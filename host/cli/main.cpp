@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cpstep — command-line front end.
 //
 //   cpstep moves U V [--k K] [--rep R] [--engine rtl|model|oracle] [--stats] [--table]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `cpstep run` and `cpstep plan`: a G-code job planned for the card, then run
 // on a transport (the simulated card through its SPI pins, a card on a Linux
 // spidev device, or a file of command words), with a summary, a JSON report, a

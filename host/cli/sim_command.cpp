@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "cli/sim_command.h"
 
 #include <fmt/core.h>

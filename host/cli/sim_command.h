@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `cpstep sim`: runs a script of raw segments and commands (docs/SIM.md) on the
 // Verilated card, through its SPI pins, and reports its final state.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `cpstep vectors OUT_DIR`: conformance vectors for other step generators
 // (docs/VALIDATING.md): segments with their expected move strings and positions.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Timing chunks in the card's form, compressed greedily from ideal move
 // times: each realized time lies in [ideal - tolerance, ideal] (never late,
 // at most `tolerance` early, as in Klipper's stepcompress).

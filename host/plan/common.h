@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Value types shared by every stage of the planning core: axis indexing,
 // source locations and diagnostics. No I/O, no global state.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // RS274NGC as LinuxCNC and Grbl users write it (docs/PLANNING.md, G-code),
 // parsed into motion blocks in machine millimetres with every modal state,
 // offset, parameter and canned cycle resolved.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The RS274NGC line reader: comments, whitespace anywhere, words whose values
 // are numbers, parameters (#1, #<name>) or [expressions] with LinuxCNC's
 // functions and operators, and parameter assignments. Pure: no I/O.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "plan/kinematics.h"
 
 #include <algorithm>

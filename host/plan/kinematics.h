@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Realized kinematics: what the card's step events amount to as velocity,
 // acceleration and jerk of each axis, to check limits against what was
 // actually emitted rather than what was planned.

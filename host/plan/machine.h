@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The machine file: axes, card and planner settings, read from TOML.
 #pragma once
 

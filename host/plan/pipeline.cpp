@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "plan/pipeline.h"
 
 #include <cmath>

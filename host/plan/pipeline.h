@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The whole core in one call: job + machine -> card segments with chunks.
 // Pure: no I/O, everything it needs is in its arguments.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Feed planning over a whole job: per-segment limits projected from the axes,
 // junction speeds from the corner angle (junction deviation, as in Grbl), and
 // backward/forward passes so that every exit speed is reachable by the next

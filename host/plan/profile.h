@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Seed 002's 7-phase jerk-limited feed profile over one path segment, in
 // closed form per phase: jerk +J, 0, -J (accelerate), 0 (cruise), -J, 0, +J
 // (decelerate). Acceleration is zero at both ends of every profile that

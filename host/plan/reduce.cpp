@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "plan/reduce.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Card segments: GCD reduction of each axis's pattern against the major axis
 // and, where a reduced pattern exceeds the card's capacity W, a split into
 // sub-segments whose ends are lattice points close to the ideal line.

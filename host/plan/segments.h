@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Geometry to integer-step segments: arcs become chords within the machine's
 // tolerance; every segment end is the absolute target rounded to whole steps,
 // so rounding never accumulates.

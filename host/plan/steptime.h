@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ideal times of move events: move i (1..T) of a segment happens when the
 // path reaches i/T of the segment's length.
 #pragma once

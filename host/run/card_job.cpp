@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "run/card_job.h"
 
 #include <fstream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A G-code job made ready for the card: planned with the card's chunk form,
 // converted to wire segments and encoded as command words, with what a run
 // needs to check the card against the plan (ideal move times, the position

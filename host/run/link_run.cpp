@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "run/link_run.h"
 
 #include <fmt/format.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Runs a CardJob on a card over any card::Link — the transport `spidev` of
 // `cpstep run`, and the same code over the simulated card in the tests. Nothing
 // of the card's pins is seen: what the run reports is what the card's replies say.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "run/measure.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What a card run amounts to, measured from its pins against the plan:
 // timing errors, per-axis realized velocity / acceleration / jerk peaks
 // (plan::realized_peaks on the STEP edge times) and the series the plots show.

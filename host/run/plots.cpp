@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "run/plots.h"
 
 #include <fcntl.h>

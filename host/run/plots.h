@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `cpstep run --plots DIR`: path.png, speed.png, accel.png and jerk.png drawn by
 // gnuplot from what the card's pins did, with the plan beside it. The data
 // files and the gnuplot script stay in DIR so a figure can be redrawn by hand.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "run/report.h"
 
 #include <fmt/format.h>

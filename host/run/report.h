@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The JSON report of `cpstep run --report` (docs/HOST.md defines every field).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Runs a CardJob on the simulated card (the Verilated cp_card: the SPI front end
 // and the motion core) through its SPI pins, and records what its pins and
 // counters did: the transport `sim` of `cpstep run`.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The Verilated cp_card of every board in rtl/builds.json (rtl/CMakeLists.txt
 // makes cpstep_rtl_card_<build>).
 #pragma once

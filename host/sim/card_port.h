@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ports of rtl/cp_card.v (the card: SPI front end + motion core), and the port
 // adaptor for its Verilated configurations (see dut.h). There is no golden model
 // of the card as a whole: RtlDut<P> steps it; tests read it through its pins.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The Verilated cp_core of every build in rtl/builds.json (rtl/CMakeLists.txt
 // makes cpstep_rtl_core_<build>), each with its golden model's parameters from
 // the same table.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Drives a cp_core stepper (RTL, model or lockstep) through its command port:
 // words in with valid/ready, register reads, idle cycles; every cycle's outputs
 // go to an optional observer (pin monitors, invariant checkers, VCD writers).

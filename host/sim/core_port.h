@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Port adaptor for Verilated cp_core configurations (see dut.h).
 #pragma once
 

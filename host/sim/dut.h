@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Uniform cycle steppers over a Verilated module and over its golden model.
 //
 // A port adaptor P describes one RTL module and its model:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The Verilated cp_engine configurations built by rtl/CMakeLists.txt.
 #pragma once
 

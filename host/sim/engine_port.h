@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Port adaptor between a Verilated cp_engine configuration and model::CpEngine
 // (see dut.h for what an adaptor provides).
 #pragma once

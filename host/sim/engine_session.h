@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Runs one request through a cp_engine stepper (RTL, model, or both in lockstep)
 // and collects what it emitted: the moves, the timing of the build, and the
 // register table decoded from the debug port.

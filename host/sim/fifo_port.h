@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Port adaptor between Verilated cp_fifo configurations and model::CpFifo.
 #pragma once
 

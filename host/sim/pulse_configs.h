@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The Verilated cp_pulse configurations built by rtl/CMakeLists.txt.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Port adaptor between a Verilated cp_pulse configuration and model::CpPulse
 // (see dut.h for what an adaptor provides).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The simulated card as a card::Link: frames go through the pin-level SPI
 // master (spi_master.h), bit by bit on SCK/MOSI/MISO, and waiting clocks the card.
 // Everything the card does meanwhile is seen by the master's observer, every

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The text format of `cpstep sim` (docs/SIM.md): raw segments, chunks and
 // commands for the card, one per line. Parsing checks syntax and field widths
 // only; values the card refuses (v > U, interval 0, ...) pass through unchanged.

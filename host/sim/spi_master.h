@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A pin-level SPI master (mode 0, MSB first) for the simulated card: it drives
 // SCK, CS and MOSI of a card stepper cycle by cycle and samples MISO, so a byte
 // vector goes out and the card's reply comes back exactly as on the wire

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "sim/vcd_writer.h"
 
 #include <stdexcept>

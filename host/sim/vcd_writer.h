@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A small VCD (IEEE 1364 value change dump) writer: named signals in one scope,
 // values written only when they change. Used by `cpstep sim --vcd` to give each
 // pin its own name (Verilator's tracer names signals by the RTL hierarchy).

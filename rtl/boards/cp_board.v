@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_board — what every iCE40 board top shares: the PLL from the 12 MHz
 // oscillator, the SPI MISO and E-stop pads, the reset after the PLL locks, the
 // card (cp_card), the drivers' ENABLE polarity and the two status LEDs. A board

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_core — motion core figures for docs/BENCHMARKS.md (run by scripts/bench).
 // Everything runs on the Verilated cp_core at its defaults (4 axes, W = 1024) with
 // the tightest pulse timing (STEP high 1, low 1, DIR setup 1, hold 1). Cycle

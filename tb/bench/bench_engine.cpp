@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_engine — engine figures for docs/BENCHMARKS.md (run by scripts/bench).
 // Cycle counts come from the Verilated RTL (deterministic); speeds are wall-clock.
 #include <fmt/core.h>

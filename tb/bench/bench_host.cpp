@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // bench_host — host planner figures for docs/BENCHMARKS.md (run by scripts/bench):
 // G-code lines planned per second, moves per chunk in the card's chunk form at the
 // machine's tolerance (with add2, and without for comparison), and the time of one

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // wave_core — prints ASCII timing diagrams of cp_core's command port, taken
 // from the Verilated RTL cycle by cycle (docs/CORE.md "Timing diagrams").
 #include <fmt/core.h>

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # `cpstep check --json` on cpstep's own trace: the verdict file read back.
 #   cmake -DCPSTEP=cpstep -DTRACE=t.vcd -DDATA=tb/check/data -DJSON=out.json -P check_json.cmake
 file(REMOVE "${JSON}")

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `cpstep check` on cpstep's own RTL trace: the Verilated card runs a small
 // job (tb/check/data/check.ngc on check.toml) and writes its pin VCD; the
 // unmodified trace must conform (no false alarm), also read through a pin map

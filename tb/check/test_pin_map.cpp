@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Pin maps (host/check/pin_map): defaults, every field, and bad maps refused
 // with file, line, column and field.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The VCD reader (host/check/vcd): the dialects cpstep, simulators and
 // sigrok-cli write, and malformed input refused with file:line:col.
 #include <gtest/gtest.h>

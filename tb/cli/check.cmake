@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Runs one cpstep command and checks its exit code, stdout and stderr.
 #   cmake -DCMD="a|b|c" -DRC=0 [-DOUT=regex] [-DERR=regex] -P check.cmake
 string(REPLACE "|" ";" CMD "${CMD}")

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 # Runs `cpstep sim SCRIPT --vcd VCD ...` and checks the waveform with vcd_count.
 #   cmake -DCPSTEP=cpstep -DCOUNTER=vcd_count -DSCRIPT=file -DVCD=out.vcd -DRC=0
 #         [-DARGS="a|b"] [-DEXPECT=regex] [-DNO_VCD=1] -P check_sim_vcd.cmake

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // vcd_count FILE — summarises a VCD for the CLI tests, independently of the
 // writer in host/sim: the timescale, every variable in declaration order, and per
 // variable its width, rising and falling edges of bit 0 and final value, plus the

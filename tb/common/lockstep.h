@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Lockstep: one Verilated module and its golden model get the same inputs every
 // cycle; every output is compared on every cycle. On the first mismatch it
 // replays the recorded stimulus into a fresh, traced RTL instance to leave an FST

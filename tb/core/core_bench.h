@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The motion core's bench: host-like random jobs, and a harness that runs them on
 // RTL and model in lockstep with the independent pin checker watching.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // An independent checker of the motion core's pins (docs/CORE.md, SPEC §1–§2). It is
 // fed the core's inputs and outputs every cycle and the segments the host sent that
 // the core must run, and nothing of the model or the RTL's internals:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Port adaptors (sim/dut.h) between the Verilated parts of cp_core (rtl/CMakeLists.txt:
 // cpstep_rtl_part_*) and their model twins, for the part benches (test_core_parts.cpp).
 // Every output port is a compared field. Outputs are defined from the first reset

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Random host-like jobs streamed to a running core, in lockstep with the model and
 // the pin checker on every cycle (CoreHarness): the body of the CoreRandom benches
 // (test_core_random.cpp), shared with the post-synthesis bench (tb/netlist).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The bad commands of docs/CORE.md "Validation" (codes 1–8 and 12–15), one catalogue
 // for every bench that sends them (tb/core/test_core_reject.cpp on the RTL cores,
 // tb/netlist on the synthesized one), sized from the core's parameters.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The core the validation benches (test_core_reject.cpp, test_core_add2.cpp) run
 // against: the HX8K's build (bit-serial multiplier), or with CPSTEP_TB_CORE_DSP
 // (test_core_dsp in CMakeLists.txt) the test build "dsp" of rtl/builds.json: the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core chunks with add2 (docs/CORE.md "Command port", "Cycle behaviour"): move j
 // of a chunk comes interval + j·add + add2·j(j−1)/2 cycles after the previous move;
 // a segment's chunks are three words when its header has bit 22. RTL vs model in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core CONFIG around STEP pulses (docs/CORE.md "Cycle behaviour", CONFIG): refused
 // with CONFIG_BUSY (13) while running or while any axis's STEP pin is active — after
 // ABORT, E-stop or the end of a run a pulse already high completes its high time, and

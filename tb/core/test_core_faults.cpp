@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core faults and bad input (docs/CORE.md "Faults", "Validation", SPEC §4), RTL vs
 // model in lockstep with the pin checker on; each test also states what must hold
 // from the pins and the registers alone.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core's parts on their own: each Verilated part (cp_cmd, cp_build, cp_run,
 // cp_status) against its model twin every cycle, under random inputs shaped to
 // reach every state (whole legal segments among junk for the parser; segment

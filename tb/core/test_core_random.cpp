@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core, RTL vs model in lockstep on every cycle, with random host-like jobs
 // streamed to a running core and the independent pin checker on every cycle.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core bad input (docs/CORE.md "Validation", codes 1–8 and 12–15): the bad
 // command makes no move, its code latches, nothing after it runs until CLEAR, and
 // what came before it behaves as the doc says — a segment already running completes,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core on its own (RTL): the paper's line as a 4-axis segment, from the pins.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core soak (label long): at least 10,000 random segments and 1,000,000 moves,
 // RTL vs model in lockstep on every cycle with the pin checker on, a fresh lockstep
 // pair per batch. Seed: CPSTEP_SEED. Figures printed at the end.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // X discipline (label long, scripts/nightly): each board's core built with random
 // initial values in every register and memory (--x-initial unique, X assigned
 // randomly: rtl/CMakeLists.txt XINIT), reset, then driven with random host-like

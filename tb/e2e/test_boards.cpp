@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Every board of rtl/builds.json, end to end: its Verilated card is asked what it
 // is through its SPI pins (the capability registers must say what the table says),
 // a G-code job is planned for what it said and run through its pins, checked

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The host's SPI client (host/card/card_client.h) against the Verilated card,
 // through its pins: the whole job path of `cpstep run` (run_on_sim), the
 // spidev path over the simulated card (run_on_link), and the client alone on the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // `cpstep run` and `cpstep plan` as a user runs them: the program runs as a
 // process and its outputs are read back here with independent readers: the
 // JSON report, the VCD through tb/cli/vcd_count, PNG signatures, and the

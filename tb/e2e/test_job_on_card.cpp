@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // G-code -> planner -> command words -> the Verilated core, and back from its pins:
 // the job lands exactly on the planned steps, and every move event happens at
 // the cycle the planned chunks say (timed from START), unless stretched.

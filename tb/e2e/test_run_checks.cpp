@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The checks of host/run against a plan that the card does not follow: a
 // planned position changed by one step must become a POSITION fault at that
 // card segment, and nothing else may change.

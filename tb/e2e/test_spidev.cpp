@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The spidev link's refusals, on what this machine has: a device path that does
 // not exist, a plain file and /dev/null in its place (the SPI ioctls fail), and
 // a file without permission. Each is a LinkError naming the path, and nothing is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Helpers shared by the engine benches: run a request in lockstep with random
 // back-pressure and the move stream's contract checked on every cycle.
 #pragma once

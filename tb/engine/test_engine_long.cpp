@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The long sweep (ctest label `long`, run by scripts/nightly): every u up to the
 // default capacity W = 1024, every v, in lockstep and against the oracle.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The seed paper's worked example, (u, v) = (51, 11), SPEC §1: the register table
 // row by row, the 51-move output, and its doubled forms.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Engine sweeps: RTL vs model on every cycle (Lockstep), and the moves against
 // the untimed oracle. SPEC §1 and §5.3.
 #include <gtest/gtest.h>

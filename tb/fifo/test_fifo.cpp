@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_fifo: RTL vs model every cycle under random traffic, and an independent
 // scoreboard: committed words come out in order, rolled-back words never do.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Measurements quoted in docs/PLANNING.md (not a test).
 //   plan_figures chunks MACHINE JOB   moves per chunk with and without add2
 //   plan_figures split                worst split deviation, exhaustive + random

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The whole pipeline on the shipped examples: every job plans on every
 // machine whose travel holds it, and the output keeps the card's rules.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The G-code corpus (examples/gcode/, README there): programs written here in
 // the dialects of common CAM posts and hand-written LinuxCNC code. Every one
 // plans on the machine it is written for; the refused ones are refused with

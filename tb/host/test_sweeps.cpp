@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Slow property sweeps (ctest label `long`).
 #include <gtest/gtest.h>
 

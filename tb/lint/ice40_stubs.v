@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // iCE40 primitives the board tops instantiate, as port-exact stubs for
 // `verilator --lint-only` of the tops (tb/lint/CMakeLists.txt). Only their
 // interfaces matter here: the PLL passes its reference through, the IO cell

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_core after synthesis: yosys's gate-level netlist of the iCEBreaker build
 // (synth_ice40 -abc9 -dsp: SB_LUT4, SB_CARRY, SB_DFF*, SB_RAM40_4K, the chunk check's
 // multiplier in SB_MAC16), simulated with yosys's iCE40 cell models

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // An independent checker of the STEP/DIR pin timing (docs/PULSE.md, "Pin-level
 // consequences"). It reads only the pins (step_o, dir_o, position_o), rst and the
 // configuration in force — never ready_o, busy_o or the model — so it holds the

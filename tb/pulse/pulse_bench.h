@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The cp_pulse bench: RTL and model in lockstep (every output, every cycle), the
 // independent pin checker on every cycle, and the pin edges recorded for the
 // directed tests' measurements.

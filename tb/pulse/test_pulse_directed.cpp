@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Directed cp_pulse tests: the figures docs/PULSE.md derives from the contract
 // (maximum step rate, DIR reversal latency), saturation and wrap at TW = 4, PW = 8,
 // reset, ignored requests, busy_o; and the pin checker's own self-test. All run in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_pulse under a random core: random configurations (1s, large values, both
 // polarities), step_i whenever ready_o (or after a wait), dir_i changed at random
 // times, polarities flipped at random while STEP is inactive, random resets, an

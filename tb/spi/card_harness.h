@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A Verilated card driven through its pins only: the pin-level SPI master, the
 // host's frame codec, and a record of every cycle's pins for the checks.
 #pragma once

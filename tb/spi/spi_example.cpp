@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // docs/PROTOCOL.md's worked example: frames from the host codec, sent through the
 // pin-level SPI master to the Verilated card (4 axes), printed with the replies.
 //   build/tb/spi/spi_example

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The host's frame codec (host/card/frame.{h,cpp}) against docs/PROTOCOL.md:
 // the CRC against a bit-serial reference written here and the standard check
 // value, frames byte by byte, the split into whole commands, reply decoding.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The card (rtl/cp_card.v) through its pins only: frames in over the pin-level
 // SPI master, replies decoded by the host codec and checked against
 // docs/PROTOCOL.md and against the card's own pins.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Frames the card must refuse (docs/PROTOCOL.md, result codes 1..6), through
 // the pins of the Verilated card: each refused frame is reported with its code
 // in the next reply and nothing from it executes — the reply's counters, status,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The golden model alone against the oracle: a wider sweep than the lockstep
 // benches can afford, at the default capacity.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The oracle's two forms agree, and both have SPEC §1's properties.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // check_vectors DIR: checks every line of DIR/engine.vec and DIR/segments.vec
 // against its own few lines of SPEC section 1's closed form (not the project's
 // oracle), and that each segment lands on its deltas. Prints "N passed, M failed".

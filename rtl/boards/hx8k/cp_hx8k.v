@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_hx8k — cpstep on Lattice's iCE40-HX8K breakout board (iCE40HX8K-CT256,
 // 12 MHz oscillator on J3). Pins on headers J2 and J3 (constraints/hx8k.pcf,
 // docs/BOARDS.md); LED0: running, LED1: fault. No button: reset at power-up.

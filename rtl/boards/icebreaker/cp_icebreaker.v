@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // cp_icebreaker — cpstep on the iCEBreaker (iCE40UP5K-SG48, 12 MHz oscillator).
 //
 // The PLL multiplies the 12 MHz oscillator up to the card's clock (scripts/synth
