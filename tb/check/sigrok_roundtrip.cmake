@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 # cpstep's own trace through sigrok-cli and back, as a capture would come:
-# read as a VCD, sampled at 50 MHz (more than twice the default board's 18 MHz card clock),
+# read as a VCD, sampled at 50 MHz (more than twice the default board's 16.5 MHz card clock),
 # saved as a sigrok session, exported with `sigrok-cli -O vcd` (time unit 10 ns: the first
 # decade at or above 50 MHz), then checked with the sample rate in the map.
 # Skipped (ctest SKIP_REGULAR_EXPRESSION) where sigrok-cli is not installed.

