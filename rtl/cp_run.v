@@ -136,7 +136,9 @@ always @* begin
     if (stretch_o) late_d = 1'b1;
     if (fire_o) late_d = 1'b0;
 
-    if (!ch_loaded_q && ch_valid_i) begin
+    // The timer takes the chunk queue's head when it holds none, and when the move
+    // that fires is its chunk's last (never both: a move fires only with a chunk).
+    if (ch_valid_i && (!ch_loaded_q || (fire_o && left_q == 16'd1))) begin
         ch_pop_o    = 1'b1;
         ch_loaded_d = 1'b1;
         delay_d     = ch_head_i[31:0];
@@ -152,14 +154,7 @@ always @* begin
             left_d  = left_q - 1'b1;
             delay_d = delay_q + tinc_q;
             tinc_d  = tinc_q + {{16{tadd2_q[15]}}, tadd2_q};
-        end else if (ch_valid_i) begin
-            ch_pop_o = 1'b1;
-            delay_d  = ch_head_i[31:0];
-            tinc_d   = {{16{ch_head_i[47]}}, ch_head_i[47:32]};
-            left_d   = ch_head_i[63:48];
-            tadd2_d  = ch_head_i[79:64];
-            tlast_d  = ch_head_i[80];
-        end else begin
+        end else if (!ch_valid_i) begin
             ch_loaded_d = 1'b0;
         end
         // The replay registers fetch the next move of the running lane's patterns.
