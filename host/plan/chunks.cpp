@@ -2,6 +2,7 @@
 #include "plan/chunks.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -18,9 +19,11 @@ std::int64_t floor_div(std::int64_t a, std::int64_t b) {  // b > 0
 std::int64_t ceil_div(std::int64_t a, std::int64_t b) { return -floor_div(-a, b); }
 
 // The same through a double quotient corrected to the exact integer result
-// (|a| < 2^53): the division is the inner loop's cost.
+// (|a| < 2^53): the division is the inner loop's cost. The quotient is truncated
+// (a conversion, not a call to floor(), which baseline x86-64 cannot inline) and
+// the loops below correct it by one where truncation and floor differ.
 std::int64_t floor_div_fast(std::int64_t a, std::int64_t b) {  // b > 0
-    auto q = static_cast<std::int64_t>(std::floor(static_cast<double>(a) / static_cast<double>(b)));
+    auto q = static_cast<std::int64_t>(static_cast<double>(a) / static_cast<double>(b));
     while (q * b > a) --q;
     while ((q + 1) * b <= a) ++q;
     return q;
@@ -31,6 +34,34 @@ struct Best {
     std::uint32_t count = 0;
     std::int64_t interval = 0, add = 0, add2 = 0, last = 0;
 };
+
+// Narrow [a_lo, a_hi], the adds A still possible, by move j's window and
+// delay (both formulas below, at j).
+[[gnu::always_inline]] inline void narrow_at(std::span<const std::int64_t> lo, std::span<const std::int64_t> hi, std::int64_t P,
+               std::int64_t I, std::int64_t B, std::size_t j, std::int64_t& a_lo, std::int64_t& a_hi) {
+    const auto jj = static_cast<std::int64_t>(j);
+    const std::int64_t tri = jj * (jj + 1) / 2;
+    const std::int64_t base = P + (jj + 1) * I + B * (jj + 1) * jj * (jj - 1) / 6;
+    a_lo = std::max(a_lo, ceil_div_fast(lo[j] - base, tri));
+    a_hi = std::min(a_hi, floor_div_fast(hi[j] - base, tri));
+    const std::int64_t dbase = I + B * jj * (jj - 1) / 2;
+    // delay_j = dbase + j A in [1, kMaxDelay]; divide only when the bound bites.
+    if (a_lo * jj + dbase < 1) a_lo = std::max(a_lo, ceil_div(1 - dbase, jj));
+    if (a_hi * jj + dbase > kMaxDelay) a_hi = std::min(a_hi, floor_div(kMaxDelay - dbase, jj));
+}
+
+// Whether (I, B) can possibly give a chunk of `need` moves: move need-1's
+// constraints alone (a necessary condition; extend() applies all of them).
+// Lets compress() skip candidates that cannot replace the best so far without
+// changing which chunk it picks.
+bool may_reach(std::span<const std::int64_t> lo, std::span<const std::int64_t> hi, std::int64_t P,
+               std::int64_t I, std::int64_t B, const ChunkLimits& lim, std::uint32_t need) {
+    if (need <= 1) return true;
+    if (need > std::min<std::size_t>(lo.size(), lim.max_count)) return false;
+    std::int64_t a_lo = lim.add_min, a_hi = lim.add_max;
+    narrow_at(lo, hi, P, I, B, need - 1, a_lo, a_hi);
+    return a_lo <= a_hi;
+}
 
 // For a fixed interval I and add2 B, extend the count while some integer add
 // keeps every event in its window and every delay in [1, 2^32).
@@ -46,14 +77,8 @@ void extend(std::span<const std::int64_t> lo, std::span<const std::int64_t> hi, 
     std::uint32_t count = 1;
     for (std::size_t j = 1; j < n; ++j) {
         const auto jj = static_cast<std::int64_t>(j);
-        const std::int64_t tri = jj * (jj + 1) / 2;
-        const std::int64_t base = P + (jj + 1) * I + B * (jj + 1) * jj * (jj - 1) / 6;
-        std::int64_t new_lo = std::max(a_lo, ceil_div_fast(lo[j] - base, tri));
-        std::int64_t new_hi = std::min(a_hi, floor_div_fast(hi[j] - base, tri));
-        const std::int64_t dbase = I + B * jj * (jj - 1) / 2;
-        // delay_j = dbase + j A in [1, kMaxDelay]; divide only when the bound bites.
-        if (new_lo * jj + dbase < 1) new_lo = std::max(new_lo, ceil_div(1 - dbase, jj));
-        if (new_hi * jj + dbase > kMaxDelay) new_hi = std::min(new_hi, floor_div(kMaxDelay - dbase, jj));
+        std::int64_t new_lo = a_lo, new_hi = a_hi;
+        narrow_at(lo, hi, P, I, B, j, new_lo, new_hi);
         if (sign != 0) {
             // The last increment A + (j-1) B, and the sign of all of them.
             const std::int64_t shift = (jj - 1) * B;
@@ -105,20 +130,26 @@ ChunkResult compress(std::span<const double> ideal, std::int64_t prev_event, dou
             return out;
         }
         // Third difference of the ideal times estimates add2.
-        std::vector<std::int64_t> b_candidates{0};
+        std::array<std::int64_t, 4> b_store{0};
+        std::size_t nb = 1;
         if (limits.enable_add2 && L.size() >= 4) {
             const double d3 = ideal[i + 3] - 3 * ideal[i + 2] + 3 * ideal[i + 1] - ideal[i];
             const auto b0 = static_cast<std::int64_t>(std::llround(d3));
             for (std::int64_t b = b0 - 1; b <= b0 + 1; ++b) {
-                if (b != 0 && b >= limits.add2_min && b <= limits.add2_max) b_candidates.push_back(b);
+                if (b != 0 && b >= limits.add2_min && b <= limits.add2_max) b_store[nb++] = b;
             }
         }
+        const std::span<const std::int64_t> b_candidates(b_store.data(), nb);
         Best best;
         // A chunk of every remaining move with add2 = 0 cannot be bettered (later
         // candidates replace it only when longer): stop the search there.
         const auto all = static_cast<std::uint32_t>(std::min<std::size_t>(L.size(), limits.max_count));
         for (std::int64_t I = i_hi; I >= i_lo; --I) {
             for (std::int64_t B : b_candidates) {
+                // extend() replaces the best only with a longer chunk, or an equal one
+                // without add2 in place of one with it.
+                const std::uint32_t need = best.count + (B == 0 && best.add2 != 0 ? 0 : 1);
+                if (!may_reach(L, H, P, I, B, limits, need)) continue;
                 if (limits.monotone && B != 0) {
                     extend(L, H, P, I, B, limits, best, +1);
                     extend(L, H, P, I, B, limits, best, -1);
