@@ -6,6 +6,7 @@
 //   cpstep run JOB.ngc --machine M.toml [--transport sim|spidev|file] [--out F] [--vcd F] [--report F]
 //              [--plots DIR] [--sck-div N] [--device /dev/spidevB.C] [--spi-hz HZ]
 //   cpstep plan JOB.ngc --machine M.toml [-o OUT.bin]
+//   cpstep conic --from X0 Y0 --to X1 Y1 (--center CX CY | --coeffs A B C D E F) [--ccw] [--engine rtl|model|oracle] [--json]
 //   cpstep check --vcd TRACE.vcd --job JOB.ngc --machine M.toml [--map PINS.toml] [--json OUT.json]
 //
 // Exit codes: 0 success, 2 refused input (file:line:col or one line on stderr),
@@ -20,6 +21,7 @@
 
 #include "cli/accuracy_command.h"
 #include "cli/check_command.h"
+#include "cli/conic_command.h"
 #include "cli/run_command.h"
 #include "cli/vectors_command.h"
 #include "card/caps.h"
@@ -149,6 +151,19 @@ int main(int argc, char** argv) {
   cli::CheckOptions co;
   auto* chkc = cli::add_check_command(app, co);
 
+  cli::ConicOptions ko;
+  auto* conc = app.add_subcommand("conic", "Step one arc or conic by combined steps (seed 001) on the conic "
+                                           "engine and print its moves (docs/CONIC.md)");
+  conc->add_option("--from", ko.from, "start point X0 Y0, in steps (decimals allowed)")->required();
+  conc->add_option("--to", ko.to, "end point X1 Y1, in steps; equal to --from: a full turn")->required();
+  conc->add_option("--center", ko.center, "circle centre CX CY, in steps, on the 1/16-step grid");
+  conc->add_option("--coeffs", ko.coeffs, "any conic A x^2 + B xy + C y^2 + D x + E y + F = 0 (integers)");
+  conc->add_flag("--ccw", ko.ccw, "counter-clockwise (circles; for --coeffs: G > 0 right of travel)");
+  conc->add_option("--engine", ko.engine, "rtl (Verilated cp_conic), model (C++ twin) or oracle (nearest-node walk)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"rtl", "model", "oracle"}));
+  conc->add_flag("--json", ko.json, "one JSON object: moves ([dx, dy] pairs), max_deviation (steps), ...");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -163,6 +178,7 @@ int main(int argc, char** argv) {
     if (*accc) return cli::run_accuracy(ao);
     if (*vecc) return cli::run_vectors(vo);
     if (*chkc) return cli::run_check(co);
+    if (*conc) return cli::run_conic(ko);
   } catch (const std::exception& e) {
     fmt::print(stderr, "cpstep: internal error: {}\n", e.what());
     return 1;

@@ -1072,9 +1072,33 @@ std::vector<Diagnostic> summarize_repeats(std::vector<Diagnostic> diags) {
 std::span<const std::string_view> ignored_codes() { return kIgnored; }
 
 Result<Job> parse_gcode(std::string_view text, std::string_view file, const GcodeOptions& options) {
+    // Binary data (a NUL byte, or mostly bytes that are neither printable ASCII,
+    // whitespace nor UTF-8, in the first 4 KiB) is refused whole with one error,
+    // instead of one error per line of noise.
+    {
+        const std::string_view head = text.substr(0, 4096);
+        std::size_t odd = 0;
+        bool nul = false;
+        for (const char ch : head) {
+            const auto c = static_cast<unsigned char>(ch);
+            nul = nul || c == 0;
+            odd += c < 0x20 && c != '\n' && c != '\r' && c != '\t' && c != '\f' && c != '\v';
+            odd += c == 0x7f;
+        }
+        if (nul || (head.size() >= 64 && odd * 10 > head.size())) {
+            Result<Job> r;
+            r.errors.push_back({std::string(file), {1, 1},
+                                nul ? "not a G-code text file: it holds NUL bytes (binary data)"
+                                    : fmt::format("not a G-code text file: {} of its first {} bytes are "
+                                                  "control characters (binary data)",
+                                                  odd, head.size())});
+            return r;
+        }
+    }
     Parser p(file, options);
     int line = 0;
-    std::size_t pos = 0;
+    // A UTF-8 byte-order mark (as some Windows editors write) is not part of line 1.
+    std::size_t pos = text.starts_with("\xEF\xBB\xBF") ? 3 : 0;
     while (pos <= text.size()) {
         auto nl = text.find('\n', pos);
         if (nl == std::string_view::npos) nl = text.size();

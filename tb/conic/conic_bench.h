@@ -13,17 +13,15 @@
 #include <random>
 #include <vector>
 
-#include "Vcp_conic.h"
-#include "Vcp_conic_small.h"
 #include "common/lockstep.h"
 #include "model/conic_oracle.h"
 #include "model/cp_conic.h"
-#include "sim/conic_port.h"
+#include "sim/conic_configs.h"
 
 namespace cpstep::tb {
 
-using ConicDefault = sim::ConicPort<Vcp_conic, 16, 32, 48, 20, 1048575>;
-using ConicSmall = sim::ConicPort<Vcp_conic_small, 8, 16, 24, 10, 5000>;
+using sim::ConicDefault;
+using sim::ConicSmall;
 
 using Coeffs = model::CpConic::Coeffs;
 using oracle::Node;

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "common/process.h"
+
 namespace cpstep::tb {
 namespace {
 
@@ -28,38 +30,9 @@ using nlohmann::json;
 const fs::path kDir = fs::path(CPSTEP_TEST_DIR) / "cli_run";
 const std::string kMachine = std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/plotter.toml";
 
-struct Outcome {
-  int rc = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// Shell quoting for the paths of this test (none holds a single quote). Built
-// by append: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string&&.
-std::string quote(const std::string& s) {
-  std::string q = "'";
-  q.append(s).append("'");
-  return q;
-}
-
 // Runs `program args...` with stdout and stderr captured in files of kDir.
 Outcome run(const std::string& program, const std::vector<std::string>& args, const std::string& tag) {
-  std::string cmd = quote(program);
-  for (const std::string& a : args) cmd.append(" ").append(quote(a));
-  const fs::path out = kDir / (tag + ".stdout"), err = kDir / (tag + ".stderr");
-  cmd.append(" >").append(quote(out.string())).append(" 2>").append(quote(err.string()));
-  const int status = std::system(cmd.c_str());
-  Outcome o;
-  o.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  o.out = slurp(out);
-  o.err = slurp(err);
-  return o;
+  return run_program(program, args, kDir, tag);
 }
 Outcome cpstep(const std::vector<std::string>& args, const std::string& tag) {
   return run(CPSTEP_BIN, args, tag);

@@ -677,3 +677,40 @@ TEST(Gcode, WarningsNoUnitsAndRepeatsSummarized) {
     EXPECT_EQ(join(summarize_repeats(d)),
               "j:1:1: feed 100 mm/s lowered to 30 mm/s (2 times, lines 1-5)\nj:2:1: other");
 }
+
+TEST(Gcode, ByteOrderMarkIsNotPartOfLineOne) {
+    const Job j = ok(parse("\xEF\xBB\xBFG21 G90\nG1 X1 F100\n"));
+    ASSERT_EQ(j.blocks.size(), 1u);
+    EXPECT_DOUBLE_EQ(j.blocks[0].end[0], 1.0);
+    // Columns on line 1 count from after the mark: the bad word is at 1:5.
+    auto r = parse("\xEF\xBB\xBFG21 @\n");
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.errors.at(0).loc.line, 1);
+    EXPECT_EQ(r.errors.at(0).loc.col, 5) << join(r.errors);
+    // Only at the very start: elsewhere its bytes are refused as any stray byte.
+    EXPECT_FALSE(parse("G21\n\xEF\xBB\xBFG1 X1 F100\n").ok());
+}
+
+TEST(Gcode, BinaryDataIsRefusedWithOneError) {
+    std::string bytes;
+    uint32_t x = 12345;  // a fixed-seed xorshift: 20 kB of noise, NUL bytes included
+    for (int i = 0; i < 20000; ++i) {
+        x ^= x << 13, x ^= x >> 17, x ^= x << 5;
+        bytes.push_back(static_cast<char>(x & 0xff));
+    }
+    auto r = parse(bytes);
+    ASSERT_FALSE(r.ok());
+    ASSERT_EQ(r.errors.size(), 1u) << join(r.errors);
+    EXPECT_EQ(r.errors[0].loc.line, 1);
+    EXPECT_NE(r.errors[0].message.find("binary data"), std::string::npos);
+    // Control characters without a NUL (an 8-bit transfer of something else).
+    std::string ctl;
+    for (int i = 0; i < 1000; ++i) ctl += (i % 4 == 0) ? '\x01' : 'G';
+    auto c = parse(ctl);
+    ASSERT_EQ(c.errors.size(), 1u) << join(c.errors);
+    EXPECT_NE(c.errors[0].message.find("control characters"), std::string::npos);
+    // A real program with a stray control byte is read, the byte named at its place.
+    auto one = parse("G21 G90\nG1 X1 F100\x01\nG1 X2\n");
+    ASSERT_FALSE(one.ok());
+    EXPECT_EQ(one.errors.at(0).loc.line, 2) << join(one.errors);
+}
