@@ -22,6 +22,7 @@ const char* host_fault_name(HostFault f) {
     case HostFault::timeout: return "TIMEOUT";
     case HostFault::stall: return "STALL";
     case HostFault::link: return "LINK";
+    case HostFault::late: return "LATE";
   }
   return "UNKNOWN";
 }
@@ -61,6 +62,13 @@ void add_card_faults(const CardJob& job, CardRun& run) {
     const card::ErrorName e = card::error_name(run.status.err_code);
     run.faults.insert(run.faults.begin(), Fault{run.status.err_code, e.name, e.meaning});
   }
+  // A stretched move kept its place on the path but not its time: the job did not
+  // run as planned, so the run is not a success (exit 1), whatever else went right.
+  if (run.stretch_count > 0)
+    run.faults.push_back(host_fault(
+        HostFault::late, fmt::format("{} move(s) fired late: the card stretched them (a STEP pulse or DIR "
+                                     "change was not ready at the planned cycle; docs/PULSE.md)",
+                                     run.stretch_count)));
   if (run.pins_observed ? run.move_cycles.size() != job.moves() || run.moves_done != job.moves()
                         : run.moves_done != job.moves())
     run.faults.push_back(host_fault(

@@ -27,6 +27,7 @@ enum class HostFault : uint32_t {
   timeout = 104,     // the card was still running after the cycle budget
   stall = 105,       // the card stopped taking command words while stopped
   link = 106,        // the card refused a frame the host does not repair, or stopped answering
+  late = 107,        // the card stretched moves: they fired after their planned cycle
 };
 const char* host_fault_name(HostFault f);
 
