@@ -11,7 +11,7 @@ namespace cpstep::plan {
 
 namespace {
 
-constexpr std::int64_t kMaxDelay = (std::int64_t{1} << 32) - 1;
+constexpr std::int64_t kMaxDelay = kMaxMoveDelayCycles;
 
 std::int64_t floor_div(std::int64_t a, std::int64_t b) {  // b > 0
     return a >= 0 ? a / b : -((-a + b - 1) / b);

@@ -21,6 +21,9 @@ struct Chunk {
     friend bool operator==(const Chunk&, const Chunk&) = default;
 };
 
+// The longest delay between two move events the card can time: its 32-bit interval.
+inline constexpr std::int64_t kMaxMoveDelayCycles = (std::int64_t{1} << 32) - 1;
+
 struct ChunkLimits {
     std::uint32_t max_count = 65535;
     std::int64_t add_min = INT32_MIN, add_max = INT32_MAX;

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "plan/chunks.h"
 #include "plan/steptime.h"
 
 namespace cpstep::plan {
@@ -35,9 +36,18 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
     if (options.add2_from_machine) lim.enable_add2 = m.planner.chunk_add2;
     const double tol = m.chunk_tolerance_cycles();
     std::int64_t prev = 0;  // the job starts at cycle 0
+    // Dwells since the last move: the card times a pause as the next move's first
+    // interval, so it needs a next move, and at most 2^32 - 1 cycles of it.
+    constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+    std::size_t dwell_first = kNone;
+    double dwell_s = 0;
     for (std::size_t i = 0; i < pj.step_segments.size(); ++i) {
         const StepSegment& s = pj.step_segments[i];
-        if (s.kind == MotionKind::dwell) continue;  // a pause shows as a longer first interval
+        if (s.kind == MotionKind::dwell) {  // a pause shows as a longer first interval
+            if (dwell_first == kNone) dwell_first = i;
+            dwell_s += s.dwell_s;
+            continue;
+        }
         auto split = reduce_segment(s.delta(), m.card.pattern_capacity, m.planner.split_epsilon_steps);
         pj.stats.worst_split_error = std::max(pj.stats.worst_split_error, split.endpoint_error);
         std::uint64_t total = 0;
@@ -47,6 +57,18 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
             part.step_segment = i;
             const auto ideal = ideal_move_times(pj.feeds[i], total, part.first_move, part.moves,
                                                 m.card.clock_hz);
+            if (dwell_first != kNone && !ideal.empty() &&
+                ideal.front() - double(prev) > double(kMaxMoveDelayCycles)) {
+                const double longest = double(kMaxMoveDelayCycles) / m.card.clock_hz;
+                result.errors.push_back(
+                    {job.file, pj.step_segments[dwell_first].loc,
+                     fmt::format("a pause of {:g} s (this dwell and any right after it; with the moves' ramps to and from "
+                                 "rest around it) is longer than the card "
+                                 "can time between two moves: {:.1f} s (2^32 - 1 cycles at {:g} MHz); G4 blocks in "
+                                 "a row are one pause, a move between them splits it",
+                                 dwell_s, longest, m.card.clock_hz / 1e6)});
+                return result;
+            }
             auto chunks = compress(ideal, prev, tol, lim);
             if (!chunks.ok()) {
                 result.errors.push_back({job.file, s.loc, fmt::format("timing: {}", chunks.error)});
@@ -57,10 +79,23 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
             pj.stats.chunks += chunks.chunks.size();
             pj.card.push_back({part, std::move(chunks.chunks)});
         }
+        dwell_first = kNone;
+        dwell_s = 0;
     }
+    if (dwell_first != kNone && dwell_s > 0)
+        result.warnings.push_back(
+            {job.file, pj.step_segments[dwell_first].loc,
+             fmt::format("a dwell of {:g} s after the last move is not run: the card times a pause by the move "
+                         "after it, and the job ends with its last move",
+                         dwell_s)});
     pj.stats.step_segments = pj.step_segments.size();
     pj.stats.card_segments = pj.card.size();
-    if (!pj.feeds.empty()) pj.stats.duration_s = pj.feeds.back().t_start + pj.feeds.back().duration;
+    // The job ends with its last move (a dwell after it is not run, warned above).
+    for (std::size_t i = pj.feeds.size(); i-- > 0;) {
+        if (pj.step_segments[i].kind == MotionKind::dwell) continue;
+        pj.stats.duration_s = pj.feeds[i].t_start + pj.feeds[i].duration;
+        break;
+    }
     result.value = std::move(pj);
     return result;
 }

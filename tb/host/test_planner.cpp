@@ -271,3 +271,41 @@ TEST(Planner, CollinearRapidIntoFeedFromRestToRestTakesTime) {
     ASSERT_EQ(ideal.size(), static_cast<std::size_t>((10 + 5 + 1 + 6 + 5 + 2 + 7) * 80));
     for (std::size_t i = 1; i < ideal.size(); ++i) ASSERT_GT(ideal[i], ideal[i - 1] + 1) << i;
 }
+
+// A pause is the next move's first interval on the card (32 bits of cycles): at
+// 48 MHz, 89.478 s at most. Longer is refused at the dwell's line, not as a
+// timing error at the move after it; a dwell with no move after it is not run,
+// said so, and not counted in the job's time.
+TEST(Pipeline, PausesLongerThanTheCardCanTimeAreRefusedAtTheDwell) {
+    const Machine m = machine();
+    const double longest = double((std::int64_t{1} << 32) - 1) / 48e6;
+    const std::string head = "G21 G90\nG1 X1 F600\n";
+    // The gap between the two moves' steps is the dwell plus their ramps to and
+    // from rest (a few tens of ms here).
+    auto fits = parse_gcode(head + fmt::format("G4 P{:.3f}\nG1 X2\nM2\n", longest - 0.5), "job.ngc");
+    ASSERT_TRUE(fits.ok());
+    auto p = plan_job(*fits, m);
+    EXPECT_TRUE(p.ok()) << join(p.errors);
+
+    // Two dwells in a row add up.
+    auto two = parse_gcode(head + fmt::format("G4 P{:.3f}\nG4 P1\nG1 X2\nM2\n", longest - 0.5), "job.ngc");
+    ASSERT_TRUE(two.ok());
+    auto q = plan_job(*two, m);
+    ASSERT_FALSE(q.ok());
+    ASSERT_EQ(q.errors.size(), 1u);
+    EXPECT_EQ(q.errors[0].loc.line, 3);
+    EXPECT_NE(q.errors[0].message.find("longer than the card can time between two moves: 89.5 s"),
+              std::string::npos)
+        << q.errors[0].message;
+
+    auto trailing = parse_gcode(head + "G4 P30\nM2\n", "job.ngc");
+    ASSERT_TRUE(trailing.ok());
+    auto r = plan_job(*trailing, m);
+    ASSERT_TRUE(r.ok()) << join(r.errors);
+    ASSERT_EQ(r.warnings.size(), 1u) << join(r.warnings);
+    EXPECT_EQ(r.warnings[0].loc.line, 3);
+    EXPECT_NE(r.warnings[0].message.find("after the last move is not run"), std::string::npos);
+    // 1 mm at 10 mm/s with its S-curve ends: well under the 30 s dwell.
+    EXPECT_GT(r->stats.duration_s, 0.1);
+    EXPECT_LT(r->stats.duration_s, 1.0);
+}
