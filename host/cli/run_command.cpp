@@ -56,12 +56,12 @@ std::optional<card::CardCaps> board_caps(const char* command, const std::string&
 // Plans the job for the card with these capabilities; prints every diagnostic.
 // nullopt when it is refused.
 std::optional<run::CardJob> prepare(const std::string& job, const std::string& machine,
-                                    const card::CardCaps& caps) {
+                                    const card::CardCaps& caps, const plan::PerAxis<int64_t>& start = {}) {
   if (const std::string why = card::unusable(caps, plan::kAxes); !why.empty()) {
     fmt::print(stderr, "cpstep: {}: cannot plan for this card\n", why);
     return std::nullopt;
   }
-  auto r = run::prepare_job(job, machine, caps);
+  auto r = run::prepare_job(job, machine, caps, start);
   print_diagnostics(r);
   if (!r.ok()) return std::nullopt;
   return std::move(*r.value);
@@ -280,18 +280,20 @@ int run_spidev_transport(const RunOptions& o) {
   const std::string device = o.device.empty() ? "/dev/spidev0.0" : o.device;
   std::unique_ptr<card::SpidevLink> link;
   std::optional<card::CardCaps> caps;
+  plan::PerAxis<int64_t> at{};  // the card's position counters: the job is planned from there
   try {
     link = std::make_unique<card::SpidevLink>(device, uint32_t(o.spi_hz ? o.spi_hz : kConnectSpiHz));
     card::ClientOptions co;
     co.axes = plan::kAxes;
     card::CardClient client(*link, co);
-    client.poll();
+    const card::Reply first = client.poll();
+    for (int a = 0; a < plan::kAxes && size_t(a) < first.positions.size(); ++a) at[a] = first.positions[size_t(a)];
     caps = card::read_caps(client);
   } catch (const std::runtime_error& e) {
     fmt::print(stderr, "cpstep run: {}; nothing was sent\n", e.what());
     return kExitRefused;
   }
-  const auto job = prepare(o.job, o.machine, *caps);
+  const auto job = prepare(o.job, o.machine, *caps, at);
   if (!job) return kExitRefused;
   const run::CardJob& j = *job;
   const uint64_t limit = uint64_t(j.clock_hz() / 8);

@@ -3,6 +3,8 @@
 
 #include <fstream>
 
+#include <fmt/format.h>
+
 namespace cpstep::run {
 
 uint64_t CardJob::wire_chunks() const {
@@ -16,7 +18,7 @@ plan::CardFacts card_facts(const card::CardCaps& caps) {
 }
 
 plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std::filesystem::path& machine_file,
-                                  const card::CardCaps& caps) {
+                                  const card::CardCaps& caps, const plan::PerAxis<int64_t>& start) {
   plan::Result<CardJob> r;
   auto machine = plan::load_machine(machine_file);
   r.warnings = machine.warnings;
@@ -26,7 +28,19 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
   }
   r.errors = plan::bind_card(*machine.value, card_facts(caps));
   if (!r.errors.empty()) return r;
-  auto job = plan::load_gcode(gcode, plan::gcode_options(*machine));
+  plan::PerAxis<double> start_mm{};
+  for (int a = 0; a < plan::kAxes; ++a) {
+    const plan::AxisConfig& ax = machine.value->axes[a];
+    if (start[a] == 0) continue;
+    if (!ax.present) {
+      r.errors.push_back({machine_file.string(), {},
+                          fmt::format("the card's axis {} is at {} steps, but the machine has no such axis",
+                                      plan::kAxisLetters[a], start[a])});
+      return r;
+    }
+    start_mm[a] = double(start[a]) / ax.steps_per_mm;
+  }
+  auto job = plan::load_gcode(gcode, plan::gcode_options(*machine, start_mm));
   r.warnings.insert(r.warnings.end(), job.warnings.begin(), job.warnings.end());
   if (!job.ok()) {
     r.errors = job.errors;
@@ -57,8 +71,9 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
   cj.ideal_cycles = plan::ideal_times(cj.planned, cj.clock_hz());
 
   std::vector<plan::Chunk> chunks;
-  plan::PerAxis<int64_t> pos{};
+  plan::PerAxis<int64_t> pos = start;
   if (!cj.planned.step_segments.empty()) pos = cj.planned.step_segments.front().start;
+  cj.start = pos;
   uint64_t moves = 0;
   for (const plan::PlannedCardSegment& c : cj.planned.card) {
     chunks.insert(chunks.end(), c.chunks.begin(), c.chunks.end());

@@ -33,6 +33,7 @@ struct CardJob {
   std::vector<double> ideal_cycles;      // per move: the planner's ideal time from START
   std::vector<int64_t> chunk_cycles;     // per move: the time its chunks realize
   std::vector<Checkpoint> checkpoints;   // one per planned card segment
+  plan::PerAxis<int64_t> start{};        // absolute steps the job was planned from (the card's position)
   std::vector<plan::Diagnostic> warnings;  // the planner's (also in the Result)
 
   [[nodiscard]] uint64_t moves() const { return planned.stats.moves; }
@@ -51,8 +52,12 @@ plan::CardFacts card_facts(const card::CardCaps& caps);
 // warnings travel with the result.
 // and encodes it for that card (its UMAX, KMAX, chunk queue). Every error
 // refuses the job; warnings travel with the result.
+// Plans the job for a card with these capabilities whose position counters read
+// `start` (absolute steps; a freshly reset card: all 0): the first move starts
+// there, and the checkpoints are absolute positions from it.
 plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std::filesystem::path& machine,
-                                  const card::CardCaps& caps = card::default_caps());
+                                  const card::CardCaps& caps = card::default_caps(),
+                                  const plan::PerAxis<int64_t>& start = {});
 
 // The command stream as little-endian 32-bit words (the `file` transport and
 // `cpstep plan -o`). Returns false when the file cannot be written.

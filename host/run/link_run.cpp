@@ -36,7 +36,11 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   for (int a = 0; a < plan::kAxes; ++a) run.start_position[a] = first.positions[size_t(a)];
   const card::Status st0 = card::decode_status(first.status);
   std::string refuse;
-  if (st0.running) refuse = "the card is running";
+  if (run.start_position != job.start)
+    refuse = fmt::format("the card is at {}, but the job was planned from {} (cpstep run plans from the "
+                         "position the card reports)",
+                         axes_text(run.start_position, job.machine), axes_text(job.start, job.machine));
+  else if (st0.running) refuse = "the card is running";
   else if (first.flags & card::reply_flag::busy) refuse = "the card's command buffer holds words";
   else if (first.flags & card::reply_flag::estop) refuse = "the card's E-stop input is active";
   if (!refuse.empty()) {
@@ -112,7 +116,7 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   if (!job.checkpoints.empty()) {
     plan::PerAxis<int64_t> want{}, moved{};
     for (int a = 0; a < plan::kAxes; ++a) {
-      want[a] = job.checkpoints.back().position[a];
+      want[a] = job.checkpoints.back().position[a] - job.start[a];
       moved[a] = run.position[a] - run.start_position[a];
     }
     if (moved != want)

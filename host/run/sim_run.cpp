@@ -305,6 +305,15 @@ std::string sim_board_for(const CardJob& job, const SimRunOptions& o) {
 }
 
 CardRun run_on_sim(const CardJob& job, const SimRunOptions& o) {
+  // The simulated card is reset for the run, so its counters read 0.
+  if (job.start != plan::PerAxis<int64_t>{}) {
+    CardRun run;
+    run.faults.push_back(host_fault(HostFault::link,
+                                    fmt::format("the job was planned from {}, but a simulated card starts at 0; "
+                                                "nothing was sent",
+                                                axes_text(job.start, job.machine))));
+    return run;
+  }
   const std::string board = sim_board_for(job, o);
 #define CPSTEP_RUN_ON(name) \
   if (board == #name) return run_on_card<sim::CardOf<builds::name, Vcp_card_##name>>(job, o);

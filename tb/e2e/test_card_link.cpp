@@ -391,6 +391,56 @@ TEST_F(CardLink, TheSpidevPathOverTheSimulatedCard) {
   EXPECT_EQ(again.position, job_->checkpoints.back().position);
 }
 
+TEST_F(CardLink, TheSpidevPathPlansFromWhereTheCardIs) {
+  // A job that ends away from the origin, then one that goes back: planned from
+  // the position the card reports, as `cpstep run --transport spidev` does.
+  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "card_link";
+  const std::string pid = std::to_string(::getpid());
+  const fs::path out = dir / ("out." + pid + ".ngc"), back = dir / ("back." + pid + ".ngc");
+  std::ofstream(out) << "G21 G90\nG1 X0.5 Y0.25 F3000\nM2\n";
+  std::ofstream(back) << "G21 G90\nG1 X0 Y0 F3000\nM2\n";
+  const std::string machine = (dir / ("fast." + pid + ".toml")).string();  // star()'s: 80 steps/mm
+  const card::CardCaps caps = card::caps_of(sim::CardDefault::kBuild);
+  DefaultCard card(job_->clock_hz());
+
+  auto first = run::prepare_job(out, machine, caps);
+  ASSERT_TRUE(first.ok()) << plan::join(first.errors);
+  const run::CardRun r1 = run::run_on_link(*first.value, card.link, {});
+  ASSERT_TRUE(r1.ok()) << (r1.faults.empty() ? "" : r1.faults.front().message);
+  const plan::PerAxis<int64_t> there{40, 20, 0, 0};
+  ASSERT_EQ(r1.position, there);
+
+  // Planned as if from the origin: refused before anything is sent.
+  auto stale = run::prepare_job(back, machine, caps);
+  ASSERT_TRUE(stale.ok()) << plan::join(stale.errors);
+  EXPECT_EQ(stale.value->moves(), 0u) << "from the origin to the origin: nothing to move";
+  const run::CardRun r2 = run::run_on_link(*stale.value, card.link, {});
+  ASSERT_EQ(r2.faults.size(), 1u);
+  EXPECT_EQ(r2.faults[0].name, "LINK");
+  EXPECT_EQ(r2.faults[0].message.rfind("the card is at x=40 y=20 z=0 a=0"), std::string::npos)
+      << "only the machine's axes are named: " << r2.faults[0].message;
+  EXPECT_EQ(r2.faults[0].message.rfind("the card is at x=40 y=20, but the job was planned from x=0 y=0", 0), 0u)
+      << r2.faults[0].message;
+  EXPECT_NE(r2.faults[0].message.find("nothing was sent"), std::string::npos);
+  EXPECT_EQ(r2.link.stats.command_frames, 0u);
+
+  // Planned from where the card is: the card comes back to the origin.
+  auto from_there = run::prepare_job(back, machine, caps, there);
+  ASSERT_TRUE(from_there.ok()) << plan::join(from_there.errors);
+  EXPECT_EQ(from_there.value->start, there);
+  EXPECT_EQ(from_there.value->moves(), 40u) << "the longer axis's steps";
+  const run::CardRun r3 = run::run_on_link(*from_there.value, card.link, {});
+  EXPECT_TRUE(r3.ok()) << (r3.faults.empty() ? "" : r3.faults.front().message);
+  EXPECT_EQ(r3.start_position, there);
+  EXPECT_EQ(r3.position, (plan::PerAxis<int64_t>{}));
+
+  // A simulated card is fresh for each run: a job planned from elsewhere is refused.
+  const run::CardRun r4 = run::run_on_sim(*from_there.value, {});
+  ASSERT_EQ(r4.faults.size(), 1u);
+  EXPECT_NE(r4.faults[0].message.find("a simulated card starts at 0; nothing was sent"), std::string::npos)
+      << r4.faults[0].message;
+}
+
 TEST_F(CardLink, TheSpidevPathRefusesABusyCard) {
   DefaultCard card(job_->clock_hz());
   // Start the job by hand, then ask run_on_link to run it on the moving card.
