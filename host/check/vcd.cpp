@@ -203,6 +203,10 @@ class Parser {
     const std::string_view digits = t.text.substr(1);
     if (digits.empty() || digits.size() > 64)
       fail(t.loc, fmt::format("vector value '{}' must have 1 to 64 bits", t.text));
+    // Wider than its variable (leading zeros aside): refused, not read as a value it cannot hold.
+    const unsigned width = codes_.find(std::string(code_token->text))->second.second;
+    if (digits.size() > width && digits.substr(0, digits.size() - width).find_first_not_of('0') != std::string_view::npos)
+      fail(t.loc, fmt::format("vector value '{}' has more bits than its variable's width {}", t.text, width));
     uint64_t bits = 0;
     bool known = true;
     for (const char c : digits) {

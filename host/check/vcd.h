@@ -9,9 +9,9 @@
 // $var (a bit select such as "[3]" after the reference is kept with the name),
 // $enddefinitions, #time (never decreasing), $dumpvars/$dumpall/$dumpon/$dumpoff
 // blocks, scalar changes (0!, 1!, x!, z!), vector changes (b0101 !, widths up
-// to 64) and real changes (r1.5 !, skipped). Several tokens may share a line
-// (sigrok writes "#12 1! 0\""). Anything else is an error naming file, line
-// and column.
+// to 64; no more bits than the variable's width, leading zeros aside) and real
+// changes (r1.5 !, skipped). Several tokens may share a line (sigrok writes
+// "#12 1! 0\""). Anything else is an error naming file, line and column.
 #pragma once
 
 #include <cstdint>

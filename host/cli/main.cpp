@@ -6,6 +6,7 @@
 //   cpstep run JOB.ngc --machine M.toml [--transport sim|spidev|file] [--out F] [--vcd F] [--report F]
 //              [--plots DIR] [--sck-div N] [--device /dev/spidevB.C] [--spi-hz HZ]
 //   cpstep plan JOB.ngc --machine M.toml [-o OUT.bin]
+//   cpstep cam PART.dxf... --sheet SHEET.toml [-o JOB.ngc] [--svg PREVIEW.svg] [--run --machine M.toml]
 //   cpstep conic --from X0 Y0 --to X1 Y1 (--center CX CY | --coeffs A B C D E F) [--ccw] [--engine rtl|model|oracle] [--json]
 //   cpstep check --vcd TRACE.vcd --job JOB.ngc --machine M.toml [--map PINS.toml] [--json OUT.json]
 //
@@ -20,7 +21,9 @@
 #include <optional>
 
 #include "cli/accuracy_command.h"
+#include "cli/cam_command.h"
 #include "cli/check_command.h"
+#include "cli/interp_command.h"
 #include "cli/conic_command.h"
 #include "cli/run_command.h"
 #include "cli/vectors_command.h"
@@ -150,6 +153,10 @@ int main(int argc, char** argv) {
   auto* vecc = cli::add_vectors_command(app, vo);
   cli::CheckOptions co;
   auto* chkc = cli::add_check_command(app, co);
+  cli::CamOptions camo;
+  auto* camc = cli::add_cam_command(app, camo);
+  cli::InterpCliOptions io;
+  auto* intc = cli::add_interp_command(app, io);
 
   cli::ConicOptions ko;
   auto* conc = app.add_subcommand("conic", "Step one arc or conic by combined steps (seed 001) on the conic "
@@ -178,6 +185,18 @@ int main(int argc, char** argv) {
     if (*accc) return cli::run_accuracy(ao);
     if (*vecc) return cli::run_vectors(vo);
     if (*chkc) return cli::run_check(co);
+    if (*camc)
+      return cli::run_cam(camo, [](const cli::CamOptions& c, const std::string& job) {
+        cli::RunOptions r;  // the generated job runs exactly as `cpstep run JOB --machine M` would
+        r.job = job;
+        r.machine = c.machine;
+        r.board = c.board;
+        r.report = c.report;
+        r.plots = c.plots;
+        r.vcd = c.vcd;
+        return cli::run_job(r);
+      });
+    if (*intc) return cli::run_interp(io);
     if (*conc) return cli::run_conic(ko);
   } catch (const std::exception& e) {
     fmt::print(stderr, "cpstep: internal error: {}\n", e.what());

@@ -189,6 +189,11 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
                m.max_timing_error_move, m.moves_off_chunk_time);
     fmt::print("checked    position_o at {} of {} card segment ends, {} off the plan\n", r.checked_segments,
                j.checkpoints.size(), r.position_mismatches);
+    if (m.curve.positions)
+      fmt::print("curves     stepped path vs {} NURBS curve{}: max {:.5f} mm, rms {:.5f} mm over {} positions "
+                 "(worst at X{:.4f} Y{:.4f}, line {})\n",
+                 m.curve.curves, m.curve.curves == 1 ? "" : "s", m.curve.max_mm, m.curve.rms_mm, m.curve.positions,
+                 m.curve.worst_x_mm, m.curve.worst_y_mm, m.curve.worst_loc.line);
   } else {
     fmt::print("card       {} moves, {} segments done (the card's counters over the job)\n", r.moves_done,
                r.segments_done);

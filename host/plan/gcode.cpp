@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "plan/gcode_expr.h"
+#include "plan/nurbs.h"
 
 namespace cpstep::plan {
 
@@ -34,6 +35,13 @@ constexpr double kRadiusTolerance = 0.00005 * 25.4;  // R arcs may fall this sho
 constexpr double kSpiralAbs = 0.005;                  // centre arcs: end radius may differ by this ...
 constexpr double kSpiralRel = 0.001;                  // ... or by this fraction of the radius
 constexpr double kPeckRetract = 0.010 * 25.4;         // G73 retract, G83 rapid-down clearance
+// One canned-cycle block expands into at most this many holes x pecks (L x depth/Q):
+// a line like G83 ... Q0.00001 L100000000 must be refused, not fill the memory.
+constexpr double kMaxCycleMoves = 100000;
+// T and H: tool numbers as the machine file's [gcode.tool_lengths] keys (1..99999), or 0.
+constexpr double kMaxTool = 99999;
+
+bool is_spline(int m) { return m == g(5) || m == g(5, 1) || m == g(5, 2) || m == g(5, 3); }
 
 bool is_cycle(int m) {
     return m == g(73) || m == g(81) || m == g(82) || m == g(83) || m == g(85) || m == g(86) ||
@@ -247,9 +255,8 @@ public:
                 case g(38, 2): case g(38, 3): case g(38, 4): case g(38, 5):
                     err(*w, fmt::format("{}: probing is not supported (the card has no probe input)", w->text));
                     break;
-                case g(5): case g(5, 1): case g(5, 2):
-                    err(*w, fmt::format("{}: splines are not supported", w->text));
-                    break;
+                case g(5): case g(5, 1): case g(5, 2): case g(5, 3):
+                    set_group(motion_w, w, "motion"); break;
                 case g(7): case g(8):
                     err(*w, fmt::format("{}: lathe diameter/radius mode is not supported", w->text));
                     break;
@@ -291,17 +298,18 @@ public:
         const int motion_now = motion_w ? code_of(motion_w) : (st_.motion ? *st_.motion : -1);
         const bool arc_now = motion_now == g(2) || motion_now == g(3);
         if (const Word* p = word('P')) {
-            const bool used = g4_w || g64_w || nonmodal == g(10) ||
+            const bool used = g4_w || g64_w || nonmodal == g(10) || motion_now == g(5) || motion_now == g(5, 2) ||
                               (cycle_mode_after && (motion_now == g(82) || motion_now == g(86) || motion_now == g(89))) ||
                               arc_now;
             if (!used) err(*p, "P is only used by G4 (dwell seconds), G10, G64, G2/G3 turns and G82/G86/G89");
         }
         if (const Word* q = word('Q')) {
-            if (!g64_w && !(cycle_mode_after && (motion_now == g(73) || motion_now == g(83))))
+            if (!g64_w && motion_now != g(5) && !(cycle_mode_after && (motion_now == g(73) || motion_now == g(83))))
                 err(*q, "Q is only used by G64 and the peck cycles G73/G83");
         }
         if (const Word* l = word('L')) {
-            if (nonmodal != g(10) && !cycle_mode_after) err(*l, "L is only used by G10 and canned cycles");
+            if (nonmodal != g(10) && !cycle_mode_after && motion_now != g(5, 2))
+                err(*l, "L is only used by G10, canned cycles and G5.2 (NURBS order)");
         }
         if (const Word* h = word('H')) {
             if (!tlo_w || code_of(tlo_w) != g(43)) err(*h, "H is only used by G43 (tool length offset)");
@@ -326,8 +334,8 @@ public:
         }
         if (const Word* t = word('T')) {
             if (t->known) {
-                if (t->value < 0 || t->value != std::floor(t->value)) {
-                    err(*t, "tool number T must be a whole number >= 0");
+                if (t->value < 0 || t->value > kMaxTool || t->value != std::floor(t->value)) {
+                    err(*t, fmt::format("tool number T must be a whole number in 0..{:g}", kMaxTool));
                 } else {
                     st_.selected_tool = static_cast<int>(t->value);
                 }
@@ -388,6 +396,18 @@ public:
         }
 
         // ---- 24: motion ----
+        if (nurbs_ && !conflict) {
+            const Word* intruder = motion_w && code_of(motion_w) != g(5, 3) ? motion_w
+                                   : (nonmodal_w && nonmodal != g(4)) ? nonmodal_w
+                                   : g4_w                               ? g4_w
+                                   : stop_w;
+            if (intruder) {
+                err(*intruder, fmt::format("{} inside a G5.2 NURBS (line {}): end it with G5.3 first", intruder->text,
+                                           nurbs_->open.line));
+                nurbs_.reset();
+                st_.motion.reset();
+            }
+        }
         if (motion_w) {
             const int c = code_of(motion_w);
             if (c == g(80)) {
@@ -403,7 +423,12 @@ public:
         } else if (g53_w && !st_.absolute) {
             err(*g53_w, "G53 cannot be used with G91 (incremental)");
         }
-        if (!axes_used) {
+        if (!axes_used && st_.motion && is_spline(*st_.motion)) {
+            // A line of the spline's words (a G5/G5.1 move, a G5.2 point or knot, G5.3).
+            const bool spline_words = motion_w || any_axis || word('I') || word('J') || word('K') ||
+                                      ((word('P') || word('Q') || word('L')) && !g4_w && !g64_w);
+            if (spline_words) spline(*st_.motion, motion_w, words.front(), axis_w, by);
+        } else if (!axes_used) {
             const bool has_center = word('I') || word('J') || word('K') || word('R');
             if (any_axis || (has_center && !(st_.motion && is_cycle(*st_.motion)))) {
                 if (!st_.motion) {
@@ -501,8 +526,8 @@ public:
         int n = st_.tool;
         if (h) {
             if (!h->known) return;
-            if (h->value < 0 || h->value != std::floor(h->value)) {
-                error(line_, h->col, "H must be a whole tool number >= 0");
+            if (h->value < 0 || h->value > kMaxTool || h->value != std::floor(h->value)) {
+                error(line_, h->col, fmt::format("H must be a whole tool number in 0..{:g}", kMaxTool));
                 return;
             }
             n = static_cast<int>(h->value);
@@ -875,14 +900,14 @@ public:
             error(line_, word('Q') ? word('Q')->col : at.col, fmt::format("{} needs Q > 0 (the peck depth)", name));
             return mark_all_unknown();
         }
-        int repeats = 1;
+        double repeats_l = 1;
         if (const Word* l = word('L')) {
             if (!l->known) return mark_all_unknown();
             if (l->value < 1 || l->value != std::floor(l->value)) {
                 error(line_, l->col, "L (canned cycle repeats) must be a whole number >= 1");
                 return;
             }
-            repeats = static_cast<int>(l->value);
+            repeats_l = l->value;
         }
         if (!need_feed(at)) return mark_all_unknown();
         if (!st_.units_set && !warned_units_) {
@@ -901,6 +926,17 @@ public:
         const double clear = st_.retract_old_z ? std::max(z0, r) : r;
         const double dwell = st_.cycle_p.value_or(0.0);
         const double q = st_.cycle_q.value_or(0.0) * st_.unit;
+        const bool pecking = mode == g(73) || mode == g(83);
+        const double pecks = pecking ? std::ceil((r - bottom) / q) : 1;  // per hole
+        if (!(repeats_l * std::max(pecks, 1.0) <= kMaxCycleMoves)) {
+            error(line_, at.col, fmt::format("{}: {:g} hole(s) of {:g} peck(s) each; a block expands into at most "
+                                             "{:g} holes x pecks",
+                                             name, repeats_l, pecks, kMaxCycleMoves));
+            return mark_all_unknown();
+        }
+        const int repeats = static_cast<int>(repeats_l);
+        // Pecks counted too: d -= q may stop moving d when q is below its rounding step.
+        const int max_pecks = static_cast<int>(kMaxCycleMoves);
         for (int rep = 0; rep < repeats; ++rep) {
             PerAxis<double> p = st_.pos;
             for (std::size_t a : {X, Y}) {
@@ -919,9 +955,10 @@ public:
             above[Y] = p[Y];
             emit_line(MotionKind::rapid, above, 0);
             emit_line(MotionKind::rapid, at_z(r), 0);
+            int n_pecks = 0;
             switch (mode) {
                 case g(73):
-                    for (double d = r - q; d > bottom; d -= q) {
+                    for (double d = r - q; d > bottom && n_pecks < max_pecks; d -= q, ++n_pecks) {
                         emit_line(MotionKind::linear, at_z(d), feed);
                         emit_line(MotionKind::rapid, at_z(d + kPeckRetract), 0);
                     }
@@ -929,7 +966,7 @@ public:
                     emit_line(MotionKind::rapid, at_z(clear), 0);
                     break;
                 case g(83):
-                    for (double d = r - q; d > bottom; d -= q) {
+                    for (double d = r - q; d > bottom && n_pecks < max_pecks; d -= q, ++n_pecks) {
                         emit_line(MotionKind::linear, at_z(d), feed);
                         emit_line(MotionKind::rapid, at_z(r), 0);
                         emit_line(MotionKind::rapid, at_z(d + kPeckRetract), 0);
@@ -969,6 +1006,7 @@ public:
     }
 
     Result<Job> finish() {
+        end_of_program();
         Result<Job> r;
         std::stable_sort(errors_.begin(), errors_.end(), [](const Diagnostic& a, const Diagnostic& b) {
             return a.loc.line != b.loc.line ? a.loc.line < b.loc.line : a.loc.col < b.loc.col;
@@ -982,6 +1020,255 @@ public:
         r.warnings = summarize_repeats(std::move(warnings_));
         if (r.errors.empty()) r.value = std::move(job_);
         return r;
+    }
+
+    // ---- splines: G5 (cubic), G5.1 (quadratic), G5.2 ... G5.3 (NURBS) ----
+    struct OpenNurbs {
+        SourceLoc open;                    // the G5.2 word
+        MotionBlock block;                 // start, spindle state at G5.2
+        int order = 3;
+        std::vector<Eigen::Vector3d> pts;  // machine mm; the first is the start
+        std::vector<double> weights;
+        std::vector<double> knots;         // K words (empty: LinuxCNC's uniform knots)
+        std::vector<SourceLoc> knot_loc;
+        bool bad = false;                  // an error was reported: no block at G5.3
+    };
+
+    // The XY point an X/Y pair names (absolute or incremental), machine mm.
+    Eigen::Vector3d xy_target(const Word* wx, const Word* wy) const {
+        Eigen::Vector3d p(st_.pos[X], st_.pos[Y], st_.pos[Z]);
+        for (std::size_t a : {X, Y}) {
+            const Word* w = a == X ? wx : wy;
+            if (!w) continue;
+            p[static_cast<Eigen::Index>(a)] = st_.absolute ? machine(a, w->value) : st_.pos[a] + w->value * st_.unit;
+        }
+        return p;
+    }
+
+    void emit_curve(MotionBlock b, std::shared_ptr<const Nurbs> curve) {
+        const Eigen::Vector3d& e = curve->points().back();
+        b.end[X] = e[0];
+        b.end[Y] = e[1];
+        b.feed = st_.feed ? *st_.feed * st_.unit / 60.0 : 0.0;  // X/Y only: units per minute
+        b.curve = std::move(curve);
+        st_.pos = b.end;
+        // A curve whose control points all coincide does not move: no block.
+        const auto& pts = b.curve->points();
+        const bool moves = std::any_of(pts.begin(), pts.end(), [&](const Eigen::Vector3d& q) { return q != pts.front(); });
+        if (moves) job_.blocks.push_back(std::move(b));
+    }
+
+    void spline(int mode, const Word* motion_w, const Word& first, const Word* const axis_w[kAxes],
+                const std::map<char, const Word*>& by) {
+        auto word = [&](char l) -> const Word* {
+            auto it = by.find(l);
+            return it == by.end() ? nullptr : it->second;
+        };
+        const Word& at = motion_w ? *motion_w : first;
+        const std::string name = gname(mode);
+        auto fail = [&](const Word& w, std::string msg) {
+            error(line_, w.col, std::move(msg));
+            if (nurbs_) nurbs_->bad = true;
+        };
+        if (st_.plane != Plane::xy) {
+            fail(at, fmt::format("{}: splines are supported in the XY plane (G17) only", name));
+            return;
+        }
+        for (std::size_t a : {Z, A}) {
+            if (axis_w[a] && !(a == Z && z_consumed_)) {
+                fail(*axis_w[a], fmt::format("{}: splines move X and Y only", name));
+                return;
+            }
+        }
+        for (char l : {'R'}) {
+            if (const Word* w = word(l)) {
+                fail(*w, fmt::format("{} is not used by {}", l, name));
+                return;
+            }
+        }
+        for (const auto& [l, w] : by) {
+            if (!w->known) {  // already reported: the spline cannot be built
+                if (nurbs_) nurbs_->bad = true;
+                if (mode == g(5) || mode == g(5, 1)) mark_all_unknown();
+                return;
+            }
+        }
+        if (!st_.units_set && !warned_units_ && (axis_w[X] || axis_w[Y])) {
+            warned_units_ = true;
+            warn(line_, at.col, "the program sets no units (G20/G21): millimetres assumed");
+        }
+        if (mode == g(5) || mode == g(5, 1)) return bezier(mode, at, axis_w, word);
+        if (mode == g(5, 3)) return close_nurbs(at, axis_w, word);
+        // G5.2: opens (with the G5.2 word) or adds a control point / a knot.
+        if (const Word* w = word('I') ? word('I') : word('J')) {
+            fail(*w, fmt::format("{} is not used by G5.2 (control points take X, Y and P)", w->letter));
+            return;
+        }
+        if (motion_w) {
+            OpenNurbs o;
+            o.open = {line_, motion_w->col};
+            o.block = base_block(MotionKind::nurbs);
+            o.pts.emplace_back(st_.pos[X], st_.pos[Y], st_.pos[Z]);
+            o.weights.push_back(1.0);
+            nurbs_ = std::move(o);
+            if (!st_.absolute) fail(*motion_w, "G5.2 control points need absolute distance mode (G90)");
+            if (!need_feed(*motion_w)) nurbs_->bad = true;
+            if (const Word* l = word('L')) {
+                if (l->value < 3 || l->value > kMaxNurbsOrder || l->value != std::floor(l->value)) {
+                    fail(*l, fmt::format("G5.2 L (the order) must be a whole number from 3 to {} (LinuxCNC reads "
+                                         "L below 3 as 3)",
+                                         kMaxNurbsOrder));
+                } else {
+                    nurbs_->order = static_cast<int>(l->value);
+                }
+            }
+            if (!axis_w[X] && !axis_w[Y]) {
+                if (const Word* p = word('P')) {  // the first point's weight
+                    if (!(p->value > 0)) {
+                        fail(*p, "NURBS weight P must be > 0");
+                    } else {
+                        nurbs_->weights.front() = p->value;
+                    }
+                }
+            }
+        } else if (!nurbs_) {
+            return;  // the G5.2 line was refused; already reported
+        } else if (const Word* l = word('L')) {
+            fail(*l, "G5.2 L (the order) is given on the G5.2 line only");
+        }
+        if (axis_w[X] || axis_w[Y]) {
+            const Word* p = word('P');
+            if (!axis_w[X] || !axis_w[Y]) {
+                fail(axis_w[X] ? *axis_w[X] : *axis_w[Y], "G5.2 control points need both X and Y");
+            } else if (!p) {
+                fail(*axis_w[X], "G5.2 control point without a weight: give P > 0");
+            } else if (!(p->value > 0)) {
+                fail(*p, "NURBS weight P must be > 0");
+            } else {
+                nurbs_->pts.push_back(xy_target(axis_w[X], axis_w[Y]));
+                nurbs_->weights.push_back(p->value);
+            }
+        } else if (!motion_w && word('P')) {
+            fail(*word('P'), "P without X and Y: only the G5.2 line may give the first point's weight alone");
+        }
+        if (const Word* k = word('K')) {
+            if (!nurbs_->knots.empty() && k->value < nurbs_->knots.back()) {
+                fail(*k, fmt::format("knots must not decrease: K{:g} after K{:g}", k->value, nurbs_->knots.back()));
+            } else if (!std::isfinite(k->value)) {
+                fail(*k, "knot K must be a finite number");
+            }
+            nurbs_->knots.push_back(k->value);
+            nurbs_->knot_loc.push_back({line_, k->col});
+        }
+    }
+
+    template <class WordFn>
+    void close_nurbs(const Word& at, const Word* const axis_w[kAxes], WordFn word) {
+        st_.motion.reset();  // G5.3 leaves no motion mode (LinuxCNC)
+        if (!nurbs_) {
+            error(line_, at.col, "G5.3 without an open G5.2 NURBS");
+            return;
+        }
+        OpenNurbs o = std::move(*nurbs_);
+        nurbs_.reset();
+        for (const Word* w : {axis_w[X], axis_w[Y], word('P'), word('K'), word('L'), word('I'), word('J')}) {
+            if (w) {
+                error(line_, w->col, fmt::format("G5.3 takes no {} word: it only ends the NURBS", w->letter));
+                o.bad = true;
+            }
+        }
+        if (o.bad) {
+            if (o.pts.size() > 1) {  // leave the tool where the curve would end
+                st_.pos[X] = o.pts.back()[0];
+                st_.pos[Y] = o.pts.back()[1];
+            }
+            return;
+        }
+        const auto order = static_cast<std::size_t>(o.order);
+        if (o.pts.size() < order) {
+            error(line_, at.col,
+                  fmt::format("a NURBS of order {} needs at least {} control points (the start counts as the "
+                              "first); got {} (G5.2 on line {})",
+                              o.order, o.order, o.pts.size(), o.open.line));
+            return;
+        }
+        std::vector<double> knots = o.knots;
+        if (knots.empty()) {
+            knots = Nurbs::uniform_clamped_knots(o.pts.size(), o.order);
+        } else if (knots.size() != o.pts.size() + order) {
+            error(line_, at.col,
+                  fmt::format("a NURBS of order {} with {} control points (the start counts as the first) needs {} "
+                              "knots, got {} K words",
+                              o.order, o.pts.size(), o.pts.size() + order, knots.size()));
+            return;
+        }
+        if (auto e = Nurbs::validate(o.order, o.pts.size(), o.weights, knots)) {
+            const SourceLoc loc = o.knot_loc.empty() ? SourceLoc{line_, at.col} : o.knot_loc.front();
+            error(loc.line, loc.col, *e);
+            return;
+        }
+        emit_curve(o.block, std::make_shared<const Nurbs>(o.order, std::move(o.pts), std::move(o.weights),
+                                                          std::move(knots)));
+    }
+
+    // G5 (cubic Bezier: start, start + IJ, end + PQ, end) and G5.1 (quadratic:
+    // start, start + IJ, end), as LinuxCNC builds them (I J P Q incremental).
+    template <class WordFn>
+    void bezier(int mode, const Word& at, const Word* const axis_w[kAxes], WordFn word) {
+        const std::string name = gname(mode);
+        if (const Word* k = word('K')) {
+            error(line_, k->col, fmt::format("K is not used by {}", name));
+            return;
+        }
+        if (!need_feed(at)) return;
+        const Word *wi = word('I'), *wj = word('J'), *wp = word('P'), *wq = word('Q');
+        const Eigen::Vector3d p0(st_.pos[X], st_.pos[Y], st_.pos[Z]);
+        const Eigen::Vector3d p3 = xy_target(axis_w[X], axis_w[Y]);
+        Eigen::Vector3d ij = Eigen::Vector3d::Zero();
+        if (mode == g(5, 1)) {
+            if (!wi || !wj) {
+                error(line_, at.col, "G5.1 needs both I and J (the control point, relative to the start)");
+                return;
+            }
+        } else if (!wp || !wq) {
+            error(line_, at.col, "G5 needs both P and Q (the second control point, relative to the end)");
+            return;
+        } else if ((wi == nullptr) != (wj == nullptr)) {
+            error(line_, (wi ? wi : wj)->col, "G5 needs both I and J, or neither (to continue the previous G5)");
+            return;
+        } else if (!wi) {
+            if (!g5_next_ij_ || *g5_next_ij_block_ != job_.blocks.size()) {
+                error(line_, at.col, "G5 without I and J continues a previous G5: give I and J on the first");
+                return;
+            }
+            ij = *g5_next_ij_;
+        }
+        if (wi) ij = Eigen::Vector3d(wi->value * st_.unit, wj->value * st_.unit, 0);
+        std::vector<Eigen::Vector3d> pts{p0, p0 + ij};
+        Eigen::Vector3d pq = Eigen::Vector3d::Zero();
+        if (mode == g(5)) {
+            pq = Eigen::Vector3d(wp->value * st_.unit, wq->value * st_.unit, 0);
+            pts.push_back(p3 + pq);
+        }
+        pts.push_back(p3);
+        const int order = static_cast<int>(pts.size());
+        const std::size_t n = pts.size();
+        MotionBlock b = base_block(MotionKind::nurbs);
+        emit_curve(b, std::make_shared<const Nurbs>(order, std::move(pts), std::vector<double>(n, 1.0),
+                                                    Nurbs::uniform_clamped_knots(n, order)));
+        g5_next_ij_.reset();
+        if (mode == g(5)) {
+            g5_next_ij_ = -pq;
+            g5_next_ij_block_ = job_.blocks.size();
+        }
+    }
+
+    // A NURBS still open at the end of the program.
+    void end_of_program() {
+        if (nurbs_) {
+            error(nurbs_->open.line, nurbs_->open.col, "G5.2 NURBS not ended by G5.3");
+            nurbs_.reset();
+        }
     }
 
     bool ended() const { return ended_; }
@@ -998,6 +1285,9 @@ private:
     bool warned_units_ = false;
     bool warned_home_ = false;
     bool z_consumed_ = false;
+    std::optional<OpenNurbs> nurbs_;
+    std::optional<Eigen::Vector3d> g5_next_ij_;        // -P, -Q of the last G5 (mm) ...
+    std::optional<std::size_t> g5_next_ij_block_;      // ... valid while no block followed it
     int line_ = 0;
     SourceLoc loc_;
     std::vector<Diagnostic> errors_;

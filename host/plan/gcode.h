@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -17,12 +18,15 @@
 
 namespace cpstep::plan {
 
+class Nurbs;  // plan/nurbs.h
+
 enum class MotionKind {
     rapid,    // G0: at the machine's limits
     linear,   // G1 at the feed rate
     arc_cw,   // G2 in the block's plane (helical when the other axes move too)
     arc_ccw,  // G3
     dwell,    // G4 P<seconds>: zero motion, a real pause; M0/M1: a stop (see pause)
+    nurbs,    // G5, G5.1, G5.2..G5.3: a rational B-spline in the XY plane (MotionBlock::curve)
 };
 
 // The plane of an arc (G17 / G18 / G19), named by its first and second axis in
@@ -49,6 +53,9 @@ struct MotionBlock {
     PauseKind pause = PauseKind::none;  // dwell blocks from M0 / M1: dwell_s = 0, a full stop
     bool spindle_ccw = false;    // M4 (true) or M3 while spindle_on
     int tool = 0;                // tool in the spindle (T ... M6)
+    // nurbs blocks: the curve in machine mm, from start (its first control
+    // point) to end (its last); Z stays at start's (docs/CURVES.md).
+    std::shared_ptr<const Nurbs> curve;
 };
 
 // An arc's plane as axis indices and its centre in those axes: the arc turns

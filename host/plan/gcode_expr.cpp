@@ -53,8 +53,19 @@ public:
     [[noreturn]] void fail(std::string message) const { throw Fail{col(), std::move(message)}; }
     [[noreturn]] void fail_at(int col, std::string message) const { throw Fail{col, std::move(message)}; }
 
-    // sign? ( number | [expression] | #parameter | function[...] )
+    // sign? ( number | [expression] | #parameter | function[...] ). Each nesting
+    // level ([, a sign, #, a function) recurses here once: deeper than kMaxDepth is
+    // refused, so that a line of thousands of '[' cannot overflow the stack.
+    static constexpr int kMaxDepth = 64;
     double real_value() {
+        if (depth_ >= kMaxDepth) fail(fmt::format("expression nested more than {} deep", kMaxDepth));
+        struct Level {
+            int& depth;
+            explicit Level(int& d) : depth(d) { ++depth; }
+            ~Level() { --depth; }
+            Level(const Level&) = delete;
+            Level& operator=(const Level&) = delete;
+        } level(depth_);
         if (peek() == '-' || peek() == '+') {
             const bool neg = peek() == '-';
             advance();
@@ -277,6 +288,7 @@ private:
     const Compact& c_;
     const Parameters& prm_;
     std::size_t p_ = 0;
+    int depth_ = 0;  // real_value() levels now open
 };
 
 // Comments out, whitespace out, lower case. Sets `error` on an unclosed '('.

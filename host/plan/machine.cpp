@@ -259,6 +259,8 @@ const DriverPreset* find_driver(std::string_view name) {
 
 std::uint32_t ns_to_cycles(double ns, double clock_hz) {
     const double exact = ns * clock_hz / 1e9;
+    // Saturated (bind_card refuses it): converting a double past 2^32 - 1 is undefined.
+    if (!(exact < 4294967295.0)) return UINT32_MAX;
     // A product like 2500 ns * 50 MHz = 125.00000000000001 must stay 125.
     const double rounded = std::round(exact);
     if (std::abs(exact - rounded) <= 1e-9 * std::max(1.0, rounded)) {
@@ -403,7 +405,9 @@ std::vector<Diagnostic> bind_card(Machine& m, const CardFacts& card) {
     if (cycles < 1.0)
         error({}, fmt::format("planner.chunk_tolerance_us: {} us is less than one cycle of the card, {} ({} us)",
                               m.planner.chunk_tolerance_s * 1e6, card.name, 1e6 / card.clock_hz));
-    const std::uint64_t max_cycles = card.timing_bits >= 32 ? UINT32_MAX : (std::uint64_t(1) << card.timing_bits) - 1;
+    // UINT32_MAX is ns_to_cycles' saturation: never a time the card can hold.
+    const std::uint64_t max_cycles =
+        card.timing_bits >= 32 ? UINT32_MAX - 1 : (std::uint64_t(1) << card.timing_bits) - 1;
     PerAxis<PulseTimingCycles> pulse{};
     for (int a = 0; a < kAxes; ++a) {
         const AxisConfig& ax = m.axes[static_cast<std::size_t>(a)];

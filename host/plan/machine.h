@@ -44,7 +44,7 @@ std::span<const DriverPreset> driver_presets();
 const DriverPreset* find_driver(std::string_view name);
 
 // ceil(ns * clock_hz / 1e9), computed so that an exact product is not bumped
-// up by floating-point noise.
+// up by floating-point noise; UINT32_MAX (saturated) when it is 2^32 - 1 or more.
 std::uint32_t ns_to_cycles(double ns, double clock_hz);
 PulseTimingCycles to_cycles(const PulseTimingNs& ns, double clock_hz);
 

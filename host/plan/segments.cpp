@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "plan/nurbs.h"
+
 namespace cpstep::plan {
 
 PerAxis<std::int64_t> StepSegment::delta() const {
@@ -76,6 +78,34 @@ std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& b, double tol) 
         for (std::size_t a = 0; a < kAxes; ++a) p[a] = b.start[a] + (b.end[a] - b.start[a]) * frac;
         p[u] = cx + rad * std::cos(ang);
         p[v] = cy + rad * std::sin(ang);
+        pts.push_back(p);
+    }
+    pts.push_back(b.end);
+    return pts;
+}
+
+std::vector<PerAxis<double>> nurbs_chord_points(const MotionBlock& b, double tol, std::vector<double>* radii) {
+    const Nurbs& c = *b.curve;
+    const std::vector<double> us = c.chord_parameters(tol);
+    const std::size_t n = us.size();
+    std::vector<double> r(n);
+    for (std::size_t i = 0; i < n; ++i) r[i] = c.radius(us[i]);
+    // A chord's ends also take the radius at its middle: the tighter of the two
+    // points' and the chord's interior stands for the curve there.
+    std::vector<double> rr = r;
+    for (std::size_t i = 0; i + 1 < n; ++i) {
+        const double mid = c.radius((us[i] + us[i + 1]) / 2);
+        rr[i] = std::min(rr[i], mid);
+        rr[i + 1] = std::min(rr[i + 1], mid);
+    }
+    if (radii) *radii = rr;
+    std::vector<PerAxis<double>> pts;
+    pts.reserve(n - 1);
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+        const Eigen::Vector3d q = c.point(us[i]);
+        PerAxis<double> p = b.start;
+        p[0] = q[0];
+        p[1] = q[1];
         pts.push_back(p);
     }
     pts.push_back(b.end);
@@ -225,7 +255,11 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
         std::vector<PerAxis<double>> pts;
         const bool is_arc = b.kind == MotionKind::arc_cw || b.kind == MotionKind::arc_ccw;
         double radius = inf;
-        if (is_arc) {
+        std::vector<double> curve_r;  // nurbs: the true radius at each point (start first)
+        if (b.kind == MotionKind::nurbs) {
+            pts = nurbs_chord_points(b, m.planner.arc_tolerance_mm, &curve_r);
+            arc_r.back() = std::min(arc_r.back(), curve_r.front());  // the curve's start point
+        } else if (is_arc) {
             pts = arc_chord_points(b, m.planner.arc_tolerance_mm);
             radius = std::min(std::hypot(b.start[0] - b.center_x, b.start[1] - b.center_y),
                               std::hypot(b.end[0] - b.center_x, b.end[1] - b.center_y));
@@ -237,7 +271,7 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
             const auto& p = pts[pi];
             if (!check(b, p)) break;
             verts.push_back(p);
-            arc_r.push_back(radius);
+            arc_r.push_back(curve_r.empty() ? radius : curve_r[pi + 1]);
             const auto target = to_steps(p);
             if (target == pos) continue;  // shorter than a step: merged into the next
             StepSegment s = proto;

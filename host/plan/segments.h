@@ -57,6 +57,14 @@ std::int64_t mm_to_steps(double mm, double steps_per_mm);
 // end included), each within `tolerance_mm` of the arc.
 std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& arc, double tolerance_mm);
 
+// The chord end points of a nurbs block (its start excluded, its exact end
+// included), each chord within `tolerance_mm` of the curve (Nurbs::
+// chord_parameters). `radii`, when given, receives the curve's true radius of
+// curvature (from C' and C'') at the start and at every point, each the
+// smaller of the point's and the adjacent chords' middles' (docs/CURVES.md).
+std::vector<PerAxis<double>> nurbs_chord_points(const MotionBlock& b, double tolerance_mm,
+                                                std::vector<double>* radii = nullptr);
+
 // A polyline turning by more than this (rad) at a point has a corner there
 // (junction deviation, acceleration zero); less is a smooth junction.
 inline constexpr double kSmoothTurnRad = 0.3;

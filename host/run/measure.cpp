@@ -3,6 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <memory>
+
+#include "plan/gcode.h"
+#include "plan/nurbs.h"
 
 namespace cpstep::run {
 
@@ -63,7 +68,51 @@ RunMeasure measure_run(const CardJob& job, const CardRun& run) {
                        am.peak.a <= ax.max_accel + am.tolerance.a &&
                        am.peak.j <= ax.max_jerk + am.tolerance.j;
   }
+  if (run.pins_observed) m.curve = curve_deviation(job, run);
   return m;
+}
+
+CurveDeviation curve_deviation(const CardJob& job, const CardRun& run) {
+  CurveDeviation d;
+  // The curves of the job, by the G-code block they came from.
+  auto parsed = plan::load_gcode(job.job_file, plan::gcode_options(job.machine));
+  if (!parsed.ok()) return d;
+  std::map<std::pair<int, int>, const plan::MotionBlock*> curves;
+  for (const auto& b : parsed->blocks)
+    if (b.kind == plan::MotionKind::nurbs && b.curve) curves[{b.loc.line, b.loc.col}] = &b;
+  if (curves.empty()) return d;
+  const std::vector<plan::PerAxis<double>> path = card_path(job, run);
+  std::unique_ptr<plan::CurveDistance> dist;
+  const plan::MotionBlock* current = nullptr;
+  double sum2 = 0;
+  uint64_t prev = 0;  // moves before this checkpoint's card segment
+  for (const Checkpoint& cp : job.checkpoints) {
+    auto it = curves.find({cp.loc.line, cp.loc.col});
+    if (it != curves.end()) {
+      if (it->second != current) {
+        current = it->second;
+        dist = std::make_unique<plan::CurveDistance>(*current->curve);
+        ++d.curves;
+      }
+      const double z = current->curve->points().front()[2];
+      for (uint64_t i = prev; i <= cp.moves && i < path.size(); ++i) {
+        const double e = (*dist)(Eigen::Vector3d(path[i][0], path[i][1], z));
+        ++d.positions;
+        sum2 += e * e;
+        if (e > d.max_mm) {
+          d.max_mm = e;
+          d.worst_loc = cp.loc;
+          d.worst_x_mm = path[i][0];
+          d.worst_y_mm = path[i][1];
+        }
+      }
+    } else {
+      current = nullptr;
+    }
+    prev = cp.moves;
+  }
+  if (d.positions) d.rms_mm = std::sqrt(sum2 / double(d.positions));
+  return d;
 }
 
 namespace {

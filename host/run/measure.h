@@ -28,6 +28,18 @@ struct AxisMeasure {
   bool within_limits = false;     // every peak <= its machine limit + its tolerance
 };
 
+// The stepped path's deviation from the job's NURBS curves (G5, G5.1,
+// G5.2..G5.3), measured from the pins: the card's position after every move
+// of a curve's card segments (and before its first), each at its distance
+// from the curve (XY; plan::CurveDistance, exact within 1e-6 mm).
+struct CurveDeviation {
+  uint64_t curves = 0;        // NURBS blocks run
+  uint64_t positions = 0;     // card positions measured
+  double max_mm = 0, rms_mm = 0;
+  plan::SourceLoc worst_loc;  // the block of the worst position
+  double worst_x_mm = 0, worst_y_mm = 0;
+};
+
 struct RunMeasure {
   uint64_t moves = 0;                  // move events seen
   double job_time_s = 0;               // START to the last move event
@@ -37,7 +49,11 @@ struct RunMeasure {
   int64_t max_chunk_error_cycles = 0;  // max |event - (START + chunk time)|: 0 unless stretched
   uint64_t moves_off_chunk_time = 0;
   plan::PerAxis<AxisMeasure> axes;
+  CurveDeviation curve;
 };
+
+// CurveDeviation of a run (zero positions when the job has no curves).
+CurveDeviation curve_deviation(const CardJob& job, const CardRun& run);
 
 // The windows for an axis: each as short as it can be while one step of
 // quantization moves the estimate by at most a fixed share of the axis's

@@ -59,6 +59,16 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
     r["chunk_tolerance_cycles"] = job.machine.chunk_tolerance_cycles();
     r["max_chunk_error_cycles"] = m.max_chunk_error_cycles;
     r["moves_off_chunk_time"] = m.moves_off_chunk_time;
+    if (m.curve.positions) {
+      // The stepped path against the job's NURBS curves (docs/CURVES.md).
+      r["curve_deviation"] = {{"curves", m.curve.curves},
+                              {"positions", m.curve.positions},
+                              {"max_mm", m.curve.max_mm},
+                              {"rms_mm", m.curve.rms_mm},
+                              {"worst_line", m.curve.worst_loc.line},
+                              {"worst_x_mm", m.curve.worst_x_mm},
+                              {"worst_y_mm", m.curve.worst_y_mm}};
+    }
   }
   r["stretches"] = run.stretch_count;
   r["stretched"] = run.status.stretched;

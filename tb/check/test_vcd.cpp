@@ -132,6 +132,8 @@ TEST(Vcd, MalformedInputNamesFileLineAndColumn) {
        "bad.vcd:7:3: bad bit '2' in vector value 'b2'"},
       {head + "#1\nb1\n",
        "bad.vcd:7:1: vector value 'b1' without an identifier code"},
+      {head + "#1\nb10 !\n",  // found by fuzz/fuzz_vcd (docs/RELIABILITY.md)
+       "bad.vcd:7:1: vector value 'b10' has more bits than its variable's width 1"},
       {head + "#1x\n",
        "bad.vcd:6:1: bad time '#1x'"},
       {head + "#1 hello\n",

@@ -139,7 +139,8 @@ const auto kExampleJobs =
     ::testing::Values(std::pair{"seed002.toml", "bracket.ngc"}, std::pair{"seed002.toml", "plasma.ngc"},
                       std::pair{"seed002.toml", "dense.ngc"}, std::pair{"router.toml", "bracket.ngc"},
                       std::pair{"plotter.toml", "plasma.ngc"}, std::pair{"plotter.toml", "bracket.ngc"},
-                      std::pair{"seed002.toml", "tab.ngc"}, std::pair{"seed002.toml", "tight_arcs.ngc"});
+                      std::pair{"seed002.toml", "tab.ngc"}, std::pair{"seed002.toml", "tight_arcs.ngc"},
+                      std::pair{"seed002.toml", "naca0025.ngc"});
 
 std::string example_name(const ::testing::TestParamInfo<std::pair<const char*, const char*>>& p) {
     std::string n = std::string(p.param.first) + "_" + p.param.second;

@@ -199,8 +199,8 @@ TEST(Gcode, AllErrorsWithLineAndColumn) {
         {"G18 G81 X1 Y1 Z-1 R1 F5\n", "job.ngc:1:5: G81: canned cycles are supported in the XY plane (G17) only"},
         {"G53 G91 G0 X1\n", "job.ngc:1:1: G53 cannot be used with G91 (incremental)"},
         // Errors on several lines are all reported, the job refused whole.
-        {"G0 X1\nG5 X1\nG0 X2\nM60\nG1 Y3\n",
-         "job.ngc:2:1: G5: splines are not supported\n"
+        {"G0 X1\nG7 X1\nG0 X2\nM60\nG1 Y3\n",
+         "job.ngc:2:1: G7: lathe diameter/radius mode is not supported\n"
          "job.ngc:4:1: M60 (pallet change) is not supported\n"
          "job.ngc:5:1: feed rate is not set (F) for a G1/G2/G3 move or canned cycle"},
     };
@@ -676,6 +676,25 @@ TEST(Gcode, WarningsNoUnitsAndRepeatsSummarized) {
                                  {"j", {5, 1}, "feed 80 mm/s lowered to 30 mm/s"}};
     EXPECT_EQ(join(summarize_repeats(d)),
               "j:1:1: feed 100 mm/s lowered to 30 mm/s (2 times, lines 1-5)\nj:2:1: other");
+}
+
+// Found by fuzz/fuzz_gcode (docs/RELIABILITY.md): inputs that ran out of memory or
+// time (a canned cycle's repeats and pecks) or of stack (nested brackets) are refused.
+TEST(Gcode, FuzzFindingsRefused) {
+    auto repeats = parse("G21 G90 G0 X0 Y0 Z5\nG81 X1 Y1 Z-1 R1 F100 L100000000\n");
+    EXPECT_EQ(join(repeats.errors),
+              "job.ngc:2:1: G81: 1e+08 hole(s) of 1 peck(s) each; a block expands into at most 100000 holes x pecks");
+    auto pecks = parse("G21 G90 G0 X0 Y0 Z5\nG83 X1 Y1 Z-1000 R1 Q0.00001 F100\n");
+    EXPECT_EQ(join(pecks.errors),
+              "job.ngc:2:1: G83: 1 hole(s) of 1.001e+08 peck(s) each; a block expands into at most 100000 holes x pecks");
+    EXPECT_TRUE(parse("G21 G90 G0 X0 Y0 Z5\nG83 X1 Y1 Z-10 R1 Q1 F100 L900\n").ok());  // 9,900 holes x pecks
+    auto nested = parse("G21 G1 X" + std::string(3000, '[') + "1" + std::string(3000, ']') + " F1\n");
+    EXPECT_EQ(join(nested.errors), "job.ngc:1:73: expression nested more than 64 deep");
+    EXPECT_TRUE(parse("G21 G1 X" + std::string(63, '[') + "1" + std::string(63, ']') + " F1\n").ok());
+    // Tool numbers past int (the conversion was undefined): refused.
+    EXPECT_EQ(join(parse("G21\nT100000000000000000000 M6\nG43 H100000 G0 Z0\n").errors),
+              "job.ngc:2:1: tool number T must be a whole number in 0..99999\n"
+              "job.ngc:3:5: H must be a whole tool number in 0..99999");
 }
 
 TEST(Gcode, ByteOrderMarkIsNotPartOfLineOne) {

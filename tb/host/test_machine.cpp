@@ -114,6 +114,11 @@ TEST(Machine, NsToCyclesRoundsUp) {
     EXPECT_EQ(ns_to_cycles(19, 50e6), 1u);
     EXPECT_EQ(ns_to_cycles(970, 48e6), 47u);  // 46.56 -> 47
     EXPECT_EQ(ns_to_cycles(1900, 12e6), 23u); // 22.8 -> 23
+    // Found by fuzz/fuzz_machine: past 2^32 - 1 cycles the count saturates (it was an
+    // undefined double-to-unsigned conversion); bind_card refuses it.
+    EXPECT_EQ(ns_to_cycles(2500, 4e101), UINT32_MAX);
+    EXPECT_EQ(ns_to_cycles(1e300, 1e300), UINT32_MAX);
+    EXPECT_EQ(ns_to_cycles(4294967294.0, 1e9), 4294967294u);
     // Every preset: cycles * period >= ns and (cycles - 1) * period < ns.
     for (double clk : {12e6, 25e6, 48e6, 50e6, 100e6, 133.33e6}) {
         for (const auto& p : driver_presets()) {
@@ -163,6 +168,15 @@ TEST(Machine, CardTableIsOptionalAndBindTakesTheCards) {
     EXPECT_EQ(m.card.max_doubling, 5u);
     // DM556 step_high 2500 ns at 20 MHz: 50 cycles.
     EXPECT_EQ(m.axes[0].pulse.step_high, 50u);
+    // More than 2^32 - 1 cycles is refused, with 32-bit timing fields too (found by
+    // fuzz/fuzz_machine: the count was an undefined double-to-unsigned conversion).
+    Machine fast = *r;
+    const auto refused = bind_card(fast, {"card D", 1e20, 1024, 8, 32});
+    EXPECT_NE(join(refused).find("step_high is 4294967295 cycles at the card's 1e+20 Hz; the card, card D, times at "
+                                 "most 4294967294 cycles (TW = 32 bits)"),
+              std::string::npos)
+        << join(refused);
+    EXPECT_FALSE(fast.card.bound);
 }
 
 // Stated [card] keys are checked against the card; pulse times against its TW.

@@ -1,0 +1,511 @@
+// SPDX-License-Identifier: MIT
+// Reads DXF through libdxflib. To name an entity's line, the file is first read as
+// text (pairs of group code and value) only to list where each entity starts and its
+// handle: libdxflib reports entities in file order, so the k-th LINE it reports is
+// the k-th LINE record. Nothing is parsed twice: geometry comes from libdxflib.
+#include "cam/dxf.h"
+
+#include <dxflib/dl_creationadapter.h>
+#include <dxflib/dl_dxf.h>
+
+#include <algorithm>
+#include <array>
+#include <optional>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+
+namespace cpstep::cam {
+
+std::string Source::where(const std::string& file) const {
+  std::string s = file + ":" + std::to_string(line) + ": " + type;
+  s += handle.empty() ? " (no handle)" : " handle " + handle;
+  return s;
+}
+
+double insunits_mm(int code) {
+  switch (code) {
+    case 0: return 1;      // unitless: the caller decides
+    case 1: return 25.4;   // inches
+    case 2: return 304.8;  // feet
+    case 4: return 1;      // millimetres
+    case 5: return 10;     // centimetres
+    case 6: return 1000;   // metres
+    case 8: return 25.4e-6;  // microinches
+    case 9: return 0.0254;   // mils
+    case 10: return 914.4;   // yards
+    case 13: return 1e-3;    // microns
+    case 14: return 100;     // decimetres
+    default: return 0;
+  }
+}
+
+namespace {
+
+std::string trim(std::string s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return {};
+  const auto e = s.find_last_not_of(" \t\r\n");
+  return s.substr(b, e - b + 1);
+}
+
+std::string kind_of(const std::string& type) {
+  if (type == "LWPOLYLINE" || type == "POLYLINE") return "POLYLINE";
+  return type;
+}
+
+struct Record {
+  std::string type, handle;
+  int line = 0;
+};
+
+// Where each entity record of the ENTITIES and BLOCKS sections starts.
+struct PreScan {
+  std::map<std::string, std::vector<Record>> by_kind;  // kind_of(type) -> records in order
+  std::vector<Record> all;
+  bool has_section = false;
+  bool binary = false;
+};
+
+PreScan prescan(const std::string& text) {
+  PreScan ps;
+  if (text.rfind("AutoCAD Binary DXF", 0) == 0) {
+    ps.binary = true;
+    return ps;
+  }
+  std::istringstream in(text);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(trim(l));
+  std::string section;
+  bool expect_section_name = false;
+  Record* cur = nullptr;
+  for (std::size_t i = 0; i + 1 < lines.size(); i += 2) {
+    const std::string& code = lines[i];
+    const std::string& value = lines[i + 1];
+    if (code == "0") {
+      cur = nullptr;
+      if (value == "SECTION") { expect_section_name = true; ps.has_section = true; continue; }
+      if (value == "ENDSEC") { section.clear(); continue; }
+      if (section != "ENTITIES" && section != "BLOCKS") continue;
+      static const std::set<std::string> structural = {"BLOCK", "ENDBLK", "VERTEX", "SEQEND", "ATTRIB", "EOF"};
+      if (structural.count(value)) continue;
+      ps.all.push_back({value, "", int(i) + 1});
+      cur = &ps.all.back();
+      continue;
+    }
+    if (code == "2" && expect_section_name) {
+      section = value;
+      expect_section_name = false;
+      continue;
+    }
+    if (code == "5" && cur && cur->handle.empty()) cur->handle = value;
+  }
+  for (const Record& r : ps.all) ps.by_kind[kind_of(r.type)].push_back(r);
+  return ps;
+}
+
+struct InsertRef {
+  std::string block;
+  Affine ocs;  // OCS -> WCS of the insert
+  double ipx, ipy, sx, sy, angle_deg, col_sp, row_sp;
+  int cols, rows;
+  int src;
+};
+
+struct BlockDef {
+  Vec2 base;
+  std::vector<Seg> segs;
+  std::vector<InsertRef> inserts;
+  int src = -1;
+};
+
+class Reader : public DL_CreationAdapter {
+ public:
+  Reader(const std::string& file, const PreScan& ps, const DxfOptions& o, DxfResult& out)
+      : file_(file), ps_(ps), opt_(o), out_(out) {}
+
+  void setVariableInt(const std::string& key, int value, int) override {
+    if (key == "$INSUNITS") insunits_ = value;
+  }
+
+  void addBlock(const DL_BlockData& d) override {
+    flush();
+    cur_block_ = d.name;
+    auto& b = blocks_[d.name];
+    b.base = {d.bpx, d.bpy};
+  }
+  void endBlock() override {
+    flush();
+    cur_block_.reset();
+  }
+
+  void addLine(const DL_LineData& d) override {
+    flush();
+    const int src = source("LINE");
+    if (skip()) return;
+    if (!finite({d.x1, d.y1, d.x2, d.y2}, src)) return;
+    const Vec2 a{d.x1, d.y1}, b{d.x2, d.y2};
+    if (dist(a, b) <= 1e-12) { warn(src, "a line of zero length, left out"); return; }
+    emit(Seg::line(a, b, src));
+  }
+
+  void addArc(const DL_ArcData& d) override {
+    flush();
+    const int src = source("ARC");
+    if (skip()) return;
+    Affine ocs;
+    if (!finite({d.cx, d.cy, d.radius, d.angle1, d.angle2}, src) || !plane(src, ocs)) return;
+    if (d.radius <= 0) { error(src, "radius " + fmt_num(d.radius) + " is not positive"); return; }
+    const double t0 = d.angle1 * kPi / 180;
+    double t1 = d.angle2 * kPi / 180;
+    while (t1 <= t0) t1 += 2 * kPi;
+    if (t1 - t0 > 2 * kPi) t1 -= 2 * kPi;
+    emit(Seg::circle_arc({d.cx, d.cy}, d.radius, t0, t1, src).transformed(ocs));
+  }
+
+  void addCircle(const DL_CircleData& d) override {
+    flush();
+    const int src = source("CIRCLE");
+    if (skip()) return;
+    Affine ocs;
+    if (!finite({d.cx, d.cy, d.radius}, src) || !plane(src, ocs)) return;
+    if (d.radius <= 0) { error(src, "radius " + fmt_num(d.radius) + " is not positive"); return; }
+    emit(Seg::circle_arc({d.cx, d.cy}, d.radius, 0, 2 * kPi, src).transformed(ocs));
+  }
+
+  void addEllipse(const DL_EllipseData& d) override {
+    flush();
+    const int src = source("ELLIPSE");
+    if (skip()) return;
+    if (!finite({d.cx, d.cy, d.mx, d.my, d.ratio, d.angle1, d.angle2}, src)) return;
+    const double* n = getExtrusion()->getDirection();
+    if (std::abs(n[0]) > 1e-9 || std::abs(n[1]) > 1e-9) { error(src, "not in the XY plane (extrusion " + dir_text() + ")"); return; }
+    const Vec2 m{d.mx, d.my};
+    if (norm(m) <= 0 || d.ratio <= 0 || d.ratio > 1 + 1e-9) {
+      error(src, "major axis " + fmt_num(norm(m)) + " and ratio " + fmt_num(d.ratio) + " do not make an ellipse");
+      return;
+    }
+    const Vec2 minor = n[2] >= 0 ? perp_left(m) * d.ratio : perp_left(m) * -d.ratio;
+    double t0 = d.angle1, t1 = d.angle2;
+    while (t1 <= t0) t1 += 2 * kPi;
+    if (t1 - t0 > 2 * kPi + 1e-12) t1 -= 2 * kPi;
+    emit(Seg::conic_arc({d.cx, d.cy}, m, minor, t0, t1, src));
+  }
+
+  void addPolyline(const DL_PolylineData& d) override {
+    flush();
+    const int src = source("POLYLINE");
+    if (skip()) return;
+    if (d.flags & (16 | 64)) { error(src, "polygon meshes and polyface meshes are not 2D contours"); return; }
+    Affine ocs;
+    if (!plane(src, ocs)) return;
+    poly_ = Poly{src, (d.flags & 1) != 0, ocs, {}};
+  }
+  void addVertex(const DL_VertexData& d) override {
+    if (!poly_) return;
+    if (!finite({d.x, d.y, d.bulge}, poly_->src)) { poly_.reset(); return; }
+    poly_->verts.push_back({d.x, d.y, d.bulge});
+  }
+
+  void addSpline(const DL_SplineData& d) override {
+    flush();
+    const int src = source("SPLINE");
+    if (skip()) return;
+    spline_ = Spline{src, int(d.degree), int(d.nKnots), int(d.nControl), int(d.nFit), {}, {}, {}};
+  }
+  void addControlPoint(const DL_ControlPointData& d) override {
+    if (spline_) spline_->ctrl.push_back({d.x, d.y, d.w});
+  }
+  void addKnot(const DL_KnotData& d) override {
+    if (spline_) spline_->knots.push_back(d.k);
+  }
+  void addFitPoint(const DL_FitPointData& d) override {
+    if (spline_) spline_->fit.push_back({d.x, d.y});
+  }
+
+  void addInsert(const DL_InsertData& d) override {
+    flush();
+    const int src = source("INSERT");
+    if (skip()) return;
+    Affine ocs;
+    if (!finite({d.ipx, d.ipy, d.sx, d.sy, d.angle, d.colSp, d.rowSp}, src) || !plane(src, ocs)) return;
+    if (d.sx == 0 || d.sy == 0) { error(src, "block " + d.name + " scaled by zero"); return; }
+    InsertRef r{d.name, ocs, d.ipx, d.ipy, d.sx, d.sy, d.angle, d.colSp, d.rowSp,
+                std::max(1, d.cols), std::max(1, d.rows), src};
+    if (cur_block_) blocks_[*cur_block_].inserts.push_back(r);
+    else inserts_.push_back(r);
+  }
+
+  void endEntity() override { flush(); }
+  void endSequence() override { flush(); }
+
+  // After libdxflib: blocks expanded into model space, units applied.
+  void finish() {
+    flush();
+    for (const InsertRef& r : inserts_) expand(r, Affine{}, 0);
+    int code = insunits_.value_or(0);
+    double mm = insunits_mm(code);
+    if (mm == 0) {
+      out_.errors.push_back(file_ + ": $INSUNITS " + std::to_string(code) + " is not a unit of length");
+      return;
+    }
+    if (code == 0) {
+      mm = opt_.unitless_mm;
+      if (!insunits_) warn(-1, "no $INSUNITS in the header: drawing units taken as " + fmt_num(mm) + " mm");
+    }
+    out_.drawing.unit_mm = mm;
+    if (mm != 1)
+      for (Seg& s : model_) s = s.transformed(Affine::scale(mm, mm));
+    out_.drawing.segs = std::move(model_);
+  }
+
+ private:
+  struct Poly {
+    int src;
+    bool closed;
+    Affine ocs;
+    struct V { double x, y, bulge; };
+    std::vector<V> verts;
+  };
+  struct Spline {
+    int src, degree, nknots, nctrl, nfit;
+    struct C { double x, y, w; };
+    std::vector<C> ctrl;
+    std::vector<double> knots;
+    std::vector<Vec2> fit;
+  };
+
+  int source(const std::string& type) {
+    const std::string kind = kind_of(type);
+    const std::size_t k = counters_[kind]++;
+    Source s{type, "", 0};
+    auto it = ps_.by_kind.find(kind);
+    if (it != ps_.by_kind.end() && k < it->second.size()) {
+      s.type = it->second[k].type;
+      s.handle = it->second[k].handle;
+      s.line = it->second[k].line;
+    }
+    out_.drawing.sources.push_back(s);
+    return int(out_.drawing.sources.size()) - 1;
+  }
+  bool skip() { return !cur_block_ && getAttributes().isInPaperSpace(); }
+  std::string where(int src) const {
+    return src < 0 ? file_ : out_.drawing.sources[std::size_t(src)].where(file_);
+  }
+  void error(int src, const std::string& msg) { out_.errors.push_back(where(src) + ": " + msg); }
+  void warn(int src, const std::string& msg) { out_.drawing.warnings.push_back(where(src) + ": " + msg); }
+  bool finite(std::initializer_list<double> vs, int src) {
+    for (double v : vs)
+      if (!std::isfinite(v)) { error(src, "a coordinate is not a finite number"); return false; }
+    return true;
+  }
+  std::string dir_text() {
+    const double* n = getExtrusion()->getDirection();
+    return fmt_num(n[0]) + ", " + fmt_num(n[1]) + ", " + fmt_num(n[2]);
+  }
+  // The OCS of the current entity as a 2D map: +Z is the identity, -Z mirrors X
+  // (the arbitrary axis algorithm); any other extrusion is not a flat drawing.
+  bool plane(int src, Affine& ocs) {
+    const double* n = getExtrusion()->getDirection();
+    if (std::abs(n[0]) > 1e-9 || std::abs(n[1]) > 1e-9 || n[2] == 0) {
+      error(src, "not in the XY plane (extrusion " + dir_text() + ")");
+      return false;
+    }
+    ocs = n[2] > 0 ? Affine{} : Affine::scale(-1, 1);
+    return true;
+  }
+  void emit(const Seg& s) {
+    if (cur_block_) blocks_[*cur_block_].segs.push_back(s);
+    else model_.push_back(s);
+  }
+
+  void flush() {
+    if (poly_) {
+      Poly p = std::move(*poly_);
+      poly_.reset();
+      finish_poly(p);
+    }
+    if (spline_) {
+      Spline s = std::move(*spline_);
+      spline_.reset();
+      finish_spline(s);
+    }
+  }
+
+  void finish_poly(const Poly& p) {
+    const std::size_t n = p.verts.size();
+    if (n < 2) { error(p.src, "a polyline needs two vertices, it has " + std::to_string(n)); return; }
+    const std::size_t edges = p.closed ? n : n - 1;
+    for (std::size_t i = 0; i < edges; ++i) {
+      const auto& v0 = p.verts[i];
+      const auto& v1 = p.verts[(i + 1) % n];
+      const Vec2 a{v0.x, v0.y}, b{v1.x, v1.y};
+      const double chord = dist(a, b);
+      if (chord <= 1e-12) continue;  // repeated vertex
+      if (std::abs(v0.bulge) < 1e-12) {
+        emit(Seg::line(a, b, p.src).transformed(p.ocs));
+        continue;
+      }
+      const double theta = 4 * std::atan(v0.bulge);  // signed included angle, ccw > 0
+      const double r = chord / (2 * std::sin(std::abs(theta) / 2));
+      const Vec2 m = (a + b) * 0.5;
+      const double h = (chord / 2) / std::tan(theta / 2);  // signed: centre left of the chord for ccw
+      const Vec2 c = m + perp_left(unit(b - a)) * h;
+      const double t0 = std::atan2(a.y - c.y, a.x - c.x);
+      Seg s = Seg::circle_arc(c, r, t0, t0 + theta, p.src);
+      s.a = a;
+      s.b = b;
+      emit(s.transformed(p.ocs));
+    }
+  }
+
+  void finish_spline(const Spline& s) {
+    const int p = s.degree, n = int(s.ctrl.size());
+    if (n == 0) {
+      error(s.src, s.fit.empty() ? "a spline without control points"
+                                 : "a spline given by fit points only (no control points) is not supported");
+      return;
+    }
+    if (p < 1 || n < p + 1) { error(s.src, "degree " + std::to_string(p) + " with " + std::to_string(n) + " control points"); return; }
+    if (int(s.knots.size()) != n + p + 1) {
+      error(s.src, std::to_string(s.knots.size()) + " knots; degree " + std::to_string(p) + " with " +
+                       std::to_string(n) + " control points needs " + std::to_string(n + p + 1));
+      return;
+    }
+    for (std::size_t i = 1; i < s.knots.size(); ++i)
+      if (s.knots[i] < s.knots[i - 1]) { error(s.src, "knots decrease at knot " + std::to_string(i)); return; }
+    for (const auto& c : s.ctrl)
+      if (!(c.w > 0) || !std::isfinite(c.x) || !std::isfinite(c.y)) { error(s.src, "a control point with a weight that is not positive or a coordinate that is not finite"); return; }
+    const double lo = s.knots[std::size_t(p)], hi = s.knots[std::size_t(n)];
+    if (!(hi > lo)) { error(s.src, "the knot vector spans no parameter range"); return; }
+    // de Boor on homogeneous points (x·w, y·w, w).
+    auto eval = [&](double t) {
+      int k = p;
+      while (k < n - 1 && t >= s.knots[std::size_t(k + 1)]) ++k;
+      std::vector<std::array<double, 3>> d(std::size_t(p + 1));
+      for (int j = 0; j <= p; ++j) {
+        const auto& c = s.ctrl[std::size_t(j + k - p)];
+        d[std::size_t(j)] = {c.x * c.w, c.y * c.w, c.w};
+      }
+      for (int r = 1; r <= p; ++r)
+        for (int j = p; j >= r; --j) {
+          const double kl = s.knots[std::size_t(j + k - p)], kr = s.knots[std::size_t(j + 1 + k - r)];
+          const double a = kr > kl ? (t - kl) / (kr - kl) : 0;
+          for (int q = 0; q < 3; ++q) d[std::size_t(j)][q] = (1 - a) * d[std::size_t(j - 1)][q] + a * d[std::size_t(j)][q];
+        }
+      return Vec2{d[std::size_t(p)][0] / d[std::size_t(p)][2], d[std::size_t(p)][1] / d[std::size_t(p)][2]};
+    };
+    const int code = insunits_.value_or(0);
+    const double unit = code == 0 || insunits_mm(code) == 0 ? opt_.unitless_mm : insunits_mm(code);
+    const double tol = opt_.spline_tolerance_mm / unit;
+    std::vector<Vec2> pts{eval(lo)};
+    std::function<void(double, double, Vec2, Vec2, int)> sub = [&](double ta, double tb, Vec2 pa, Vec2 pb, int depth) {
+      bool ok = depth >= 18;
+      if (!ok) {
+        ok = true;
+        const Vec2 d = pb - pa;
+        const double l = norm(d);
+        for (int q = 1; q < 4 && ok; ++q) {
+          const Vec2 pm = eval(ta + (tb - ta) * q / 4);
+          const double e = l > 0 ? std::abs(cross(d, pm - pa)) / l : dist(pm, pa);
+          if (e > tol) ok = false;
+        }
+      }
+      if (ok) { pts.push_back(pb); return; }
+      const double tm = 0.5 * (ta + tb);
+      const Vec2 pm = eval(tm);
+      sub(ta, tm, pa, pm, depth + 1);
+      sub(tm, tb, pm, pb, depth + 1);
+    };
+    const int spans = std::max(4, 2 * n);
+    Vec2 prev = pts[0];
+    for (int i = 0; i < spans; ++i) {
+      const double ta = lo + (hi - lo) * i / spans, tb = lo + (hi - lo) * (i + 1) / spans;
+      const Vec2 pb = i + 1 == spans ? eval(hi - 1e-12 * (hi - lo)) : eval(tb);
+      sub(ta, tb, prev, pb, 0);
+      prev = pb;
+    }
+    for (std::size_t i = 1; i < pts.size(); ++i)
+      if (dist(pts[i - 1], pts[i]) > 1e-12) emit(Seg::line(pts[i - 1], pts[i], s.src));
+  }
+
+  void expand(const InsertRef& r, const Affine& outer, int depth) {
+    auto it = blocks_.find(r.block);
+    if (it == blocks_.end()) { error(r.src, "block \"" + r.block + "\" is not defined"); return; }
+    if (depth > 16 || std::find(stack_.begin(), stack_.end(), r.block) != stack_.end()) {
+      error(r.src, "block \"" + r.block + "\" inserts itself");
+      return;
+    }
+    stack_.push_back(r.block);
+    const BlockDef& b = it->second;
+    for (int row = 0; row < r.rows; ++row)
+      for (int col = 0; col < r.cols; ++col) {
+        const Affine m = outer * r.ocs * Affine::translate(r.ipx, r.ipy) * Affine::rotate_deg(r.angle_deg) *
+                         Affine::translate(col * r.col_sp, row * r.row_sp) * Affine::scale(r.sx, r.sy) *
+                         Affine::translate(-b.base.x, -b.base.y);
+        for (const Seg& s : b.segs) model_.push_back(s.transformed(m));
+        for (const InsertRef& inner : b.inserts) expand(inner, m, depth + 1);
+      }
+    stack_.pop_back();
+  }
+
+  const std::string& file_;
+  const PreScan& ps_;
+  const DxfOptions& opt_;
+  DxfResult& out_;
+  std::map<std::string, std::size_t> counters_;
+  std::optional<int> insunits_;
+  std::optional<std::string> cur_block_;
+  std::map<std::string, BlockDef> blocks_;
+  std::vector<InsertRef> inserts_;
+  std::vector<Seg> model_;
+  std::optional<Poly> poly_;
+  std::optional<Spline> spline_;
+  std::vector<std::string> stack_;
+};
+
+}  // namespace
+
+DxfResult load_dxf(const std::string& path, const DxfOptions& options) {
+  DxfResult out;
+  out.drawing.file = path;
+  std::ifstream f(path, std::ios::binary);
+  if (!f) {
+    out.errors.push_back(path + ": cannot read the file");
+    return out;
+  }
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string text = ss.str();
+  const PreScan ps = prescan(text);
+  if (ps.binary) {
+    out.errors.push_back(path + ": binary DXF is not supported (save it as ASCII DXF)");
+    return out;
+  }
+  if (!ps.has_section) {
+    out.errors.push_back(path + ":1: not a DXF file (no SECTION)");
+    return out;
+  }
+  static const std::set<std::string> supported = {"LINE", "ARC", "CIRCLE", "ELLIPSE", "LWPOLYLINE",
+                                                   "POLYLINE", "SPLINE", "INSERT"};
+  for (const Record& r : ps.all)
+    if (!supported.count(r.type))
+      out.drawing.warnings.push_back(Source{r.type, r.handle, r.line}.where(path) + ": not cut geometry, left out");
+  Reader reader(path, ps, options, out);
+  DL_Dxf dxf;
+  std::istringstream in(text);
+  if (!dxf.in(in, &reader)) {
+    out.errors.push_back(path + ": libdxflib could not read it");
+    return out;
+  }
+  reader.finish();
+  if (out.errors.empty() && out.drawing.segs.empty())
+    out.errors.push_back(path + ": no LINE, ARC, CIRCLE, ELLIPSE, POLYLINE, SPLINE or INSERT in model space");
+  return out;
+}
+
+}  // namespace cpstep::cam

@@ -1,0 +1,273 @@
+// SPDX-License-Identifier: MIT
+// DXF import (host/cam/dxf.h): each entity kind against geometry computed here
+// from the numbers written into the file; units; blocks; refusals naming file,
+// handle and line.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "cam/dxf.h"
+#include "dxf_text.h"
+
+using namespace cpstep::cam;
+using camtest::DxfText;
+
+namespace {
+
+DxfResult load(const DxfText& d, const std::string& name) {
+  const auto dir = camtest::temp_dir("dxf");
+  return load_dxf(camtest::write(dir / name, d.text()));
+}
+
+bool near(Vec2 a, Vec2 b, double tol = 1e-9) { return dist(a, b) <= tol; }
+
+}  // namespace
+
+TEST(Dxf, LineArcCircleKeptExact) {
+  DxfText d;
+  d.line(1, 2, 11, 2);
+  d.arc(5, 5, 3, 30, 120);
+  d.circle(-4, 7, 2.5);
+  const DxfResult r = load(d, "basic.dxf");
+  ASSERT_TRUE(r.ok()) << r.errors.front();
+  ASSERT_EQ(r.drawing.segs.size(), 3u);
+  const Seg& l = r.drawing.segs[0];
+  EXPECT_EQ(l.kind, SegKind::line);
+  EXPECT_TRUE(near(l.a, {1, 2}) && near(l.b, {11, 2}));
+  const Seg& a = r.drawing.segs[1];
+  ASSERT_EQ(a.kind, SegKind::arc);
+  EXPECT_TRUE(a.is_circular());
+  EXPECT_NEAR(a.radius(), 3, 1e-12);
+  EXPECT_TRUE(a.ccw());
+  EXPECT_TRUE(near(a.a, {5 + 3 * std::cos(M_PI / 6), 5 + 3 * std::sin(M_PI / 6)}));
+  EXPECT_TRUE(near(a.b, {5 + 3 * std::cos(2 * M_PI / 3), 5 + 3 * std::sin(2 * M_PI / 3)}));
+  EXPECT_NEAR(a.sweep(), M_PI / 2, 1e-12);
+  const Seg& c = r.drawing.segs[2];
+  EXPECT_TRUE(c.closed());
+  EXPECT_NEAR(c.radius(), 2.5, 1e-12);
+  EXPECT_TRUE(near(c.c, {-4, 7}));
+}
+
+TEST(Dxf, ArcAcrossZeroDegrees) {
+  DxfText d;
+  d.arc(0, 0, 2, 300, 60);  // counter-clockwise through 0 degrees: 120 degrees of arc
+  const DxfResult r = load(d, "wrap.dxf");
+  ASSERT_TRUE(r.ok());
+  EXPECT_NEAR(r.drawing.segs[0].sweep(), 2 * M_PI / 3, 1e-12);
+  EXPECT_TRUE(near(r.drawing.segs[0].at(0.5 * (r.drawing.segs[0].t0 + r.drawing.segs[0].t1)), {2, 0}, 1e-12));
+}
+
+TEST(Dxf, ArcWithDownwardExtrusionIsMirrored) {
+  DxfText d;
+  d.arc(5, 0, 1, 0, 90, false, -1);  // OCS x is -X: centre (-5, 0), from (-6, 0) to (-5, 1), clockwise in WCS
+  const DxfResult r = load(d, "ocs.dxf");
+  ASSERT_TRUE(r.ok());
+  const Seg& a = r.drawing.segs[0];
+  EXPECT_TRUE(near(a.c, {-5, 0}));
+  EXPECT_TRUE(near(a.a, {-6, 0}, 1e-12));
+  EXPECT_TRUE(near(a.b, {-5, 1}, 1e-12));
+  EXPECT_FALSE(a.ccw());
+}
+
+TEST(Dxf, EllipseFromMajorAxisAndRatio) {
+  DxfText d;
+  d.ellipse(10, 20, 0, 8, 0.25);  // upright: semi-axes 8 (y) and 2 (x)
+  const DxfResult r = load(d, "ell.dxf");
+  ASSERT_TRUE(r.ok());
+  const Seg& e = r.drawing.segs[0];
+  EXPECT_TRUE(e.closed());
+  EXPECT_FALSE(e.is_circular());
+  for (int i = 0; i < 36; ++i) {
+    const Vec2 p = e.at(e.t0 + (e.t1 - e.t0) * i / 36);
+    EXPECT_NEAR(std::pow((p.x - 10) / 2, 2) + std::pow((p.y - 20) / 8, 2), 1, 1e-12);
+  }
+  const Box b = e.box();
+  EXPECT_NEAR(b.lo.x, 8, 1e-9);
+  EXPECT_NEAR(b.hi.x, 12, 1e-9);
+  EXPECT_NEAR(b.lo.y, 12, 1e-9);
+  EXPECT_NEAR(b.hi.y, 28, 1e-9);
+}
+
+TEST(Dxf, LwPolylineBulgesAreArcs) {
+  DxfText d;
+  // a 10 x 4 slot: bulge 1 is a half circle of radius chord/2, counter-clockwise
+  d.lwpolyline({{0, 0, 0}, {10, 0, 1}, {10, 4, 0}, {0, 4, 1}}, true);
+  const DxfResult r = load(d, "slot.dxf");
+  ASSERT_TRUE(r.ok());
+  ASSERT_EQ(r.drawing.segs.size(), 4u);
+  const Seg& a = r.drawing.segs[1];
+  ASSERT_TRUE(a.is_circular());
+  EXPECT_TRUE(near(a.c, {10, 2}, 1e-12));
+  EXPECT_NEAR(a.radius(), 2, 1e-12);
+  EXPECT_NEAR(a.sweep(), M_PI, 1e-12);
+  EXPECT_TRUE(a.ccw());
+  EXPECT_TRUE(near(a.at(0.5 * (a.t0 + a.t1)), {12, 2}, 1e-12));  // bulges outwards
+  const Seg& b = r.drawing.segs[3];
+  EXPECT_TRUE(near(b.c, {0, 2}, 1e-12));
+  EXPECT_TRUE(near(b.at(0.5 * (b.t0 + b.t1)), {-2, 2}, 1e-12));
+}
+
+TEST(Dxf, NegativeBulgeIsClockwise) {
+  DxfText d;
+  const double b = std::tan(M_PI / 8);  // a quarter circle
+  d.lwpolyline({{0, 0, -b}, {1, 1, 0}}, false);
+  const DxfResult r = load(d, "cw.dxf");
+  ASSERT_TRUE(r.ok());
+  const Seg& a = r.drawing.segs[0];
+  EXPECT_FALSE(a.ccw());
+  EXPECT_NEAR(a.radius(), 1, 1e-12);
+  EXPECT_TRUE(near(a.c, {1, 0}, 1e-12));  // clockwise from (0,0) to (1,1): the centre is right of the chord
+}
+
+TEST(Dxf, R12PolylineWithVertices) {
+  DxfText d;
+  d.polyline_r12({{0, 0, 0}, {4, 0, 0}, {4, 3, 0}}, true);
+  const DxfResult r = load(d, "r12.dxf");
+  ASSERT_TRUE(r.ok()) << r.errors.front();
+  ASSERT_EQ(r.drawing.segs.size(), 3u);
+  EXPECT_TRUE(near(r.drawing.segs[2].b, {0, 0}));
+  double len = 0;
+  for (const Seg& s : r.drawing.segs) len += s.length();
+  EXPECT_NEAR(len, 12, 1e-12);
+}
+
+TEST(Dxf, SplineSampledWithinTolerance) {
+  // a clamped quadratic with three control points is the Bezier (1-t)^2 P0 + 2t(1-t) P1 + t^2 P2
+  DxfText d;
+  d.spline(2, {0, 0, 0, 1, 1, 1}, {{0, 0}, {10, 20}, {20, 0}});
+  const auto dir = camtest::temp_dir("dxf");
+  DxfOptions o;
+  o.spline_tolerance_mm = 0.01;
+  const DxfResult r = load_dxf(camtest::write(dir / "spl.dxf", d.text()), o);
+  ASSERT_TRUE(r.ok()) << r.errors.front();
+  ASSERT_GT(r.drawing.segs.size(), 10u);
+  EXPECT_TRUE(near(r.drawing.segs.front().a, {0, 0}, 1e-9));
+  EXPECT_TRUE(near(r.drawing.segs.back().b, {20, 0}, 1e-6));
+  double worst = 0;
+  for (int i = 0; i <= 2000; ++i) {
+    const double t = i / 2000.0;
+    const Vec2 p{2 * t * (1 - t) * 10 + t * t * 20, 2 * t * (1 - t) * 20};
+    double best = 1e9;
+    for (const Seg& s : r.drawing.segs) best = std::min(best, s.distance(p));
+    worst = std::max(worst, best);
+  }
+  EXPECT_LE(worst, 0.01);
+}
+
+TEST(Dxf, RationalSplineIsACircleArc) {
+  // a quarter circle as a rational quadratic: weights 1, sqrt(1/2), 1
+  DxfText d;
+  d.spline(2, {0, 0, 0, 1, 1, 1}, {{10, 0}, {10, 10}, {0, 10}}, {1, std::sqrt(0.5), 1});
+  const DxfResult r = load(d, "rat.dxf");
+  ASSERT_TRUE(r.ok()) << r.errors.front();
+  for (const Seg& s : r.drawing.segs) EXPECT_NEAR(norm(s.a), 10, 1e-9);
+}
+
+TEST(Dxf, InsertArrayRotatedScaledBlock) {
+  DxfText d;
+  d.begin_block("B", 1, 1);      // base point (1,1)
+  d.line(1, 1, 3, 1, true);      // from the base point, 2 long along x
+  d.insert("B", 100, 50, 2, 2, 90, 3, 2, 10, 20);  // scaled 2, turned 90 degrees, 3 x 2 array
+  const DxfResult r = load(d, "ins.dxf");
+  ASSERT_TRUE(r.ok()) << r.errors.front();
+  ASSERT_EQ(r.drawing.segs.size(), 6u);
+  // cell (col, row) sits at (col*10, row*20) in the block's turned frame: x' = -y, y' = x
+  for (int row = 0; row < 2; ++row)
+    for (int col = 0; col < 3; ++col) {
+      const Vec2 a{100 - row * 20.0, 50 + col * 10.0};
+      const Vec2 b{a.x, a.y + 4};
+      bool found = false;
+      for (const Seg& s : r.drawing.segs) found = found || (near(s.a, a, 1e-9) && near(s.b, b, 1e-9));
+      EXPECT_TRUE(found) << col << "," << row;
+    }
+}
+
+TEST(Dxf, NestedBlocksAndUnevenScaleMakeAnEllipse) {
+  DxfText d;
+  d.begin_block("C");
+  d.circle(0, 0, 1, true);
+  d.begin_block("D");
+  d.insert("C", 5, 0, 1, 1, 0, 1, 1, 0, 0, true);
+  d.insert("D", 0, 0, 3, 1);
+  const DxfResult r = load(d, "nest.dxf");
+  ASSERT_TRUE(r.ok()) << r.errors.front();
+  ASSERT_EQ(r.drawing.segs.size(), 1u);
+  const Seg& e = r.drawing.segs[0];
+  EXPECT_FALSE(e.is_circular());
+  for (int i = 0; i < 12; ++i) {
+    const Vec2 p = e.at(e.t0 + (e.t1 - e.t0) * i / 12);
+    EXPECT_NEAR(std::pow((p.x - 15) / 3, 2) + p.y * p.y, 1, 1e-12);  // centre (15, 0), semi-axes 3 and 1
+  }
+}
+
+TEST(Dxf, InsunitsInchesAndMetres) {
+  DxfText in(1);
+  in.line(0, 0, 2, 0);
+  const DxfResult ri = load(in, "inch.dxf");
+  ASSERT_TRUE(ri.ok());
+  EXPECT_NEAR(ri.drawing.segs[0].length(), 50.8, 1e-12);
+  DxfText m(6);
+  m.circle(0, 0, 0.01);
+  const DxfResult rm = load(m, "m.dxf");
+  ASSERT_TRUE(rm.ok());
+  EXPECT_NEAR(rm.drawing.segs[0].radius(), 10, 1e-12);
+  DxfText none(-1);
+  none.line(0, 0, 1, 0);
+  const DxfResult rn = load(none, "none.dxf");
+  ASSERT_TRUE(rn.ok());
+  EXPECT_FALSE(rn.drawing.warnings.empty());  // units assumed: said so
+}
+
+TEST(Dxf, RefusalsNameFileHandleAndLine) {
+  DxfText d;
+  d.line(0, 0, 1, 0);
+  const std::string bad = d.circle(3, 3, 0);
+  const std::string ins = d.insert("NOPE", 0, 0);
+  const auto dir = camtest::temp_dir("dxf");
+  const std::string path = camtest::write(dir / "bad.dxf", d.text());
+  const DxfResult r = load_dxf(path);
+  ASSERT_EQ(r.errors.size(), 2u);
+  EXPECT_EQ(r.errors[0].rfind(path + ":" + std::to_string(d.line_of(bad)) + ": CIRCLE handle " + bad + ": radius 0", 0), 0u)
+      << r.errors[0];
+  EXPECT_NE(r.errors[1].find(path + ":" + std::to_string(d.line_of(ins)) + ": INSERT handle " + ins), std::string::npos)
+      << r.errors[1];
+  EXPECT_NE(r.errors[1].find("NOPE"), std::string::npos);
+}
+
+TEST(Dxf, RecursiveBlockRefused) {
+  DxfText d;
+  d.begin_block("R");
+  d.line(0, 0, 1, 0, true);
+  const std::string h = d.insert("R", 1, 0, 1, 1, 0, 1, 1, 0, 0, true);
+  d.insert("R", 0, 0);
+  const DxfResult r = load(d, "rec.dxf");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.errors[0].find("handle " + h), std::string::npos) << r.errors[0];
+  EXPECT_NE(r.errors[0].find("inserts itself"), std::string::npos);
+}
+
+TEST(Dxf, BadSplineAndNotDxfAndMissingFile) {
+  DxfText d;
+  const std::string h = d.spline(3, {0, 0, 1, 1}, {{0, 0}, {1, 1}, {2, 0}, {3, 1}});  // 4 knots, needs 8
+  const DxfResult r = load(d, "spl.dxf");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.errors[0].find("SPLINE handle " + h), std::string::npos);
+  EXPECT_NE(r.errors[0].find("needs 8"), std::string::npos) << r.errors[0];
+  const auto dir = camtest::temp_dir("dxf");
+  const DxfResult t = load_dxf(camtest::write(dir / "text.dxf", "hello\nworld\n"));
+  ASSERT_FALSE(t.ok());
+  EXPECT_NE(t.errors[0].find("not a DXF file"), std::string::npos);
+  const DxfResult m = load_dxf((dir / "absent.dxf").string());
+  ASSERT_FALSE(m.ok());
+  EXPECT_NE(m.errors[0].find("cannot read"), std::string::npos);
+}
+
+TEST(Dxf, UnsupportedEntitiesAreNamedAndLeftOut) {
+  DxfText d;
+  d.line(0, 0, 1, 0);
+  d.raw("0\nTEXT\n5\nABC\n8\n0\n10\n0\n20\n0\n40\n2\n1\nhello\n");
+  const DxfResult r = load(d, "text.dxf");
+  ASSERT_TRUE(r.ok());
+  ASSERT_EQ(r.drawing.warnings.size(), 1u);
+  EXPECT_NE(r.drawing.warnings[0].find("TEXT handle ABC"), std::string::npos) << r.drawing.warnings[0];
+}
