@@ -78,6 +78,15 @@ void CpConic::rule(const Coeffs& k, const Node& n, bool cw, int& dx, int& dy) {
 
 // G(P + d) = G + d.grad + A dx^2 + B dx dy + C dy^2; the gradient moves by the
 // constant second differences.
+CpConic::Node CpConic::at(const Coeffs& k, int64_t x, int64_t y) {
+  const i128 X = x, Y = y;
+  Node n;
+  n.g = k.a * X * X + k.b * X * Y + k.c * Y * Y + k.d * X + k.e * Y + k.f;
+  n.gx = 2 * k.a * X + k.b * Y + k.d;
+  n.gy = k.b * X + 2 * k.c * Y + k.e;
+  return n;
+}
+
 CpConic::Node CpConic::advance(const Coeffs& k, const Node& n, int dx, int dy) {
   Node m;
   m.g = n.g + dx * n.gx + dy * n.gy + dx * dx * k.a + dx * dy * k.b + dy * dy * k.c;

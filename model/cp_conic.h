@@ -88,6 +88,9 @@ class CpConic {
   };
   static void rule(const Coeffs& k, const Node& n, bool cw, int& dx, int& dy);
   static Node advance(const Coeffs& k, const Node& n, int dx, int dy);
+  // G and its gradient at node (x, y), evaluated directly (the engine reaches the
+  // start node's values bit-serially; the host and the benches start walks here).
+  static Node at(const Coeffs& k, int64_t x, int64_t y);
   // The eight-point test: does the curve pass through the unit square centred on
   // the node (some of the 8 boundary points E + (i/2, j/2) on each side, or on it)?
   static bool on_curve(const Coeffs& k, const Node& n);

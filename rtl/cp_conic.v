@@ -15,6 +15,9 @@
 //
 // Valid/ready contract (docs/ENGINE.md): a transfer happens on a rising edge where
 // valid && ready; valid never waits for ready; while valid && !ready the data holds.
+//
+// Not yet instantiated by cp_core / cp_card (issue 13): linting rtl/ all at once
+// names it a second top level (MULTITOP); tb/lint lints it as its own top.
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none

@@ -58,15 +58,6 @@ struct Request {
   }
 };
 
-CpConic::Node eval_at(const CpConic::Coeffs& k, int64_t x, int64_t y) {
-  CpConic::Node n;
-  const i128 X = x, Y = y;
-  n.g = k.a * X * X + k.b * X * Y + k.c * Y * Y + k.d * X + k.e * Y + k.f;
-  n.gx = 2 * k.a * X + k.b * Y + k.d;
-  n.gy = k.b * X + 2 * k.c * Y + k.e;
-  return n;
-}
-
 bool integral(double v, double scale) {
   const double s = v * scale;
   return std::abs(s - std::nearbyint(s)) <= 1e-9 * std::max(1.0, std::abs(s));
@@ -159,7 +150,7 @@ int run_conic(const ConicOptions& o) {
     for (int i = 0; i < 2; ++i)
       for (int j = 0; j < 2; ++j) {
         const Node n{bx + i, by + j};
-        if (!CpConic::on_curve(rq.k, eval_at(rq.k, n.x, n.y))) continue;
+        if (!CpConic::on_curve(rq.k, CpConic::at(rq.k, n.x, n.y))) continue;
         const long double d = oracle::nearest(curve, n.x, n.y).distance;
         if (!found || d < best) found = true, best = d, rq.start = n;
       }
@@ -170,7 +161,7 @@ int run_conic(const ConicOptions& o) {
   {
     std::vector<Node> walk;
     Node p = rq.start;
-    CpConic::Node n = eval_at(rq.k, p.x, p.y);
+    CpConic::Node n = CpConic::at(rq.k, p.x, p.y);
     while (walk.size() < params.nmax) {
       int dx = 0, dy = 0;
       CpConic::rule(rq.k, n, rq.cw, dx, dy);

@@ -100,16 +100,9 @@ ConicRun run_conic(Stepper& dut, const ConicRequest& rq, unsigned ready_pct = 10
 // it returns to `stop` or makes `max_moves` moves.
 inline std::vector<Node> walk(const ConicRequest& rq, Node stop, size_t max_moves) {
   const Coeffs k = rq.coeffs();
-  const auto at = [&](int64_t x, int64_t y) {
-    model::CpConic::Node n;
-    n.g = k.a * x * x + k.b * x * y + k.c * y * y + k.d * x + k.e * y + k.f;
-    n.gx = 2 * k.a * x + k.b * y + k.d;
-    n.gy = k.b * x + 2 * k.c * y + k.e;
-    return n;
-  };
   std::vector<Node> out;
   Node p = rq.start;
-  model::CpConic::Node n = at(p.x, p.y);
+  model::CpConic::Node n = model::CpConic::at(k, p.x, p.y);
   while (out.size() < max_moves) {
     int dx = 0, dy = 0;
     model::CpConic::rule(k, n, rq.cw, dx, dy);
@@ -123,11 +116,7 @@ inline std::vector<Node> walk(const ConicRequest& rq, Node stop, size_t max_move
 
 inline bool node_on_curve(const ConicRequest& rq, Node p) {
   const Coeffs k = rq.coeffs();
-  model::CpConic::Node n;
-  n.g = k.a * p.x * p.x + k.b * p.x * p.y + k.c * p.y * p.y + k.d * p.x + k.e * p.y + k.f;
-  n.gx = 2 * k.a * p.x + k.b * p.y + k.d;
-  n.gy = k.b * p.x + 2 * k.c * p.y + k.e;
-  return model::CpConic::on_curve(k, n);
+  return model::CpConic::on_curve(k, model::CpConic::at(k, p.x, p.y));
 }
 
 // The circle with centre (p/4, q/4) and radius s/4, times 16:
