@@ -152,6 +152,19 @@ void read_axis(Reader& r, const toml::table& t, std::string_view path, AxisConfi
         r.error(loc_of(*t.get("travel_max_mm")),
                 fmt::format("{}.travel_max_mm: must be > travel_min_mm ({})", path, *tmin));
     }
+    // The card counts each axis's position in a signed 32-bit register (READ
+    // 0x10 + i, docs/CORE.md): every point of the travel must have a step
+    // count it can hold, or the position it reports wraps.
+    constexpr double kPosMax = 2147483647.0;
+    for (const auto& [key, v] : {std::pair{"travel_min_mm", tmin}, std::pair{"travel_max_mm", tmax}}) {
+        if (!v || !(ax.steps_per_mm > 0)) continue;
+        if (!(std::abs(*v * ax.steps_per_mm) <= kPosMax)) {
+            r.error(loc_of(*t.get(key)),
+                    fmt::format("{}.{}: {} mm is {:.6g} steps at {} steps/mm, past the card's "
+                                "signed 32-bit position (at most {:.0f} steps either way)",
+                                path, key, *v, *v * ax.steps_per_mm, ax.steps_per_mm, kPosMax));
+        }
+    }
     ax.travel_min_mm = tmin.value_or(0);
     ax.travel_max_mm = tmax.value_or(0);
     ax.max_velocity = r.number(t, path, "max_velocity_mm_s", true, positive, gt0).value_or(0);

@@ -49,7 +49,7 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
             continue;
         }
         auto split = reduce_segment(s.delta(), m.card.pattern_capacity, m.planner.split_epsilon_steps);
-        pj.stats.worst_split_error = std::max(pj.stats.worst_split_error, split.endpoint_error);
+        pj.stats.worst_split_error = std::max(pj.stats.worst_split_error, split.deviation_bound - 0.5);
         std::uint64_t total = 0;
         for (const auto& part : split.parts) total += part.moves;
         for (auto& part : split.parts) {

@@ -163,6 +163,22 @@ double polyline_radius(const PerAxis<double>& in, const PerAxis<double>& out, do
     return chord / (2 * half_sin);
 }
 
+double reversal_speed(double u, const AxisConfig& axis, double a, const Machine& m) {
+    const double c = std::abs(u);
+    if (!(c > 0) || !(axis.steps_per_mm > 0)) return kInf;
+    const PulseTimingCycles& p = axis.pulse;
+    const double gap_cycles =
+        static_cast<double>(p.step_high) +
+        std::max<double>(std::max<std::uint32_t>(p.dir_hold, 1) + std::max<std::uint32_t>(p.dir_setup, 1),
+                         p.step_low) +
+        m.chunk_tolerance_cycles();
+    const double need_s = gap_cycles / m.card.clock_hz;
+    const double d = 0.5 / (axis.steps_per_mm * c);  // mm of path for half a step of the axis
+    const double v_d = d / need_s;                   // the fastest speed over d
+    const double v2 = v_d * v_d - 2 * a * d;
+    return v2 > 0 ? std::sqrt(v2) : 0.0;
+}
+
 double junction_speed(const PerAxis<double>& in, const PerAxis<double>& out, double a,
                       double deviation) {
     double dot = 0;
@@ -286,6 +302,25 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
         const double bend = curvature_speed(b.radius_start_mm, kCurvatureShare * a_normal,
                                             kCurvatureShare * j_normal);
         junction[i] = std::min({jv, bend, out[i - 1].cruise, out[i].cruise});
+    }
+    // Axes that reverse where the path goes on (a zigzag's corners, or an axis
+    // that last moved some segments back): DIR hold and setup at that speed.
+    {
+        PerAxis<int> last{};  // sign of each axis's last motion
+        for (std::size_t i = 0; i < n; ++i) {
+            const StepSegment& s = segs[i];
+            if (s.kind == MotionKind::dwell) continue;
+            const auto d = s.delta();
+            for (std::size_t a = 0; a < kAxes; ++a) {
+                if (d[a] == 0) continue;
+                const int sign = d[a] > 0 ? 1 : -1;
+                if (i > 0 && last[a] != 0 && sign != last[a] && junction[i] > 0) {
+                    junction[i] = std::min(
+                        junction[i], reversal_speed(dir[i][a], m.axes[a], out[i].limits.a, m));
+                }
+                last[a] = sign;
+            }
+        }
     }
 
     // Spans: runs of segments joined smoothly whose cruise caps lie within a

@@ -43,6 +43,20 @@ double polyline_radius(const PerAxis<double>& in, const PerAxis<double>& out, do
 double junction_speed(const PerAxis<double>& in, const PerAxis<double>& out, double a,
                       double deviation);
 
+// Fastest junction speed at which an axis whose direction reverses there (the
+// path going on) keeps the card's DIR hold and setup without a stretched move.
+// `u` is the axis's share of the outgoing path direction (mm per mm), `a` the
+// outgoing segment's acceleration limit. The last step toward the turning
+// point may come at the junction itself; the first step back comes once the
+// axis has gone back half a step (the card's lattice rounds there), so its
+// time is at least d / v_d with d = 1/2 step of path and v_d the speed after
+// accelerating over d. Across a reversal the card needs step_high +
+// max(max(hold,1) + max(setup,1), step_low) cycles from leading edge to
+// leading edge (docs/PULSE.md), plus the chunk tolerance (a move may be
+// that much early). 0 when even a start from rest at the junction is too fast
+// over d at the acceleration limit.
+double reversal_speed(double u, const AxisConfig& axis, double a, const Machine& m);
+
 // What a path bending with radius r leaves of the limits: the cruise cap v
 // (at most the given v, and the curvature speed with kCurvatureShare of the
 // axes' normal limits a_normal, j_normal), and the tangential acceleration and

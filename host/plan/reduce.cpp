@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -13,6 +14,8 @@ namespace cpstep::plan {
 namespace {
 
 __extension__ typedef __int128 i128;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 struct Line {
     PerAxis<std::int64_t> mag{};  // |delta|
@@ -31,21 +34,113 @@ struct Line {
     }
 };
 
-bool fits(const Line& L, std::int64_t i0, std::int64_t i1, std::uint32_t W) {
-    const std::int64_t n = i1 - i0;
-    if (n <= 0 || n > std::numeric_limits<std::uint32_t>::max()) return false;
+// A lattice point of the line after i moves, per axis: q(i) and the signed
+// error s(i) = 2T q(i) - 2 D i, in (-T, T] (2T times q(i) - D i / T).
+struct Point {
+    std::int64_t i = 0;
+    PerAxis<std::int64_t> q{}, s{};
+};
+
+Point point_at(const Line& L, std::int64_t i) {
+    Point p;
+    p.i = i;
     for (std::size_t a = 0; a < kAxes; ++a) {
-        if (static_cast<int>(a) == L.major) continue;
-        const std::int64_t dp = L.q(a, i1) - L.q(a, i0);
-        if (n / std::gcd(n, dp) > static_cast<std::int64_t>(W)) return false;
+        p.q[a] = L.q(a, i);
+        p.s[a] = static_cast<std::int64_t>(i128{2} * L.T * p.q[a] - i128{2} * L.mag[a] * i);
     }
-    return true;
+    return p;
 }
 
-double worst_err(const Line& L, std::int64_t i) {
-    double e = 0;
-    for (std::size_t a = 0; a < kAxes; ++a) e = std::max(e, L.err(a, i));
-    return e;
+// The point one move earlier: s grows by 2D; past T, q drops by one.
+void step_back(const Line& L, Point& p) {
+    --p.i;
+    for (std::size_t a = 0; a < kAxes; ++a) {
+        p.s[a] += 2 * L.mag[a];
+        if (p.s[a] > L.T) {
+            p.s[a] -= 2 * L.T;
+            --p.q[a];
+        }
+    }
+}
+
+// The part from p0 to p1 and its proved bound on |card - ideal| (steps), over
+// every move of the part and every axis, or +inf if some reduced pattern is
+// longer than W; parts whose bound exceeds `cut` may report any value above it
+// (the gcd is skipped when the bound without it already exceeds `cut`). Per
+// minor axis: the card's chord position minus the ideal line is a linear term,
+// which over moves 1..n lies between its value after the first move and the
+// end's error s1, plus the chord's own rounding r, a multiple of 1/u in
+// [-(ceil(u/2) - 1)/u, floor(u/2)/u] (ties round up). With u = 1
+// (the part's slope is 0 or 1) the chord is exact and the part stays within
+// its end errors.
+double part_bound(const Line& L, const Point& p0, const Point& p1, std::uint32_t W,
+                  double cut = kInf) {
+    const std::int64_t n = p1.i - p0.i;
+    if (n <= 0 || n > std::numeric_limits<std::uint32_t>::max()) return kInf;
+    double b = 0;
+    const double twoT = 2.0 * static_cast<double>(L.T);
+    for (std::size_t a = 0; a < kAxes; ++a) {
+        if (static_cast<int>(a) == L.major || L.mag[a] == 0) continue;
+        const std::int64_t dp = p1.q[a] - p0.q[a];
+        const auto s0 = static_cast<double>(p0.s[a]), s1 = static_cast<double>(p1.s[a]);
+        const double first = s0 + (s1 - s0) / static_cast<double>(n);
+        const double top = std::max(first, s1) / twoT, bottom = std::min(first, s1) / twoT;
+        double hi = top, lo = bottom;
+        if (dp != 0 && dp != n) {
+            // u >= 2 adds at least 1/3 on top; skip the gcd when that is too much.
+            if (top + 1.0 / 3.0 > cut) return top + 1.0 / 3.0;
+            const std::int64_t u = n / std::gcd(n, dp);
+            if (u > static_cast<std::int64_t>(W)) return kInf;
+            hi += static_cast<double>(u / 2) / static_cast<double>(u);
+            lo -= static_cast<double>((u + 1) / 2 - 1) / static_cast<double>(u);
+        }
+        b = std::max({b, std::abs(hi), std::abs(lo)});
+        if (b > cut) return b;
+    }
+    return b;
+}
+
+// The farthest point in (p0, last] whose part from p0 has a bound of at most
+// D, and that bound. A single move always qualifies when D >= 1/2: its bound
+// is its end's lattice error.
+std::pair<Point, double> farthest_within(const Line& L, const Point& p0, std::int64_t last,
+                                         std::uint32_t W, double D) {
+    Point p = point_at(L, last);
+    double b = part_bound(L, p0, p, W, D);
+    while (b > D && p.i > p0.i + 1) {
+        step_back(L, p);
+        b = part_bound(L, p0, p, W, D);
+    }
+    return {p, b};
+}
+
+struct Split {
+    std::vector<std::pair<std::int64_t, std::int64_t>> parts;  // [i0, i1) in moves
+    double bound = 0;                                          // max part bound
+    bool kept_budget = true;
+};
+
+// Greedy at bound D: from each split point the farthest part in the window
+// whose bound is at most D. With `budget`, gives up (kept_budget false) as
+// soon as some prefix has more than its budget of parts: moves / min_avg +
+// slack, so no run of short parts anywhere outpaces the link.
+Split greedy(const Line& L, std::uint32_t W, double D, std::int64_t min_avg, bool budget) {
+    constexpr std::int64_t kSlack = 4;
+    const std::int64_t window = 4 * static_cast<std::int64_t>(W);
+    Split out;
+    Point p0 = point_at(L, 0);
+    while (p0.i < L.T) {
+        auto [p, b] = farthest_within(L, p0, std::min(L.T, p0.i + window), W, D);
+        out.parts.emplace_back(p0.i, p.i);
+        out.bound = std::max(out.bound, b);
+        const auto k = static_cast<std::int64_t>(out.parts.size());
+        if (budget && p.i < L.T && k > p.i / min_avg + kSlack) {
+            out.kept_budget = false;
+            return out;
+        }
+        p0 = p;
+    }
+    return out;
 }
 
 }  // namespace
@@ -79,39 +174,47 @@ SplitResult reduce_segment(const PerAxis<std::int64_t>& delta, std::uint32_t W, 
         out.parts.push_back(c);
     };
 
-    // Greedy: from i0, look at the split candidates in a window; find the
-    // smallest achievable split-point error there, then take the farthest
-    // candidate whose error is within max(that, epsilon). Candidates beyond W
-    // moves only fit when the reduced patterns happen to be short; they are
-    // looked at too, up to 4W, because near-rational slopes give long parts.
-    const std::int64_t window = 4 * static_cast<std::int64_t>(W);
-    std::int64_t i0 = 0;
-    while (i0 < L.T) {
-        if (fits(L, i0, L.T, W)) {
-            emit(i0, L.T);
-            break;
-        }
-        const std::int64_t last = std::min(L.T - 1, i0 + window);
-        // One pass: remember the error of every fitting candidate.
-        std::vector<std::pair<std::int64_t, double>> cand;
-        double best = std::numeric_limits<double>::infinity();
-        for (std::int64_t i = i0 + 1; i <= last; ++i) {
-            if (!fits(L, i0, i, W)) continue;
-            const double e = worst_err(L, i);
-            best = std::min(best, e);
-            cand.emplace_back(i, e);
-        }
-        const double threshold = std::max(best, epsilon) + 1e-12;
-        std::int64_t pick = i0 + 1;
-        for (auto it = cand.rbegin(); it != cand.rend(); ++it) {
-            if (it->second <= threshold) {
-                pick = it->first;
-                break;
+    const double whole = part_bound(L, point_at(L, 0), point_at(L, L.T), W);
+    if (whole < kInf) {  // fits whole: the exact reduced pattern (bound <= 1/2)
+        emit(0, L.T);
+        out.deviation_bound = whole;
+        return out;
+    }
+    // The split's bound D: the target 1/2 + epsilon when the greedy at that
+    // bound keeps the budget of parts (every prefix averages at least
+    // min(32, W/4) moves, 4 parts of slack, so a short part may bridge two long
+    // ones); otherwise the smallest D in (target, 1] that keeps it, by
+    // bisection (6 halvings); and D = 1 when none does.
+    const std::int64_t min_avg = std::max<std::int64_t>(1, std::min<std::int64_t>(32, W / 4));
+    const double target = 0.5 + epsilon;
+    Split best = greedy(L, W, target, min_avg, true);
+    if (!best.kept_budget) {
+        double lo = target, hi = 1.0;
+        best = greedy(L, W, hi, min_avg, true);
+        if (!best.kept_budget) {
+            best = greedy(L, W, hi, min_avg, false);
+        } else {
+            for (int it = 0; it < 6; ++it) {
+                const double mid = 0.5 * (lo + hi);
+                Split g = greedy(L, W, mid, min_avg, true);
+                if (g.kept_budget) {
+                    hi = mid;
+                    best = std::move(g);
+                } else {
+                    lo = mid;
+                }
             }
         }
-        out.endpoint_error = std::max(out.endpoint_error, worst_err(L, pick));
-        emit(i0, pick);
-        i0 = pick;
+    }
+    const auto& chosen = best.parts;
+    out.deviation_bound = best.bound;
+    for (const auto& [i0, i1] : chosen) {
+        if (i0 > 0) {
+            double e = 0;
+            for (std::size_t a = 0; a < kAxes; ++a) e = std::max(e, L.err(a, i0));
+            out.endpoint_error = std::max(out.endpoint_error, e);
+        }
+        emit(i0, i1);
     }
     return out;
 }

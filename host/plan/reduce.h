@@ -26,13 +26,20 @@ struct CardSegment {
 
 struct SplitResult {
     std::vector<CardSegment> parts;
-    // Largest |ideal - lattice| over the split points, in steps: the extra
-    // deviation beyond half a step the split may introduce.
+    // Largest |ideal - lattice| over the split points, in steps.
     double endpoint_error = 0;
+    // Proved bound on max_deviation(delta, parts): the largest per-part bound
+    // (chord between the part's lattice ends plus the chord's rounding). At most
+    // 1/2 when the segment fits whole; at most 1/2 + epsilon when parts of that
+    // bound average at least min(32, W/4) moves; otherwise the smallest bound up
+    // to 1 step that reaches that average (a long line along a slope close to a
+    // short fraction, or several minor axes that are seldom near a lattice point
+    // at once).
+    double deviation_bound = 0;
 };
 
 // Reduce one segment of integer deltas. `capacity` is W; `epsilon` is the
-// split-point error the search accepts before preferring longer parts.
+// extra deviation beyond half a step the split aims for.
 SplitResult reduce_segment(const PerAxis<std::int64_t>& delta, std::uint32_t capacity,
                            double epsilon);
 

@@ -210,6 +210,12 @@ TEST(Machine, ErrorsNameFileLineColumn) {
         {edit("steps_per_mm = 80\n", ""), "mach.toml:4:1: axes.x.steps_per_mm: missing"},
         {edit("travel_max_mm = 300", "travel_max_mm = -5"),
          "mach.toml:7:17: axes.x.travel_max_mm: must be > travel_min_mm (0)"},
+        {edit("travel_max_mm = 300", "travel_max_mm = 30000000"),
+         "mach.toml:7:17: axes.x.travel_max_mm: 30000000 mm is 2.4e+09 steps at 80 steps/mm, past the card's "
+         "signed 32-bit position (at most 2147483647 steps either way)"},
+        {edit("travel_min_mm = 0", "travel_min_mm = -1e300"),
+         "mach.toml:6:17: axes.x.travel_min_mm: -1e+300 mm is -8e+301 steps at 80 steps/mm, past the card's "
+         "signed 32-bit position (at most 2147483647 steps either way)"},
         {edit("driver = \"dm556\"", "driver = \"L298\""),
          "mach.toml:11:10: axes.x.driver: unknown driver \"L298\" (known: DM556, M542, DM860T, "
          "TB6600, A4988, DRV8825, DRV8884, TMC2209)"},

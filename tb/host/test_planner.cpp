@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "plan/pipeline.h"
+#include "plan/chunks.h"
 #include "plan/planner.h"
 
 using namespace cpstep::plan;
@@ -308,4 +309,84 @@ TEST(Pipeline, PausesLongerThanTheCardCanTimeAreRefusedAtTheDwell) {
     // 1 mm at 10 mm/s with its S-curve ends: well under the 30 s dwell.
     EXPECT_GT(r->stats.duration_s, 0.1);
     EXPECT_LT(r->stats.duration_s, 1.0);
+}
+
+namespace {
+
+// Each axis's steps in a planned job as the card would emit them: move times
+// from the chunks (chunks.h expand), the steps of each move from SPEC §1's
+// closed form of its card segment's (u, v) pattern. Times in card cycles.
+struct AxisStep {
+    std::int64_t t;
+    int dir;
+};
+std::vector<std::vector<AxisStep>> steps_of(const PlannedJob& pj) {
+    std::vector<std::vector<AxisStep>> out(kAxes);
+    std::int64_t prev = 0;
+    for (const auto& c : pj.card) {
+        const auto times = expand(c.chunks, prev);
+        const CardSegment& s = c.segment;
+        for (std::size_t a = 0; a < kAxes; ++a) {
+            std::int64_t before = 0;
+            for (std::uint32_t mv = 1; mv <= s.moves; ++mv) {
+                const std::int64_t u = s.u[a], v = s.v[a];
+                const std::int64_t done = (mv / u) * v + (2 * v * (mv % u) + u) / (2 * u);
+                if (done != before) out[a].push_back({times[mv - 1], s.dir_positive[a] ? 1 : -1});
+                before = done;
+            }
+        }
+        prev = times.back();
+    }
+    return out;
+}
+
+}  // namespace
+
+// A zigzag whose corners the path takes at speed while y reverses, on drivers
+// that need 40 us of DIR hold and 40 us of setup: across every reversal the
+// card needs step_high + hold + setup cycles between the two leading edges
+// (docs/PULSE.md), or it stretches the move (a LATE fault). The planner slows
+// the corners so that it never has to; without that, the corners here run at
+// the feed and y's first step back comes 1,697 cycles (35 us) after its last
+// step forward, against the 3,936 it needs.
+TEST(Planner, AnAxisReversingAtSpeedKeepsDirHoldAndSetup) {
+    std::string text = "[card]\nclock_hz = 48e6\n[planner]\njunction_deviation_mm = 5\n";
+    for (const char* axis : {"x", "y"}) {
+        text += fmt::format(R"([axes.{}]
+steps_per_mm = 400
+travel_min_mm = 0
+travel_max_mm = 300
+max_velocity_mm_s = 100
+max_accel_mm_s2 = 20000
+max_jerk_mm_s3 = 2000000
+step_high_ns = 2000
+step_low_ns = 2000
+dir_setup_ns = 40000
+dir_hold_ns = 40000
+)", axis);
+    }
+    auto parsed = parse_machine(text, "zigzag.toml");
+    ASSERT_TRUE(parsed.ok()) << join(parsed.errors);
+    const Machine m = *parsed;
+    auto job = parse_gcode("G21 G90\nG1 X5 Y5 F6000\nX10 Y0\nX15 Y5\nX20 Y0\nX25 Y5\nM2\n", "zigzag.ngc");
+    ASSERT_TRUE(job.ok()) << join(job.errors);
+    auto pj = plan_job(*job, m);
+    ASSERT_TRUE(pj.ok()) << join(pj.errors);
+    const auto steps = steps_of(*pj);
+    const PulseTimingCycles& p = m.axes[1].pulse;
+    ASSERT_EQ(p.dir_setup, 1920u);
+    const std::int64_t reversal = p.step_high + std::max<std::int64_t>(p.dir_hold + p.dir_setup, p.step_low);
+    int reversals = 0;
+    for (std::size_t i = 1; i < steps[1].size(); ++i) {
+        const auto& a = steps[1][i - 1];
+        const auto& b = steps[1][i];
+        ASSERT_GE(b.t - a.t, p.step_high + p.step_low) << "step " << i;
+        if (a.dir != b.dir) {
+            ++reversals;
+            EXPECT_GE(b.t - a.t, reversal) << "y reverses at step " << i << ", cycle " << a.t;
+        }
+    }
+    EXPECT_EQ(reversals, 4);
+    // The corners are not stops: y's reversal costs only what the driver needs.
+    EXPECT_GT(pj->feeds[1].profile.v_entry, 1.0);
 }

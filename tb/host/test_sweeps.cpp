@@ -28,6 +28,7 @@ TEST(LongSweep, SplitExhaustiveTwoAxis) {
                 ASSERT_EQ(sum, T);
                 ASSERT_EQ(landed, d);
                 ASSERT_LE(max_deviation(d, r.parts), 0.5 + r.endpoint_error + 1e-12);
+                ASSERT_LE(max_deviation(d, r.parts), r.deviation_bound + 1e-12);
             }
         }
     }
@@ -45,6 +46,8 @@ TEST(LongSweep, SplitRandomFourAxisLarge) {
         }
         ASSERT_EQ(landed, d);
         ASSERT_LE(max_deviation(d, r.parts), 0.5 + r.endpoint_error + 1e-12);
+        ASSERT_LE(max_deviation(d, r.parts), r.deviation_bound + 1e-12);
+        ASSERT_LT(r.deviation_bound, 1.0);
     }
 }
 
