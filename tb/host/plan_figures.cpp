@@ -155,11 +155,12 @@ int bounds(const char* mpath, const char* jpath) {
     if (!feeds.ok()) { fmt::print(stderr, "{}\n", join(feeds.errors)); return 1; }
     const double planned = feeds->back().t_start + feeds->back().duration;
     const double lb = time_lower_bound(*segs.value, *m);
-    // The feed moves: from the first to the last G1/G2/G3 segment.
+    // The feed moves: from the first to the last G1/G2/G3/G5.x segment.
     std::size_t first = segs->size(), last = 0;
     for (std::size_t i = 0; i < segs->size(); ++i) {
         const auto k = (*segs.value)[i].kind;
-        if (k == MotionKind::linear || k == MotionKind::arc_cw || k == MotionKind::arc_ccw) {
+        if (k == MotionKind::linear || k == MotionKind::arc_cw || k == MotionKind::arc_ccw ||
+            k == MotionKind::nurbs) {
             first = std::min(first, i);
             last = i + 1;
         }
