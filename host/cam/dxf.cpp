@@ -19,6 +19,10 @@
 #include <set>
 #include <sstream>
 
+#include <Eigen/Core>
+
+#include "plan/nurbs.h"
+
 namespace cpstep::cam {
 
 std::string Source::where(const std::string& file) const {
@@ -382,55 +386,63 @@ class Reader : public DL_CreationAdapter {
       if (!(c.w > 0) || !std::isfinite(c.x) || !std::isfinite(c.y)) { error(s.src, "a control point with a weight that is not positive or a coordinate that is not finite"); return; }
     const double lo = s.knots[std::size_t(p)], hi = s.knots[std::size_t(n)];
     if (!(hi > lo)) { error(s.src, "the knot vector spans no parameter range"); return; }
-    // de Boor on homogeneous points (x·w, y·w, w).
-    auto eval = [&](double t) {
-      int k = p;
-      while (k < n - 1 && t >= s.knots[std::size_t(k + 1)]) ++k;
-      std::vector<std::array<double, 3>> d(std::size_t(p + 1));
-      for (int j = 0; j <= p; ++j) {
-        const auto& c = s.ctrl[std::size_t(j + k - p)];
-        d[std::size_t(j)] = {c.x * c.w, c.y * c.w, c.w};
-      }
-      for (int r = 1; r <= p; ++r)
-        for (int j = p; j >= r; --j) {
-          const double kl = s.knots[std::size_t(j + k - p)], kr = s.knots[std::size_t(j + 1 + k - r)];
-          const double a = kr > kl ? (t - kl) / (kr - kl) : 0;
-          for (int q = 0; q < 3; ++q) d[std::size_t(j)][q] = (1 - a) * d[std::size_t(j - 1)][q] + a * d[std::size_t(j)][q];
-        }
-      return Vec2{d[std::size_t(p)][0] / d[std::size_t(p)][2], d[std::size_t(p)][1] / d[std::size_t(p)][2]};
-    };
+    // The curve over [lo, hi] as a clamped NURBS (DXF allows unclamped knots,
+    // e.g. a closed periodic spline): knot insertion at both ends, then the
+    // shared curve code (host/plan/nurbs.h) evaluates and samples it.
+    std::vector<Eigen::Vector4d> hom;
+    for (const auto& c : s.ctrl) hom.emplace_back(c.x * c.w, c.y * c.w, 0.0, c.w);
+    std::vector<double> knots = s.knots;
+    clamp_at(lo, p, knots, hom);
+    clamp_at(hi, p, knots, hom);
+    const auto first = std::size_t(std::lower_bound(knots.begin(), knots.end(), lo) - knots.begin());
+    const auto last = std::size_t(std::upper_bound(knots.begin(), knots.end(), hi) - knots.begin()) - 1;
+    std::vector<double> kn(knots.begin() + std::ptrdiff_t(first), knots.begin() + std::ptrdiff_t(last) + 1);
+    const std::size_t count = kn.size() - std::size_t(p) - 1;
+    std::vector<Eigen::Vector3d> pts;
+    std::vector<double> weights;
+    for (std::size_t i = first; i < first + count; ++i) {
+      weights.push_back(hom[i][3]);
+      pts.emplace_back(hom[i][0] / hom[i][3], hom[i][1] / hom[i][3], 0.0);
+    }
+    if (auto why = plan::Nurbs::validate(p + 1, pts.size(), weights, kn)) { error(s.src, *why); return; }
+    const plan::Nurbs curve(p + 1, std::move(pts), std::move(weights), std::move(kn));
     const int code = insunits_.value_or(0);
     const double unit = code == 0 || insunits_mm(code) == 0 ? opt_.unitless_mm : insunits_mm(code);
-    const double tol = opt_.spline_tolerance_mm / unit;
-    std::vector<Vec2> pts{eval(lo)};
-    std::function<void(double, double, Vec2, Vec2, int)> sub = [&](double ta, double tb, Vec2 pa, Vec2 pb, int depth) {
-      bool ok = depth >= 18;
-      if (!ok) {
-        ok = true;
-        const Vec2 d = pb - pa;
-        const double l = norm(d);
-        for (int q = 1; q < 4 && ok; ++q) {
-          const Vec2 pm = eval(ta + (tb - ta) * q / 4);
-          const double e = l > 0 ? std::abs(cross(d, pm - pa)) / l : dist(pm, pa);
-          if (e > tol) ok = false;
+    Vec2 prev{};
+    bool have = false;
+    for (double u : curve.chord_parameters(opt_.spline_tolerance_mm / unit)) {
+      const Eigen::Vector3d c = curve.point(u);
+      const Vec2 q{c.x(), c.y()};
+      if (have && dist(prev, q) > 1e-12) emit(Seg::line(prev, q, s.src));
+      prev = q;
+      have = true;
+    }
+  }
+
+  // Inserts knot u into (knots, homogeneous points) of degree p until it is
+  // there p + 1 times (Boehm's algorithm, one insertion at a time).
+  static void clamp_at(double u, int p, std::vector<double>& knots, std::vector<Eigen::Vector4d>& hom) {
+    auto multiplicity = [&] { return int(std::count(knots.begin(), knots.end(), u)); };
+    while (multiplicity() < p + 1) {
+      // k: the last index with knots[k] <= u (u inside the knots' range), capped
+      // so that k + 1 is an index.
+      auto k = std::size_t(std::upper_bound(knots.begin(), knots.end(), u) - knots.begin()) - 1;
+      k = std::min(k, knots.size() - 2);
+      std::vector<Eigen::Vector4d> q(hom.size() + 1);
+      for (std::size_t i = 0; i < q.size(); ++i) {
+        if (i + std::size_t(p) <= k) {
+          q[i] = hom[i];
+        } else if (i > k) {
+          q[i] = hom[i - 1];
+        } else {
+          // Knots equal to u (already inserted) leave their point as it was.
+          const double al = knots[i] < u ? (u - knots[i]) / (knots[i + std::size_t(p)] - knots[i]) : 0.0;
+          q[i] = al * hom[i] + (1 - al) * hom[i - 1];
         }
       }
-      if (ok) { pts.push_back(pb); return; }
-      const double tm = 0.5 * (ta + tb);
-      const Vec2 pm = eval(tm);
-      sub(ta, tm, pa, pm, depth + 1);
-      sub(tm, tb, pm, pb, depth + 1);
-    };
-    const int spans = std::max(4, 2 * n);
-    Vec2 prev = pts[0];
-    for (int i = 0; i < spans; ++i) {
-      const double ta = lo + (hi - lo) * i / spans, tb = lo + (hi - lo) * (i + 1) / spans;
-      const Vec2 pb = i + 1 == spans ? eval(hi - 1e-12 * (hi - lo)) : eval(tb);
-      sub(ta, tb, prev, pb, 0);
-      prev = pb;
+      knots.insert(knots.begin() + std::ptrdiff_t(k) + 1, u);
+      hom = std::move(q);
     }
-    for (std::size_t i = 1; i < pts.size(); ++i)
-      if (dist(pts[i - 1], pts[i]) > 1e-12) emit(Seg::line(pts[i - 1], pts[i], s.src));
   }
 
   void expand(const InsertRef& r, const Affine& outer, int depth) {

@@ -131,27 +131,64 @@ TEST(Dxf, R12PolylineWithVertices) {
   EXPECT_NEAR(len, 12, 1e-12);
 }
 
+DxfResult load_splines(const DxfText& d, const std::string& name, double tolerance_mm) {
+  DxfOptions o;
+  o.spline_tolerance_mm = tolerance_mm;
+  return load_dxf(camtest::write(camtest::temp_dir("dxf") / name, d.text()), o);
+}
+
+// The largest distance from a point of `curve` to the nearest of `segs`.
+double farthest(const std::vector<Vec2>& curve, const std::vector<Seg>& segs) {
+  double worst = 0;
+  for (const Vec2& p : curve) {
+    double best = 1e9;
+    for (const Seg& s : segs) best = std::min(best, s.distance(p));
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+
 TEST(Dxf, SplineSampledWithinTolerance) {
   // a clamped quadratic with three control points is the Bezier (1-t)^2 P0 + 2t(1-t) P1 + t^2 P2
   DxfText d;
   d.spline(2, {0, 0, 0, 1, 1, 1}, {{0, 0}, {10, 20}, {20, 0}});
-  const auto dir = camtest::temp_dir("dxf");
-  DxfOptions o;
-  o.spline_tolerance_mm = 0.01;
-  const DxfResult r = load_dxf(camtest::write(dir / "spl.dxf", d.text()), o);
+  const DxfResult r = load_splines(d, "spl.dxf", 0.01);
   ASSERT_TRUE(r.ok()) << r.errors.front();
   ASSERT_GT(r.drawing.segs.size(), 10u);
   EXPECT_TRUE(near(r.drawing.segs.front().a, {0, 0}, 1e-9));
   EXPECT_TRUE(near(r.drawing.segs.back().b, {20, 0}, 1e-6));
-  double worst = 0;
+  std::vector<Vec2> curve;
   for (int i = 0; i <= 2000; ++i) {
     const double t = i / 2000.0;
-    const Vec2 p{2 * t * (1 - t) * 10 + t * t * 20, 2 * t * (1 - t) * 20};
-    double best = 1e9;
-    for (const Seg& s : r.drawing.segs) best = std::min(best, s.distance(p));
-    worst = std::max(worst, best);
+    curve.push_back({2 * t * (1 - t) * 10 + t * t * 20, 2 * t * (1 - t) * 20});
   }
-  EXPECT_LE(worst, 0.01);
+  EXPECT_LE(farthest(curve, r.drawing.segs), 0.01);
+}
+
+// DXF allows unclamped knots (a closed spline is often periodic, its knots
+// uniform). A uniform quadratic B-spline is, span by span, the curve
+// ((1-t)^2 P_j + (1 + 2t - 2t^2) P_j+1 + t^2 P_j+2) / 2 between the midpoints of
+// its control polygon's legs: here closed, the control polygon a square whose
+// first two corners are repeated at the end.
+TEST(Dxf, UnclampedClosedSplineFollowsItsUniformBSpline) {
+  const std::vector<std::pair<double, double>> sq{{0, 0}, {40, 0}, {40, 40}, {0, 40}, {0, 0}, {40, 0}};
+  DxfText d;
+  d.spline(2, {0, 1, 2, 3, 4, 5, 6, 7, 8}, sq);
+  const DxfResult r = load_splines(d, "periodic.dxf", 0.005);
+  ASSERT_TRUE(r.ok()) << r.errors.front();
+  ASSERT_GT(r.drawing.segs.size(), 8u);
+  EXPECT_TRUE(near(r.drawing.segs.front().a, {20, 0}, 1e-9));
+  EXPECT_TRUE(near(r.drawing.segs.back().b, {20, 0}, 1e-9));
+  std::vector<Vec2> curve;
+  for (std::size_t j = 0; j + 2 < sq.size(); ++j) {
+    for (int i = 0; i <= 400; ++i) {
+      const double t = i / 400.0;
+      const double a = 0.5 * (1 - t) * (1 - t), b = 0.5 * (1 + 2 * t - 2 * t * t), c = 0.5 * t * t;
+      curve.push_back({a * sq[j].first + b * sq[j + 1].first + c * sq[j + 2].first,
+                       a * sq[j].second + b * sq[j + 1].second + c * sq[j + 2].second});
+    }
+  }
+  EXPECT_LE(farthest(curve, r.drawing.segs), 0.005);
 }
 
 TEST(Dxf, RationalSplineIsACircleArc) {
