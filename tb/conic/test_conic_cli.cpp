@@ -25,12 +25,17 @@ using nlohmann::json;
 
 using cpstep::tb::Outcome;
 
-// `cpstep conic ARGS` (split at spaces: the tests' arguments hold none).
+// `cpstep conic ARGS` (split at spaces: the tests' arguments hold none). Its
+// output files are named after the test and a call count: ctest runs the tests
+// of this file as parallel processes, which must not share a file.
 Outcome cpstep(const std::string& args) {
   std::vector<std::string> argv{"conic"};
   std::istringstream in(args);
   for (std::string a; in >> a;) argv.push_back(a);
-  return cpstep::tb::run_program(CPSTEP_BIN, argv, fs::path(CPSTEP_TEST_DIR) / "conic_cli", "conic");
+  static int calls = 0;
+  const std::string tag = std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+                          std::to_string(calls++);
+  return cpstep::tb::run_program(CPSTEP_BIN, argv, fs::path(CPSTEP_TEST_DIR) / "conic_cli", tag);
 }
 
 struct Path {
