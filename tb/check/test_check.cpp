@@ -361,6 +361,56 @@ TEST_F(Check, ADirChangeInsideTheHoldWindow) {
   EXPECT_DOUBLE_EQ(f.expected, job_->machine.axes[X].pulse_ns.dir_hold);
 }
 
+TEST_F(Check, SetupAndHoldEachAgainstItsOwnMinimum) {
+  // check.toml gives x the same setup and hold (1000 ns); here they differ, so a
+  // check that took one for the other is caught (scripts/mutants.toml
+  // check-setup-field). DIR 500 ns before segment 2's first x step: a setup finding
+  // against 1000 ns of setup; with the hold at 1000 and the setup at 100, none.
+  struct Restore {
+    plan::AxisConfig& ax;
+    const plan::PulseTimingNs saved = ax.pulse_ns;
+    ~Restore() { ax.pulse_ns = saved; }
+  } restore{job_->machine.axes[X]};
+  auto& dir = changes("dir_x");
+  auto it = std::find_if(dir.begin(), dir.end(), [&](const VcdChange& c) {
+    return c.time > events_[end(0) - 1] && c.time < events_[first(1)];
+  });
+  ASSERT_NE(it, dir.end());
+  it->time = events_[first(1)] - 500'000;
+  sort_by_time(dir);
+
+  restore.ax.pulse_ns.dir_setup = 1000;
+  restore.ax.pulse_ns.dir_hold = 100;
+  const Finding& f = single(verdict(), FindingKind::dir_setup, 2, X, first(1) + 1);
+  EXPECT_NEAR(f.actual, 500, 1e-6);
+  EXPECT_DOUBLE_EQ(f.expected, 1000);
+
+  restore.ax.pulse_ns.dir_setup = 100;
+  restore.ax.pulse_ns.dir_hold = 1000;
+  const check::Verdict v = verdict();
+  EXPECT_TRUE(v.conforms()) << check::verdict_summary(v);
+}
+
+TEST_F(Check, ADirChangeOnAStepEdgeIsASetupFindingNotAHoldOne) {
+  // DIR moved onto segment 2's first x leading edge: that edge had no setup (0 ns);
+  // the hold is measured from the leading edge before it (segment 1's last), long
+  // ago, not from the edge at the same instant (scripts/mutants.toml check-hold-bound).
+  auto& dir = changes("dir_x");
+  auto it = std::find_if(dir.begin(), dir.end(), [&](const VcdChange& c) {
+    return c.time > events_[end(0) - 1] && c.time < events_[first(1)];
+  });
+  ASSERT_NE(it, dir.end());
+  ASSERT_GE(rise_at("step_x", first(1)), 0);
+  it->time = events_[first(1)];
+  sort_by_time(dir);
+
+  const check::Verdict v = verdict();
+  const Finding& f = single(v, FindingKind::dir_setup, 2, X, first(1) + 1);
+  EXPECT_NEAR(f.actual, 0, 1e-6);
+  EXPECT_EQ(find(v, FindingKind::dir_hold, 2, X), nullptr);
+  EXPECT_EQ(find(v, FindingKind::direction, 2, X), nullptr);  // the edge sees the new DIR
+}
+
 TEST_F(Check, TwoAxesSwapped) {
   for (check::VcdVar& var : trace_.vars) {
     for (auto [a, b] : {std::pair{"step_x", "step_y"}, std::pair{"dir_x", "dir_y"}}) {
