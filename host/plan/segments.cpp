@@ -44,44 +44,94 @@ std::int64_t mm_to_steps(double mm, double steps_per_mm) {
     return static_cast<std::int64_t>(std::floor(mm * steps_per_mm + 0.5));
 }
 
-std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& b, double tol) {
-    // The arc's plane (G17/G18/G19): u, v its two axes; the others move linearly.
-    const ArcFrame f = arc_frame(b);
-    const std::size_t u = f.first, v = f.second;
-    const double cx = f.center_first, cy = f.center_second;
-    const double r0 = std::hypot(b.start[u] - cx, b.start[v] - cy);
-    const double r1 = std::hypot(b.end[u] - cx, b.end[v] - cy);
-    const double a0 = std::atan2(b.start[v] - cy, b.start[u] - cx);
-    const double a1 = std::atan2(b.end[v] - cy, b.end[u] - cx);
-    const bool cw = b.kind == MotionKind::arc_cw;
-    constexpr double two_pi = 2 * std::numbers::pi;
-    double sweep = cw ? a0 - a1 : a1 - a0;
-    const bool closed = std::hypot(b.end[u] - b.start[u], b.end[v] - b.start[v]) < 1e-9;
-    if (closed) {
-        sweep = two_pi;
-    } else {
-        while (sweep <= 0) sweep += two_pi;
-        while (sweep > two_pi) sweep -= two_pi;
-    }
-    // A chord of angle theta on radius r stands off the arc by r(1 - cos(theta/2)).
-    const double r = std::max(r0, r1);
-    double max_angle = std::numbers::pi / 2;
-    if (tol < r) max_angle = std::min(max_angle, 2 * std::acos(1 - tol / r));
-    const auto n = static_cast<std::size_t>(std::max(1.0, std::ceil(sweep / max_angle - 1e-9)));
-    std::vector<PerAxis<double>> pts;
-    pts.reserve(n);
-    for (std::size_t i = 1; i < n; ++i) {
-        const double frac = static_cast<double>(i) / static_cast<double>(n);
+namespace {
+
+// An arc's geometry in its plane (G17/G18/G19): u, v its two axes (the others
+// move linearly), the centre, the end radii, the start angle and the sweep
+// (positive, 2 pi for a full circle), in the arc's own direction.
+struct ArcGeom {
+    std::size_t u = 0, v = 1;
+    double cx = 0, cy = 0, r0 = 0, r1 = 0, a0 = 0, sweep = 0;
+    bool cw = false;
+    // The point at fraction `frac` of the sweep (the radius interpolated).
+    PerAxis<double> at(const MotionBlock& b, double frac) const {
         const double ang = a0 + (cw ? -1 : 1) * sweep * frac;
         const double rad = r0 + (r1 - r0) * frac;
         PerAxis<double> p = b.start;
         for (std::size_t a = 0; a < kAxes; ++a) p[a] = b.start[a] + (b.end[a] - b.start[a]) * frac;
         p[u] = cx + rad * std::cos(ang);
         p[v] = cy + rad * std::sin(ang);
-        pts.push_back(p);
+        return p;
     }
+};
+
+ArcGeom arc_geom(const MotionBlock& b) {
+    const ArcFrame f = arc_frame(b);
+    ArcGeom g;
+    g.u = f.first;
+    g.v = f.second;
+    g.cx = f.center_first;
+    g.cy = f.center_second;
+    g.r0 = std::hypot(b.start[g.u] - g.cx, b.start[g.v] - g.cy);
+    g.r1 = std::hypot(b.end[g.u] - g.cx, b.end[g.v] - g.cy);
+    g.a0 = std::atan2(b.start[g.v] - g.cy, b.start[g.u] - g.cx);
+    const double a1 = std::atan2(b.end[g.v] - g.cy, b.end[g.u] - g.cx);
+    g.cw = b.kind == MotionKind::arc_cw;
+    constexpr double two_pi = 2 * std::numbers::pi;
+    g.sweep = g.cw ? g.a0 - a1 : a1 - g.a0;
+    const bool closed = std::hypot(b.end[g.u] - b.start[g.u], b.end[g.v] - b.start[g.v]) < 1e-9;
+    if (closed) {
+        g.sweep = two_pi;
+    } else {
+        while (g.sweep <= 0) g.sweep += two_pi;
+        while (g.sweep > two_pi) g.sweep -= two_pi;
+    }
+    return g;
+}
+
+// How many chords stand off the arc by at most tol: a chord of angle theta on
+// radius r stands off it by r(1 - cos(theta/2)).
+double arc_chord_count(const ArcGeom& g, double tol) {
+    const double r = std::max(g.r0, g.r1);
+    double max_angle = std::numbers::pi / 2;
+    if (tol < r) max_angle = std::min(max_angle, 2 * std::acos(1 - tol / r));
+    return std::max(1.0, std::ceil(g.sweep / max_angle - 1e-9));
+}
+
+std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& b, const ArcGeom& g, std::size_t n) {
+    std::vector<PerAxis<double>> pts;
+    pts.reserve(n);
+    for (std::size_t i = 1; i < n; ++i) pts.push_back(g.at(b, static_cast<double>(i) / static_cast<double>(n)));
     pts.push_back(b.end);
     return pts;
+}
+
+// The points that bound an arc: its ends and the axis-extreme points (0, 90,
+// 180, 270 degrees) the sweep passes; every chord point lies within their box.
+// Checked against the travel before any chord is made, so a huge arc is
+// refused at once.
+std::vector<PerAxis<double>> arc_extremes(const MotionBlock& b, const ArcGeom& g) {
+    constexpr double two_pi = 2 * std::numbers::pi;
+    std::vector<PerAxis<double>> pts{b.start, b.end};
+    for (int q = 0; q < 4; ++q) {
+        const double ang = q * std::numbers::pi / 2;
+        double d = g.cw ? g.a0 - ang : ang - g.a0;  // how far along the sweep the angle lies
+        while (d < 0) d += two_pi;
+        while (d >= two_pi) d -= two_pi;
+        if (d <= g.sweep) pts.push_back(g.at(b, d / g.sweep));
+    }
+    return pts;
+}
+
+// Most chords one arc may become (a full circle of radius 1e12 mm at 0.005 mm
+// would be 3e7): far above any arc inside a machine's travel.
+constexpr std::size_t kMaxArcChords = 1'000'000;
+
+}  // namespace
+
+std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& b, double tol) {
+    const ArcGeom g = arc_geom(b);
+    return arc_chord_points(b, g, static_cast<std::size_t>(arc_chord_count(g, tol)));
 }
 
 std::vector<PerAxis<double>> nurbs_chord_points(const MotionBlock& b, double tol, std::vector<double>* radii) {
@@ -260,7 +310,20 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
             pts = nurbs_chord_points(b, m.planner.arc_tolerance_mm, &curve_r);
             arc_r.back() = std::min(arc_r.back(), curve_r.front());  // the curve's start point
         } else if (is_arc) {
-            pts = arc_chord_points(b, m.planner.arc_tolerance_mm);
+            const ArcGeom g = arc_geom(b);
+            bool inside = true;
+            for (const auto& p : arc_extremes(b, g)) inside = inside && check(b, p);
+            if (!inside) continue;
+            const double n = arc_chord_count(g, m.planner.arc_tolerance_mm);
+            if (n > double(kMaxArcChords)) {
+                result.errors.push_back(
+                    {job.file, b.loc,
+                     fmt::format("an arc of radius {:.6g} mm needs {:.3g} chords within arc_tolerance_mm = {:g}; "
+                                 "at most {} are made",
+                                 std::max(g.r0, g.r1), n, m.planner.arc_tolerance_mm, kMaxArcChords)});
+                continue;
+            }
+            pts = arc_chord_points(b, g, static_cast<std::size_t>(n));
             radius = std::min(std::hypot(b.start[0] - b.center_x, b.start[1] - b.center_y),
                               std::hypot(b.end[0] - b.center_x, b.end[1] - b.center_y));
             arc_r.back() = std::min(arc_r.back(), radius);  // the arc's start point

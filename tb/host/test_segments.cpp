@@ -143,6 +143,26 @@ TEST(Segments, TravelAndAxisErrors) {
     EXPECT_NE(e.find(" mm is outside the travel -50..100 mm of axis y"), std::string::npos) << e;
 }
 
+// An arc is checked against the travel on the points that bound it (its ends
+// and the axis-extreme points it sweeps) before any chord is made: a full
+// circle of radius 10^12 mm (which would be 3e7 chords, about a gigabyte) is
+// refused at its far x extreme, where no chord point lies, and an arc inside the
+// travel that would need more than 10^6 chords is refused by its count.
+TEST(Segments, HugeArcsAreRefusedBeforeTheirChords) {
+    const Machine m = machine(100, 300);
+    EXPECT_EQ(join(run("G0 X1 Y1\nG2 X1 Y1 I1000000000000 J0 F60\n", m).errors),
+              "job.ngc:2:1: X 2000000000001.000 mm is outside the travel 0..300 mm of axis x");
+    // Half circles whose ends are inside: the top at y = 100 is inside, at 110 not.
+    EXPECT_EQ(join(run("G0 X250 Y0\nG3 X50 Y0 I-100 J0 F60\n", m).errors), "");
+    EXPECT_EQ(join(run("G0 X260 Y0\nG3 X40 Y0 I-110 J0 F60\n", m).errors),
+              "job.ngc:2:1: Y 110.000 mm is outside the travel -50..100 mm of axis y");
+    Machine fine = m;
+    fine.planner.arc_tolerance_mm = 1e-10;
+    const std::string e = join(run("G0 X150 Y0\nG2 X150 Y0 I-50 J0 F60\n", fine).errors);
+    EXPECT_EQ(e.rfind("job.ngc:2:1: an arc of radius 50 mm needs ", 0), 0u) << e;
+    EXPECT_NE(e.find("chords within arc_tolerance_mm = 1e-10; at most 1000000 are made"), std::string::npos) << e;
+}
+
 // The planner times a segment over its unrounded chord (so the planned speed
 // is the speed along the G-code's geometry, with no chord-to-chord ripple from
 // rounding), unless that chord is less than half the rounded one.
