@@ -76,9 +76,10 @@ int speed(const char* mpath, const char* jpath, int reps) {
 
 int chunks(const char* mpath, const char* jpath) {
     auto m = load_bound(mpath);
-    auto job = load_gcode(jpath);
-    if (!m.ok() || !job.ok()) {
-        fmt::print(stderr, "{}\n{}\n", join(m.errors), join(job.errors));
+    if (!m.ok()) { fmt::print(stderr, "{}\n", join(m.errors)); return 1; }
+    auto job = load_gcode(jpath, gcode_options(*m));  // the machine's tool lengths, G28 positions
+    if (!job.ok()) {
+        fmt::print(stderr, "{}\n", join(job.errors));
         return 1;
     }
     for (bool add2 : {false, true}) {
@@ -144,9 +145,10 @@ int split() {
 // Planned time beside the lower bound, for one machine and job.
 int bounds(const char* mpath, const char* jpath) {
     auto m = load_bound(mpath);
-    auto job = load_gcode(jpath);
-    if (!m.ok() || !job.ok()) {
-        fmt::print(stderr, "{}\n{}\n", join(m.errors), join(job.errors));
+    if (!m.ok()) { fmt::print(stderr, "{}\n", join(m.errors)); return 1; }
+    auto job = load_gcode(jpath, gcode_options(*m));  // the machine's tool lengths, G28 positions
+    if (!job.ok()) {
+        fmt::print(stderr, "{}\n", join(job.errors));
         return 1;
     }
     auto segs = make_step_segments(*job, *m);
