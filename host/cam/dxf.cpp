@@ -9,11 +9,9 @@
 #include <dxflib/dl_dxf.h>
 
 #include <algorithm>
-#include <array>
 #include <optional>
 #include <cmath>
 #include <fstream>
-#include <functional>
 #include <map>
 #include <memory>
 #include <set>

@@ -314,7 +314,7 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
             for (std::size_t a = 0; a < kAxes; ++a) {
                 if (d[a] == 0) continue;
                 const int sign = d[a] > 0 ? 1 : -1;
-                if (i > 0 && last[a] != 0 && sign != last[a] && junction[i] > 0) {
+                if (last[a] != 0 && sign != last[a] && junction[i] > 0) {
                     junction[i] = std::min(
                         junction[i], reversal_speed(dir[i][a], m.axes[a], out[i].limits.a, m));
                 }

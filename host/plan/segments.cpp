@@ -57,7 +57,7 @@ struct ArcGeom {
     PerAxis<double> at(const MotionBlock& b, double frac) const {
         const double ang = a0 + (cw ? -1 : 1) * sweep * frac;
         const double rad = r0 + (r1 - r0) * frac;
-        PerAxis<double> p = b.start;
+        PerAxis<double> p{};
         for (std::size_t a = 0; a < kAxes; ++a) p[a] = b.start[a] + (b.end[a] - b.start[a]) * frac;
         p[u] = cx + rad * std::cos(ang);
         p[v] = cy + rad * std::sin(ang);
@@ -107,9 +107,10 @@ std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& b, const ArcGeo
 }
 
 // The points that bound an arc: its ends and the axis-extreme points (0, 90,
-// 180, 270 degrees) the sweep passes; every chord point lies within their box.
-// Checked against the travel before any chord is made, so a huge arc is
-// refused at once.
+// 180, 270 degrees) the sweep passes; the chord points lie within their box
+// (to within the end radii's difference, which the G-code's arc tolerance
+// keeps small; the chord points are checked too). Checked against the travel
+// before any chord is made, so a huge arc is refused at once.
 std::vector<PerAxis<double>> arc_extremes(const MotionBlock& b, const ArcGeom& g) {
     constexpr double two_pi = 2 * std::numbers::pi;
     std::vector<PerAxis<double>> pts{b.start, b.end};
@@ -324,8 +325,7 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
                 continue;
             }
             pts = arc_chord_points(b, g, static_cast<std::size_t>(n));
-            radius = std::min(std::hypot(b.start[0] - b.center_x, b.start[1] - b.center_y),
-                              std::hypot(b.end[0] - b.center_x, b.end[1] - b.center_y));
+            radius = std::min(g.r0, g.r1);  // in the arc's own plane (G17, G18 or G19)
             arc_r.back() = std::min(arc_r.back(), radius);  // the arc's start point
         } else {
             pts.push_back(b.end);

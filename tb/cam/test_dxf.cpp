@@ -131,38 +131,37 @@ TEST(Dxf, R12PolylineWithVertices) {
   EXPECT_NEAR(len, 12, 1e-12);
 }
 
-DxfResult load_splines(const DxfText& d, const std::string& name, double tolerance_mm) {
+// Loads the one spline of `d` sampled within `tol` and checks the polyline:
+// more than `min_segs` lines, from `from` to `to` (within `end_tol`), and no
+// point of `curve` (the spline's own formula, sampled) farther than tol from it.
+void check_spline(const DxfText& d, const std::string& name, double tol, std::size_t min_segs, Vec2 from,
+                  Vec2 to, double end_tol, const std::vector<Vec2>& curve) {
   DxfOptions o;
-  o.spline_tolerance_mm = tolerance_mm;
-  return load_dxf(camtest::write(camtest::temp_dir("dxf") / name, d.text()), o);
-}
-
-// The largest distance from a point of `curve` to the nearest of `segs`.
-double farthest(const std::vector<Vec2>& curve, const std::vector<Seg>& segs) {
+  o.spline_tolerance_mm = tol;
+  const DxfResult r = load_dxf(camtest::write(camtest::temp_dir("dxf") / name, d.text()), o);
+  ASSERT_TRUE(r.ok()) << r.errors.front();
+  ASSERT_GT(r.drawing.segs.size(), min_segs);
+  EXPECT_TRUE(near(r.drawing.segs.front().a, from, end_tol));
+  EXPECT_TRUE(near(r.drawing.segs.back().b, to, end_tol));
   double worst = 0;
   for (const Vec2& p : curve) {
     double best = 1e9;
-    for (const Seg& s : segs) best = std::min(best, s.distance(p));
+    for (const Seg& s : r.drawing.segs) best = std::min(best, s.distance(p));
     worst = std::max(worst, best);
   }
-  return worst;
+  EXPECT_LE(worst, tol);
 }
 
 TEST(Dxf, SplineSampledWithinTolerance) {
   // a clamped quadratic with three control points is the Bezier (1-t)^2 P0 + 2t(1-t) P1 + t^2 P2
   DxfText d;
   d.spline(2, {0, 0, 0, 1, 1, 1}, {{0, 0}, {10, 20}, {20, 0}});
-  const DxfResult r = load_splines(d, "spl.dxf", 0.01);
-  ASSERT_TRUE(r.ok()) << r.errors.front();
-  ASSERT_GT(r.drawing.segs.size(), 10u);
-  EXPECT_TRUE(near(r.drawing.segs.front().a, {0, 0}, 1e-9));
-  EXPECT_TRUE(near(r.drawing.segs.back().b, {20, 0}, 1e-6));
   std::vector<Vec2> curve;
   for (int i = 0; i <= 2000; ++i) {
     const double t = i / 2000.0;
     curve.push_back({2 * t * (1 - t) * 10 + t * t * 20, 2 * t * (1 - t) * 20});
   }
-  EXPECT_LE(farthest(curve, r.drawing.segs), 0.01);
+  check_spline(d, "spl.dxf", 0.01, 10, {0, 0}, {20, 0}, 1e-6, curve);
 }
 
 // DXF allows unclamped knots (a closed spline is often periodic, its knots
@@ -174,11 +173,6 @@ TEST(Dxf, UnclampedClosedSplineFollowsItsUniformBSpline) {
   const std::vector<std::pair<double, double>> sq{{0, 0}, {40, 0}, {40, 40}, {0, 40}, {0, 0}, {40, 0}};
   DxfText d;
   d.spline(2, {0, 1, 2, 3, 4, 5, 6, 7, 8}, sq);
-  const DxfResult r = load_splines(d, "periodic.dxf", 0.005);
-  ASSERT_TRUE(r.ok()) << r.errors.front();
-  ASSERT_GT(r.drawing.segs.size(), 8u);
-  EXPECT_TRUE(near(r.drawing.segs.front().a, {20, 0}, 1e-9));
-  EXPECT_TRUE(near(r.drawing.segs.back().b, {20, 0}, 1e-9));
   std::vector<Vec2> curve;
   for (std::size_t j = 0; j + 2 < sq.size(); ++j) {
     for (int i = 0; i <= 400; ++i) {
@@ -188,7 +182,7 @@ TEST(Dxf, UnclampedClosedSplineFollowsItsUniformBSpline) {
                        a * sq[j].second + b * sq[j + 1].second + c * sq[j + 2].second});
     }
   }
-  EXPECT_LE(farthest(curve, r.drawing.segs), 0.005);
+  check_spline(d, "periodic.dxf", 0.005, 8, {20, 0}, {20, 0}, 1e-9, curve);
 }
 
 TEST(Dxf, RationalSplineIsACircleArc) {

@@ -163,6 +163,27 @@ TEST(Segments, HugeArcsAreRefusedBeforeTheirChords) {
     EXPECT_NE(e.find("chords within arc_tolerance_mm = 1e-10; at most 1000000 are made"), std::string::npos) << e;
 }
 
+// An arc's radius (which caps its speed) is measured in its own plane: a G18
+// half circle of radius 10 mm in XZ, away from y = 0, is a 10 mm curve (it was
+// measured from X and Y until 2026-11-26: 11.18 mm here, y being 5).
+TEST(Segments, ArcRadiusIsMeasuredInTheArcsPlane) {
+    Machine m = machine(100, 300);
+    m.axes[2] = m.axes[0];
+    m.axes[2].travel_min_mm = -50;
+    m.axes[2].travel_max_mm = 50;
+    auto r = run("G0 X40 Y5 Z0\nG18 G2 X20 Z0 I-10 K0 F60\n", m);
+    ASSERT_TRUE(r.ok()) << join(r.errors);
+    int arcs = 0;
+    for (const StepSegment& s : *r.value) {
+        // The first and last chord join the arc to a line: no radius (the rule of
+        // path_radii in every plane).
+        if (s.kind != MotionKind::arc_cw || !std::isfinite(s.radius_mm)) continue;
+        ++arcs;
+        EXPECT_NEAR(s.radius_mm, 10, 0.01) << "segment at z " << s.to_mm[2];
+    }
+    EXPECT_GT(arcs, 10);
+}
+
 // The planner times a segment over its unrounded chord (so the planned speed
 // is the speed along the G-code's geometry, with no chord-to-chord ripple from
 // rounding), unless that chord is less than half the rounded one.

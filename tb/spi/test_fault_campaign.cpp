@@ -153,16 +153,10 @@ class Monitor {
     cfg.assign(p_.n, AxisCfg{});
     count.assign(p_.n, 0);
   }
+  // The configuration as the pin checker sees it; the campaign keeps the reset polarities.
   model::CpPulseIn pulse_in(unsigned a, bool rst) const {
-    model::CpPulseIn i;
-    i.rst = rst;
-    i.cfg_step_high = cfg[a].high;
-    i.cfg_step_low = cfg[a].low;
-    i.cfg_dir_setup = cfg[a].setup;
-    i.cfg_dir_hold = cfg[a].hold;
-    i.cfg_step_pol = p_.step_pol_reset;  // the campaign keeps the reset polarities
-    i.cfg_dir_pol = p_.dir_pol_reset;
-    return i;
+    return {rst, cfg[a].high, cfg[a].low, cfg[a].setup, cfg[a].hold, bool(p_.step_pol_reset),
+            bool(p_.dir_pol_reset)};
   }
   static model::CpPulseOut pins_of(const sim::CardOut& o, unsigned a) {
     model::CpPulseOut p;
