@@ -100,6 +100,21 @@ CpBuild::Out CpBuild::eval_outputs(const In& i) const {
   return eval(i, d, e);
 }
 
+bool CpBuild::still(const In& i) const {
+  if (i.rst) return false;
+  Regs d = r_;
+  Engine e;
+  const Out o = eval(i, d, e);
+  if (!(d == r_) || o.seg_pop || o.run_wr || o.bank_we || o.len_we || o.fault || e.in_valid) return false;
+  CpEngineIn ei;
+  ei.rst = e.rst;
+  ei.in_u = r_.u;
+  ei.in_v = uint32_t(i.seg_head) & 0xFFFFFF;
+  ei.in_rep = 1;
+  ei.move_ready = e.move_ready;
+  return engine_.still(ei);
+}
+
 void CpBuild::tick() {
   Regs d = r_;
   Engine e;

@@ -50,6 +50,9 @@ class CpBuild {
   // The outputs for inputs `i` (the core settles its parts with it).
   Out eval_outputs(const In& i) const;
   void tick();
+  // True when a clock with inputs `i` changes no register, bank or queue, and
+  // the engine is still (the event-skipping core's test; see CpCore::quiet_for).
+  bool still(const In& i) const;
 
   // Registered outputs, for the core's other parts.
   bool busy() const { return r_.state != State::idle; }
@@ -64,6 +67,7 @@ class CpBuild {
     unsigned axis = 0;
     uint32_t u = 0, dir = 0, moving = 0, cap_addr = 0;
     bool end = false;
+    bool operator==(const Regs&) const = default;
   };
   struct Engine {
     bool in_valid = false, move_ready = false, rst = false;

@@ -238,6 +238,15 @@ CpCmd::Out CpCmd::eval_outputs(const In& i) const {
   return eval(i, d);
 }
 
+bool CpCmd::still(const In& i) const {
+  if (i.rst) return false;
+  Regs d = r_;
+  const Out o = eval(i, d);
+  return d == r_ && !(i.cmd_valid && o.cmd_ready) && !o.seg_wr && !o.seg_commit && !o.seg_rollback && !o.ch_wr &&
+         !o.ch_commit && !o.ch_rollback && !o.start && !o.abort && !o.clear && !o.drivers_on && !o.drivers_off &&
+         !o.cfg_write && !o.fault;
+}
+
 void CpCmd::tick() {
   Regs d = r_;
   eval(in, d);

@@ -52,6 +52,9 @@ class CpCmd {
   // The outputs for inputs `i` (the core settles its parts with it).
   Out eval_outputs(const In& i) const;
   void tick();
+  // True when a clock with inputs `i` takes no word and changes no register or
+  // queue (the event-skipping core's test; see CpCore::quiet_for).
+  bool still(const In& i) const;
 
  private:
   enum class Parse {
@@ -74,6 +77,7 @@ class CpCmd {
     int64_t product = 0, mul_b = 0;
     uint32_t mul_a = 0;
     uint32_t rsp_data = 0, rsp_addr = 0;
+    bool operator==(const Regs&) const = default;
   };
   Out eval(const In& i, Regs& d) const;
   bool multiply_step(Regs& d) const;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "model/cp_core.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "model/bits.h"
@@ -167,21 +168,61 @@ CpCore::Out CpCore::outputs() const {
   return o;
 }
 
+namespace {
+
+CpFifoIn fifo_in(bool rst, bool clear, bool wr, const FifoWord& data, bool commit, bool rollback, bool pop) {
+  CpFifoIn f;
+  f.rst = rst;
+  f.clear = clear;
+  f.wr = wr;
+  f.wr_data = data;
+  f.commit = commit;
+  f.rollback = rollback;
+  f.out_ready = pop;
+  return f;
+}
+
+}  // namespace
+
+CpFifoIn CpCore::seg_in(const Wires& w) const {
+  return fifo_in(in.rst, w.st.flush, w.cmd.seg_wr, {w.cmd.seg_data, 0, 0, 0}, w.cmd.seg_commit,
+                 w.cmd.seg_rollback, w.b.seg_pop);
+}
+CpFifoIn CpCore::chunk_in(const Wires& w) const {
+  return fifo_in(in.rst, w.st.flush, w.cmd.ch_wr, w.cmd.ch_data, w.cmd.ch_commit, w.cmd.ch_rollback, w.r.ch_pop);
+}
+CpFifoIn CpCore::run_in(const Wires& w) const {
+  return fifo_in(in.rst, w.st.flush, w.b.run_wr, {w.b.run_data, 0, 0, 0}, true, false, w.r.run_pop);
+}
+
+uint64_t CpCore::quiet_for(uint64_t limit) const {
+  if (in.rst || limit == 0) return 0;
+  const Wires w = settle();
+  // Every part without a counter must be still: it takes no word, writes no
+  // queue or bank, latches nothing.
+  if (!cmd_.still(w.cmd_in) || !build_.still(w.b_in) || !status_.still(w.st_in)) return 0;
+  if (!seg_fifo_.still(seg_in(w)) || !chunk_fifo_.still(chunk_in(w)) || !run_fifo_.still(run_in(w))) return 0;
+  // The counters: the move timer and each pulse timer say how far they stay quiet.
+  uint64_t h = std::min<uint64_t>(limit, run_.quiet_for(w.r_in));
+  for (unsigned a = 0; a < p_.n && h > 0; ++a)
+    h = std::min(h, pulses_[a].quiet_for(pulse_in(a, (w.r.step >> a & 1) != 0)));
+  return h;
+}
+
+void CpCore::skip(uint64_t cycles) {
+  run_.skip(cycles);
+  for (CpPulse& p : pulses_) p.skip(cycles);
+}
+
 void CpCore::tick() {
   const Wires w = settle();
-  auto edge = [&](CpFifo& f, bool wr, const FifoWord& data, bool commit, bool rollback, bool pop) {
-    f.in.rst = in.rst;
-    f.in.clear = w.st.flush;
-    f.in.wr = wr;
-    f.in.wr_data = data;
-    f.in.commit = commit;
-    f.in.rollback = rollback;
-    f.in.out_ready = pop;
+  auto edge = [&](CpFifo& f, const CpFifoIn& fi) {
+    f.in = fi;
     f.tick();
   };
-  edge(seg_fifo_, w.cmd.seg_wr, {w.cmd.seg_data, 0, 0, 0}, w.cmd.seg_commit, w.cmd.seg_rollback, w.b.seg_pop);
-  edge(chunk_fifo_, w.cmd.ch_wr, w.cmd.ch_data, w.cmd.ch_commit, w.cmd.ch_rollback, w.r.ch_pop);
-  edge(run_fifo_, w.b.run_wr, {w.b.run_data, 0, 0, 0}, true, false, w.r.run_pop);
+  edge(seg_fifo_, seg_in(w));
+  edge(chunk_fifo_, chunk_in(w));
+  edge(run_fifo_, run_in(w));
   // The pulse timers take this cycle's configuration and direction (registered).
   for (unsigned a = 0; a < p_.n; ++a) {
     pulses_[a].in = pulse_in(a, (w.r.step >> a & 1) != 0);

@@ -38,6 +38,16 @@ class CpCore {
   Out outputs() const;
   void tick();
 
+  // Event skipping. quiet_for(limit): how many clocks from now, with the inputs in
+  // `in` held, change nothing but counters — the move timer counting towards the
+  // pending move, the pulse timers' high, low and setup counts — so that every
+  // output (pins, position, status, READ data, cmd_ready) stays as it is now; at
+  // most `limit`, 0 when this clock must be clocked normally. skip(n) then
+  // advances n <= quiet_for() clocks at once, leaving the core in exactly the
+  // state n tick()s would have. docs/SIM.md ("The fast engine").
+  uint64_t quiet_for(uint64_t limit) const;
+  void skip(uint64_t cycles);
+
   const Params& params() const { return p_; }
 
  private:
@@ -58,6 +68,10 @@ class CpCore {
   };
   Wires settle() const;
   CpPulseIn pulse_in(unsigned axis, bool step) const;
+  // The three queues' inputs this clock.
+  CpFifoIn seg_in(const Wires& w) const;
+  CpFifoIn chunk_in(const Wires& w) const;
+  CpFifoIn run_in(const Wires& w) const;
 
   Params p_;
   CpCmd cmd_;

@@ -39,17 +39,17 @@ uint32_t CpEngine::front_slot(const Reg& r) const {
   return r.rev ? wrap(int64_t(r.lo) + r.len) : wrap(int64_t(r.lo) - 1);
 }
 
-EngineError CpEngine::refusal() const {
-  const uint32_t u = in.in_u & mask_u_, v = in.in_v & mask_u_;
+EngineError CpEngine::refusal(const In& i) const {
+  const uint32_t u = i.in_u & mask_u_, v = i.in_v & mask_u_;
   if (u == 0) return EngineError::u_zero;
   if (v > u) return EngineError::v_gt_u;
   if (u > p_.u_max()) return EngineError::u_gt_umax;
-  if ((in.in_k & mask_k_) > p_.kmax) return EngineError::k_gt_kmax;
-  if ((in.in_rep & mask_rep_) == 0) return EngineError::rep_zero;
+  if ((i.in_k & mask_k_) > p_.kmax) return EngineError::k_gt_kmax;
+  if ((i.in_rep & mask_rep_) == 0) return EngineError::rep_zero;
   return EngineError::none;
 }
 
-CpEngine::Regs CpEngine::next(Cycle& io) const {
+CpEngine::Regs CpEngine::next(const In& i, Cycle& io) const {
   const Regs& q = r_;
   Regs d = q;
   d.write_pending = false;
@@ -63,7 +63,7 @@ CpEngine::Regs CpEngine::next(Cycle& io) const {
     io.waddr[t] = q.write_addr;
     io.wbit[t] = rdata_[1 - t];
   }
-  if (q.out_valid && in.move_ready) d.out_valid = false;
+  if (q.out_valid && i.move_ready) d.out_valid = false;
 
   const bool ready = q.state == State::idle && !q.out_valid;
   const auto begin_replay = [&](Regs& s) {
@@ -77,15 +77,15 @@ CpEngine::Regs CpEngine::next(Cycle& io) const {
 
   switch (q.state) {
     case State::idle: {
-      if (!(in.in_valid && ready)) break;
-      if (const EngineError e = refusal(); e != EngineError::none) {
+      if (!(i.in_valid && ready)) break;
+      if (const EngineError e = refusal(i); e != EngineError::none) {
         d.err = true;
         d.err_code = uint32_t(e);
         break;
       }
-      const uint32_t u = in.in_u & mask_u_, v = in.in_v & mask_u_;
-      d.k = in.in_k & mask_k_;
-      d.rep = in.in_rep & mask_rep_;
+      const uint32_t u = i.in_u & mask_u_, v = i.in_v & mask_u_;
+      d.k = i.in_k & mask_k_;
+      d.rep = i.in_rep & mask_rep_;
       if (v == 0 || v == u) {
         d.constant = true;
         d.constant_move = v != 0;
@@ -153,7 +153,7 @@ CpEngine::Regs CpEngine::next(Cycle& io) const {
     }
 
     case State::replay: {
-      if (q.write_pending || !(!q.out_valid || in.move_ready)) break;
+      if (q.write_pending || !(!q.out_valid || i.move_ready)) break;
       if (!q.constant) {
         const int m = q.phase == 0 ? 1 : 0;  // phase 0 reads M2, phase 1 reads M1
         io.re[m] = true;
@@ -195,7 +195,7 @@ CpEngine::Regs CpEngine::next(Cycle& io) const {
 
 CpEngineOut CpEngine::outputs() const {
   Cycle io;
-  (void)next(io);
+  (void)next(in, io);
   const Regs& q = r_;
   CpEngineOut o;
   o.in_ready = q.state == State::idle && !q.out_valid;
@@ -226,9 +226,16 @@ CpEngineOut CpEngine::outputs() const {
   return o;
 }
 
+bool CpEngine::still(const In& i) const {
+  Cycle io;
+  Regs d = next(i, io);
+  if (i.rst) d.write_pending = d.out_valid = d.err = d.snap_valid = false, d.state = State::idle;
+  return d == r_ && !io.we[0] && !io.we[1] && !io.re[0] && !io.re[1];
+}
+
 void CpEngine::tick() {
   Cycle io;
-  Regs d = next(io);
+  Regs d = next(in, io);
   for (int m = 0; m < 2; ++m)  // synchronous reads see the memory before this edge's write
     if (io.re[m]) rdata_[m] = mem_[m][io.raddr[m]] != 0;
   for (int m = 0; m < 2; ++m)

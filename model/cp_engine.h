@@ -72,6 +72,9 @@ class CpEngine {
 
   CpEngineOut outputs() const;
   void tick();
+  // True when a clock with inputs `i` changes no register and touches no
+  // memory (the event-skipping core's test; see CpCore::quiet_for).
+  bool still(const In& i) const;
 
   const CpEngineParams& params() const { return p_; }
 
@@ -80,6 +83,7 @@ class CpEngine {
   struct Reg {
     uint32_t lo = 0, len = 0;
     bool rev = false;
+    bool operator==(const Reg&) const = default;
   };
   enum class State { idle, build, replay };
 
@@ -95,7 +99,7 @@ class CpEngine {
   uint32_t wrap(int64_t a) const;
   uint32_t phys(const Reg& r, uint32_t logical) const;  // address of logical bit
   uint32_t front_slot(const Reg& r) const;              // where a prepend writes
-  EngineError refusal() const;
+  EngineError refusal(const In& i) const;
 
   // All registers of the engine; next() computes the state after the coming edge
   // and the memory operations of this cycle.
@@ -123,8 +127,9 @@ class CpEngine {
     uint32_t err_code = 0;
     uint32_t snap_x = 0, snap_y = 0;
     Reg snap[2];
+    bool operator==(const Regs&) const = default;
   };
-  Regs next(Cycle& io) const;
+  Regs next(const In& i, Cycle& io) const;
 
   CpEngineParams p_;
   uint32_t mask_u_, mask_k_, mask_rep_;

@@ -31,6 +31,14 @@ CpFifo::Out CpFifo::outputs() const {
   return o;
 }
 
+bool CpFifo::still(const In& i) const {
+  // A clear (or reset) of an empty queue whose pointers are at 0 changes nothing.
+  if (i.rst || i.clear) return wptr_ == 0 && cptr_ == 0 && rptr_ == 0 && !out_valid_;
+  const bool fetch_due = cptr_ != rptr_ && !out_valid_;
+  return !i.wr && !(out_valid_ && i.out_ready) && !fetch_due && !(i.commit && cptr_ != wptr_) &&
+         !(i.rollback && wptr_ != cptr_);
+}
+
 void CpFifo::tick() {
   const Out o = outputs();
   const bool write = in.wr && !o.full && !in.clear;

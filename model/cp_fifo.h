@@ -42,6 +42,11 @@ class CpFifo {
   In in;
   Out outputs() const;
   void tick();
+  // True when a clock with inputs `i` changes nothing: no write, pop, commit or
+  // rollback that moves a pointer, no clear of a queue not already empty, and no
+  // committed word on its way to the head (the event-skipping core's test; see
+  // CpCore::quiet_for).
+  bool still(const In& i) const;
 
  private:
   uint32_t ptr_mask() const { return (2u << p_.aw) - 1; }  // pointers carry one extra bit

@@ -46,6 +46,15 @@ class CpPulse {
   CpPulseOut outputs() const;
   void tick();
 
+  // Event skipping (CpCore::quiet_for): how many clocks with inputs `i` change
+  // nothing but the timer's counters — no pulse starts or ends, no pin moves —
+  // before a counter reaches a threshold that can change what the timer does.
+  // 0: clock it normally; kForever: nothing here ends the quiet.
+  static constexpr uint64_t kForever = ~uint64_t(0);
+  uint64_t quiet_for(const CpPulseIn& i) const;
+  // Advances that many quiet clocks at once.
+  void skip(uint64_t cycles);
+
   const CpPulseParams& params() const { return p_; }
 
  private:
@@ -61,9 +70,10 @@ class CpPulse {
   };
   Regs reset_state() const;
   uint32_t sat_inc(uint32_t x) const { return x == sat_ ? x : x + 1; }
-  bool want_dir() const { return in.cfg_dir_pol ? in.dir : !in.dir; }
-  bool quiet() const;
-  bool ready() const;
+  uint32_t sat_add(uint32_t x, uint64_t k) const { return k >= uint64_t(sat_ - x) ? sat_ : uint32_t(x + k); }
+  static bool want_dir(const CpPulseIn& i) { return i.cfg_dir_pol ? i.dir : !i.dir; }
+  bool quiet(const CpPulseIn& i) const;
+  bool ready(const CpPulseIn& i) const;
 
   CpPulseParams p_;
   uint32_t sat_;       // 2^TW - 1, also the mask of a timing field

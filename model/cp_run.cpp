@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "model/cp_run.h"
 
+#include <algorithm>
+
 #include "model/bits.h"
 #include "model/cp_engine.h"
 
@@ -111,6 +113,24 @@ CpRun::Out CpRun::eval_outputs(const In& i) const {
   Regs d = r_;
   Replay rp;
   return eval(i, d, rp);
+}
+
+uint64_t CpRun::quiet_for(const In& i) const {
+  if (i.rst || i.bank_we || i.len_we) return 0;
+  Regs d = r_;
+  Replay rp;
+  const Out o = eval(i, d, rp);
+  if (o.fire || o.stretch || o.seg_done || o.ch_pop || o.run_pop || o.fault || rp.re) return 0;
+  d.elapsed = r_.elapsed;
+  if (!(d == r_)) return 0;
+  // elapsed counts up (saturating); the next thing it can change is the pending
+  // move falling due at elapsed == delay.
+  if (r_.chunk_loaded && r_.elapsed < r_.delay) return r_.delay - r_.elapsed;
+  return kForever;
+}
+
+void CpRun::skip(uint64_t cycles) {
+  r_.elapsed = uint32_t(std::min<uint64_t>(uint64_t(r_.elapsed) + cycles, 0xFFFFFFFFu));
 }
 
 void CpRun::tick() {

@@ -57,6 +57,15 @@ class CpRun {
   Out eval_outputs(const In& i) const;
   void tick();
 
+  // Event skipping (CpCore::quiet_for): how many clocks with inputs `i` change
+  // nothing but the move timer's elapsed count — no move fires or is counted
+  // late, no queue is popped, no bank is written — before the pending move falls
+  // due. 0: clock it normally; kForever: nothing here ends the quiet.
+  static constexpr uint64_t kForever = ~uint64_t(0);
+  uint64_t quiet_for(const In& i) const;
+  // Advances that many quiet clocks at once.
+  void skip(uint64_t cycles);
+
   // Registered outputs, for the core's other parts.
   bool running() const { return r_.running; }
   bool cur_valid() const { return r_.cur_valid; }
@@ -82,6 +91,7 @@ class CpRun {
     // lane's pattern lengths minus one (lane, axis).
     std::array<uint32_t, kCoreMaxAxes> rp_ptr{};
     std::array<std::array<uint32_t, kCoreMaxAxes>, 2> lm1{};
+    bool operator==(const Regs&) const = default;
   };
   // The replay's read of the banks this cycle.
   struct Replay {

@@ -93,35 +93,33 @@ CpStatus::Out CpStatus::eval_outputs(const In& i) const {
   return o;
 }
 
-void CpStatus::tick() {
-  if (in.rst) {
-    r_ = reset_state();
-    return;
-  }
+void CpStatus::tick() { r_ = in.rst ? reset_state() : next(in); }
+
+CpStatus::Regs CpStatus::next(const In& i) const {
   const Regs& q = r_;
   Regs d = q;
-  d.stretched = q.stretched || in.stretch;
-  d.stretch_count = q.stretch_count + uint32_t(in.stretch);
-  d.moves_done = q.moves_done + uint32_t(in.fire);
-  d.segments_done = q.segments_done + uint32_t(in.seg_done);
+  d.stretched = q.stretched || i.stretch;
+  d.stretch_count = q.stretch_count + uint32_t(i.stretch);
+  d.moves_done = q.moves_done + uint32_t(i.fire);
+  d.segments_done = q.segments_done + uint32_t(i.seg_done);
   // Drivers: off wins over on; E-stop holds them off.
-  if (in.drivers_on) d.enable = true;
-  if (in.drivers_off || in.estop) d.enable = false;
+  if (i.drivers_on) d.enable = true;
+  if (i.drivers_off || i.estop) d.enable = false;
   // CLEAR drops what was latched before this cycle (a stretch in this very cycle
   // stays); then the first fault latches.
-  const bool clearing = in.clear && !in.estop;
+  const bool clearing = i.clear && !i.estop;
   if (clearing) {
     d.fault = false;
     d.err = 0;
-    d.stretched = in.stretch;
+    d.stretched = i.stretch;
   }
-  const FaultPick f = pick_fault(in.estop, in.abort, in.run_fault, in.build_fault, in.cmd_fault, in.cmd_code);
+  const FaultPick f = pick_fault(i.estop, i.abort, i.run_fault, i.build_fault, i.cmd_fault, i.cmd_code);
   if (f.set && (!q.fault || clearing)) {
     d.fault = true;
     d.err = f.code;
   }
-  if (in.cfg_write) {
-    const uint32_t word = in.cfg_word;
+  if (i.cfg_write) {
+    const uint32_t word = i.cfg_word;
     const uint32_t axis = word >> 24 & 0xF;
     if (axis < p_.n) {
       PulseConfig& c = d.cfg[axis];
@@ -138,7 +136,7 @@ void CpStatus::tick() {
       }
     }
   }
-  r_ = d;
+  return d;
 }
 
 }  // namespace cpstep::model

@@ -74,6 +74,9 @@ class CpStatus {
   // The outputs for inputs `i` (the core settles its parts with it).
   Out eval_outputs(const In& i) const;
   void tick();
+  // True when a clock with inputs `i` changes no register (the event-skipping
+  // core's test; see CpCore::quiet_for).
+  bool still(const In& i) const { return !i.rst && next(i) == r_; }
 
   // Registered outputs, for the core's other parts.
   bool fault() const { return r_.fault; }
@@ -88,8 +91,10 @@ class CpStatus {
     bool stretched = false, enable = false;
     uint32_t stretch_count = 0, moves_done = 0, segments_done = 0;
     std::array<PulseConfig, kCoreMaxAxes> cfg{};
+    bool operator==(const Regs&) const = default;
   };
   Regs reset_state() const;
+  Regs next(const In& i) const;  // the registers after a clock (not in reset)
   uint32_t status_word(const In& i) const;
 
   Params p_;

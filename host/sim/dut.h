@@ -103,4 +103,69 @@ class ModelDut {
   uint64_t cycle_ = 0;
 };
 
+// ModelDut with event skipping, for the lockstep benches that prove it: when the
+// model says the coming clocks are quiet (Model::quiet_for: nothing but counters
+// changes and no output moves while the inputs stay), it only counts them while
+// the inputs stay the same as far as P::held_equal tells, and applies them at
+// once (Model::skip) when the inputs change or the quiet ends. Meanwhile the
+// outputs come from the model not yet advanced, for the inputs of the cycle:
+// quiet means they are the advanced model's too (P::held_equal may let through
+// inputs that only choose what an output shows, like a read port's address).
+template <class P>
+class SkippingModelDut {
+ public:
+  explicit SkippingModelDut(typename P::Model::Params params = P::model_params()) : model_(params) {}
+  typename P::Out step(const typename P::In& in) {
+    ++cycle_;
+    if (left_ > 0 && P::held_equal(held_, in)) {
+      --left_;
+      ++pending_;
+      model_.in = in;
+      return model_.outputs();
+    }
+    catch_up();
+    model_.in = in;
+    const typename P::Out out = model_.outputs();
+    if (const uint64_t h = model_.quiet_for(kMaxSkip)) {
+      held_ = in;
+      pending_ = 1;
+      left_ = h - 1;
+      skipped_ += h;
+    } else {
+      model_.tick();
+    }
+    return out;
+  }
+  uint64_t cycle() const { return cycle_; }
+  // Clocks the model advanced by skip() rather than tick().
+  uint64_t skipped() const { return skipped_; }
+  typename P::Model& model() {
+    catch_up();
+    return model_;
+  }
+
+ private:
+  static constexpr uint64_t kMaxSkip = uint64_t(1) << 40;
+  void catch_up() {
+    if (pending_) model_.skip(pending_);
+    skipped_ -= left_;
+    pending_ = left_ = 0;
+  }
+  typename P::Model model_;
+  typename P::In held_{};
+  uint64_t cycle_ = 0, pending_ = 0, left_ = 0, skipped_ = 0;
+};
+
+// The model stepper a lockstep bench runs against the RTL: P::ModelStepper when
+// the port names one (e.g. SkippingModelDut<P>), else ModelDut<P>.
+template <class P>
+struct ModelStepperOf {
+  using type = ModelDut<P>;
+};
+template <class P>
+  requires requires { typename P::ModelStepper; }
+struct ModelStepperOf<P> {
+  using type = typename P::ModelStepper;
+};
+
 }  // namespace cpstep::sim

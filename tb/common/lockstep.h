@@ -71,6 +71,8 @@ class Lockstep {
 
   uint64_t cycle() const { return rtl_.cycle(); }
   typename P::Model& model() { return model_.model(); }
+  // The model's stepper (ModelDut, or SkippingModelDut: sim::ModelStepperOf).
+  const auto& model_stepper() const { return model_; }
 
  private:
   [[noreturn]] void fail(const char* signal, uint64_t expected, uint64_t actual) {
@@ -94,7 +96,7 @@ class Lockstep {
   }
 
   std::string name_;
-  sim::ModelDut<P> model_;
+  typename sim::ModelStepperOf<P>::type model_;
   sim::RtlDut<P> rtl_;
   size_t max_history_;
   bool recording_ = true;

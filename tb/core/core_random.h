@@ -16,10 +16,11 @@ namespace cpstep::tb {
 
 // `batches` fresh harnesses (seeds seed, seed+1, ...), each running `jobs` jobs of
 // `segments` segments with random pulse timing and command pacing, checked after
-// every job; prints what ran and returns the cycles it ran.
+// every job; prints what ran and returns the cycles it ran. With a skipping model
+// (sim::Skipping) `skipped` gets the clocks it skipped rather than ticked.
 template <class P>
 uint64_t random_jobs(const char* name, uint64_t seed, unsigned batches, unsigned jobs, unsigned segments,
-                 JobShape shape) {
+                     JobShape shape, uint64_t* skipped = nullptr) {
   uint64_t moves = 0, late = 0, segs = 0, cycles = 0, add2_chunks = 0, curved = 0;
   for (unsigned b = 0; b < batches; ++b) {
     CoreHarness<P> h(name, seed + b);
@@ -40,6 +41,8 @@ uint64_t random_jobs(const char* name, uint64_t seed, unsigned batches, unsigned
       h.expect_consistent(where);
       if (::testing::Test::HasFailure()) return cycles + h.cycles;
     }
+    if constexpr (requires { h.ls.model_stepper().skipped(); })
+      if (skipped) *skipped += h.ls.model_stepper().skipped();
     moves += h.chk.moves();
     late += h.chk.late_moves();
     segs += h.chk.segments_done();

@@ -9,12 +9,13 @@
 
 #include "core/core_bench.h"
 #include "core/core_small.h"
+#include "core/core_validated.h"
 #include "sim/core_configs.h"
 
 namespace cpstep::tb {
 namespace {
 
-using Core = sim::CoreDefault;
+using Core = ValidatedCore;
 using Harness = CoreHarness<Core>;
 
 constexpr uint32_t kEstop = 10, kAbort = 11, kUnderrun = 9;
