@@ -141,8 +141,51 @@ CpCore::Wires CpCore::settle() const {
   return w;
 }
 
+const CpCore::Wires& CpCore::wires() const {
+  if (!wires_valid_ || !(in == wires_in_)) {
+    wires_ = settle();
+    wires_in_ = in;
+    wires_valid_ = true;
+  }
+  return wires_;
+}
+
+bool CpCore::lazy_holds() const {
+  return lazy_left_ > 0 && in.rst == lazy_in_.rst && in.cmd_valid == lazy_in_.cmd_valid &&
+         in.cmd_data == lazy_in_.cmd_data && in.rsp_ready == lazy_in_.rsp_ready && in.estop == lazy_in_.estop;
+}
+
+void CpCore::catch_up() {
+  if (lazy_pending_) {
+    run_.skip(lazy_pending_);
+    for (CpPulse& p : pulses_) p.skip(lazy_pending_);
+    wires_valid_ = false;
+  }
+  lazy_pending_ = lazy_left_ = 0;
+}
+
+void CpCore::set_lazy(bool on) {
+  catch_up();
+  lazy_ = on;
+  backoff_ = 1;
+  backoff_left_ = 0;
+}
+
 CpCore::Out CpCore::outputs() const {
-  const Wires w = settle();
+  if (lazy_holds()) {
+    Out o = lazy_out_;
+    o.rd_data = status_.read(lazy_st_, in.rd_addr & 0xFF);
+    return o;
+  }
+  return outputs(wires());
+}
+
+uint32_t CpCore::read_port(uint32_t addr) const {
+  if (lazy_holds()) return status_.read(lazy_st_, addr & 0xFF);
+  return status_.read(wires().st_in, addr & 0xFF);
+}
+
+CpCore::Out CpCore::outputs(const Wires& w) const {
   Out o;
   o.cmd_ready = w.cmd.cmd_ready;
   o.rsp_valid = w.cmd.rsp_valid;
@@ -196,8 +239,13 @@ CpFifoIn CpCore::run_in(const Wires& w) const {
 }
 
 uint64_t CpCore::quiet_for(uint64_t limit) const {
+  // Lazy: the quiet the last clock found, if the inputs still hold it.
+  if (lazy_) return lazy_holds() ? std::min(limit, lazy_left_) : 0;
+  return quiet_for(wires(), limit);
+}
+
+uint64_t CpCore::quiet_for(const Wires& w, uint64_t limit) const {
   if (in.rst || limit == 0) return 0;
-  const Wires w = settle();
   // Every part without a counter must be still: it takes no word, writes no
   // queue or bank, latches nothing.
   if (!cmd_.still(w.cmd_in) || !build_.still(w.b_in) || !status_.still(w.st_in)) return 0;
@@ -210,12 +258,43 @@ uint64_t CpCore::quiet_for(uint64_t limit) const {
 }
 
 void CpCore::skip(uint64_t cycles) {
+  if (lazy_holds()) {
+    // Within the quiet already found: counted with the rest.
+    lazy_pending_ += cycles;
+    lazy_left_ -= cycles;
+    return;
+  }
+  catch_up();
   run_.skip(cycles);
   for (CpPulse& p : pulses_) p.skip(cycles);
+  wires_valid_ = false;
 }
 
 void CpCore::tick() {
-  const Wires w = settle();
+  if (lazy_holds()) {
+    ++lazy_pending_;
+    --lazy_left_;
+    return;
+  }
+  catch_up();
+  const Wires& w = wires();
+  if (lazy_) {
+    if (backoff_left_ > 0) {
+      --backoff_left_;
+    } else if (const uint64_t h = quiet_for(w, ~uint64_t(0))) {
+      // This clock starts a quiet: count it and the next h - 1 while the inputs stay.
+      lazy_in_ = in;
+      lazy_out_ = outputs(w);
+      lazy_st_ = w.st_in;
+      lazy_pending_ = 1;
+      lazy_left_ = h - 1;
+      backoff_ = 1;
+      return;
+    } else {
+      backoff_ = std::min(2 * backoff_, 16u);
+      backoff_left_ = backoff_;
+    }
+  }
   auto edge = [&](CpFifo& f, const CpFifoIn& fi) {
     f.in = fi;
     f.tick();
@@ -236,6 +315,7 @@ void CpCore::tick() {
   run_.tick();
   status_.in = w.st_in;
   status_.tick();
+  wires_valid_ = false;
 }
 
 }  // namespace cpstep::model

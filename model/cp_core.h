@@ -48,6 +48,20 @@ class CpCore {
   uint64_t quiet_for(uint64_t limit) const;
   void skip(uint64_t cycles);
 
+  // Lazy clocking, for the fast engine (docs/SIM.md "Engines"): when a clock finds
+  // the core quiet for h clocks, tick() only counts the next ones for as long as
+  // the inputs stay (all but rd_addr, which only chooses what rd_data shows), and
+  // skips them at once when the inputs change or the quiet ends; outputs() gives
+  // the outputs of the quiet (rd_data read for the rd_addr of the clock). Every
+  // output in every clock is the same as without it. After a clock that was not
+  // quiet, the next few do not ask (2, 4 up to 16 clocks), so busy stretches
+  // cost about one settle a clock. Lazy, quiet_for() answers with the quiet the
+  // last clock found (0 if it found none) rather than looking. Off by default.
+  void set_lazy(bool on);
+  // The read port's data for register `addr` with the inputs in `in` otherwise:
+  // what outputs().rd_data would be for that rd_addr.
+  uint32_t read_port(uint32_t addr) const;
+
   const Params& params() const { return p_; }
 
  private:
@@ -67,6 +81,13 @@ class CpCore {
     CpRunOut r;
   };
   Wires settle() const;
+  // settle() for the current inputs, computed once per clock.
+  const Wires& wires() const;
+  uint64_t quiet_for(const Wires& w, uint64_t limit) const;
+  Out outputs(const Wires& w) const;
+  // Lazy clocking: the quiet clocks still ahead and the ones counted, not yet skipped.
+  bool lazy_holds() const;
+  void catch_up();
   CpPulseIn pulse_in(unsigned axis, bool step) const;
   // The three queues' inputs this clock.
   CpFifoIn seg_in(const Wires& w) const;
@@ -80,6 +101,17 @@ class CpCore {
   CpStatus status_;
   CpFifo seg_fifo_, chunk_fifo_, run_fifo_;
   std::vector<CpPulse> pulses_;
+
+  mutable Wires wires_{};
+  mutable In wires_in_{};
+  mutable bool wires_valid_ = false;
+
+  bool lazy_ = false;
+  In lazy_in_{};
+  Out lazy_out_{};
+  CpStatusIn lazy_st_{};
+  uint64_t lazy_left_ = 0, lazy_pending_ = 0;
+  unsigned backoff_ = 1, backoff_left_ = 0;
 };
 
 }  // namespace cpstep::model

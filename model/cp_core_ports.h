@@ -34,6 +34,7 @@ struct CpCoreIn {
   bool rsp_ready = false;
   bool estop = false;
   uint32_t rd_addr = 0;  // the read port's register (8 bits)
+  bool operator==(const CpCoreIn&) const = default;
 };
 
 struct CpCoreOut {

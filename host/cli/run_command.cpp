@@ -200,8 +200,14 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
   }
   fmt::print("stretches  {}\n", r.stretch_count);
   if (r.pins_observed)
-    fmt::print("simulated  {} card cycles in {:.1f} s ({:.2f} M cycles/s, Verilated cp_card)\n", r.sim_cycles,
-               wall_s, wall_s > 0 ? double(r.sim_cycles) / wall_s / 1e6 : 0.0);
+    fmt::print("simulated  {} card cycles in {:.2f} s ({:.2f} M cycles/s, {}{})\n", r.sim_cycles, wall_s,
+               wall_s > 0 ? double(r.sim_cycles) / wall_s / 1e6 : 0.0,
+               r.engine == run::Engine::model      ? "the fast engine: the golden model, event to event"
+               : r.engine == run::Engine::rtl      ? "the Verilated cp_card"
+                                                   : "the fast engine and the Verilated cp_card in lockstep",
+               r.skipped_cycles ? fmt::format("; {:.1f} % of the cycles skipped",
+                                              100.0 * double(r.skipped_cycles) / double(r.sim_cycles))
+                                : "");
   else
     fmt::print("ran        {:.1f} s\n", wall_s);
   fmt::print("link       {}\n", link_line(r));
@@ -260,7 +266,16 @@ int run_sim_transport(const RunOptions& o) {
     fmt::print(stderr, "cpstep run: --board {}: no such board (boards: {})\n", board, card::board_names());
     return kExitRefused;
   }
-  const auto job = prepare(o.job, o.machine, run::connect_sim(board));
+  const std::optional<run::Engine> engine = run::parse_engine(o.engine);
+  if (!engine) {
+    fmt::print(stderr, "cpstep run: --engine {}: no such engine (model, rtl, lockstep)\n", o.engine);
+    return kExitRefused;
+  }
+  if (!o.fst.empty() && *engine == run::Engine::model) {
+    fmt::print(stderr, "cpstep run: --fst traces the Verilated card: it needs --engine rtl or lockstep\n");
+    return kExitRefused;
+  }
+  const auto job = prepare(o.job, o.machine, run::connect_sim(board, *engine));
   if (!job) return kExitRefused;
   const run::CardJob& j = *job;
   std::ofstream report_file;
@@ -271,6 +286,8 @@ int run_sim_transport(const RunOptions& o) {
   so.max_cycles = o.max_cycles;
   so.sck_div = o.sck_div;
   so.board = board;
+  so.engine = *engine;
+  so.fst = o.fst;
   so.progress = [&progress](uint64_t done, uint64_t total) { progress.update(done, total); };
   const auto began = std::chrono::steady_clock::now();
   const run::CardRun r = run::run_on_sim(j, so);
@@ -354,6 +371,12 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& o) {
                     card::board_names() + "; default " + std::string(builds::kDefaultBoard) +
                     "). spidev asks the card.");
   c->add_option("--out", o.out, "file transport: the command stream (little-endian 32-bit words)");
+  c->add_option("--engine", o.engine,
+                "sim: what simulates the card: model (the golden model, event to event: fast), rtl (the "
+                "Verilated card, every cycle) or lockstep (both, every output compared every cycle); "
+                "docs/SIM.md")
+      ->capture_default_str();
+  c->add_option("--fst", o.fst, "sim, --engine rtl or lockstep: an FST waveform of every signal of the RTL card");
   c->add_option("--vcd", o.vcd, "sim: write the STEP/DIR pins to this VCD file");
   c->add_option("--report", o.report, "sim: write the JSON report here");
   c->add_option("--plots", o.plots, "sim: write path/speed/accel/jerk PNGs (gnuplot) into this directory");

@@ -16,6 +16,8 @@ struct RunOptions {
   std::string job, machine;
   std::string transport = "sim";   // sim | spidev | file
   std::string board;               // sim: the board simulated; file: the board planned for ("": default)
+  std::string engine = "model";    // sim: model (fast), rtl (Verilated) or lockstep (both, compared)
+  std::string fst;                 // sim, rtl engine: an FST waveform of every RTL signal
   std::string out;                 // file transport: the command stream
   std::string vcd, report, plots;  // sim transport: optional outputs (spidev: the report)
   uint64_t max_cycles = 0;         // 0: twice the planned time plus 10^7 cycles

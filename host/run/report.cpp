@@ -45,6 +45,8 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
     r["job_time_cycles"] = m.job_time_cycles;
     r["run_cycles"] = run.cycles;
     r["sim_cycles"] = run.sim_cycles;
+    r["engine"] = engine_name(run.engine);
+    r["skipped_cycles"] = run.skipped_cycles;
     r["start_cycle"] = run.start_cycle;
     r["move_events"] = m.moves;
   }

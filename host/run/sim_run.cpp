@@ -6,10 +6,13 @@
 #include <fstream>
 #include <memory>
 #include <stdexcept>
+#include <type_traits>
 
 #include "sim/card_configs.h"
+#include "sim/fast_card.h"
 #include "sim/sim_link.h"
 #include "sim/spi_master.h"
+#include "sim/twin_card.h"
 #include "sim/vcd_writer.h"
 
 namespace cpstep::run {
@@ -23,8 +26,24 @@ const char* host_fault_name(HostFault f) {
     case HostFault::stall: return "STALL";
     case HostFault::link: return "LINK";
     case HostFault::late: return "LATE";
+    case HostFault::engine: return "ENGINE";
   }
   return "UNKNOWN";
+}
+
+const char* engine_name(Engine e) {
+  switch (e) {
+    case Engine::model: return "model";
+    case Engine::rtl: return "rtl";
+    case Engine::lockstep: return "lockstep";
+  }
+  return "?";
+}
+
+std::optional<Engine> parse_engine(std::string_view name) {
+  for (Engine e : {Engine::model, Engine::rtl, Engine::lockstep})
+    if (name == engine_name(e)) return e;
+  return std::nullopt;
 }
 
 namespace {
@@ -102,7 +121,10 @@ class Recorder {
     run_.move_cycles.reserve(job.moves());
   }
 
-  void observe(uint64_t cycle, const sim::CardIn& in, const sim::CardOut& out) {
+  // `count` cycles from `cycle` on with the same pins and outputs (1 from the
+  // Verilated card, runs of quiet cycles from the fast engine): what changes, it
+  // changes in the first.
+  void observe(uint64_t cycle, uint64_t count, const sim::CardIn& in, const sim::CardOut& out) {
     if (vcd_) {
       for (int a = 0; a < plan::kAxes; ++a) {
         vcd_->set(signals_[a], out.step >> a & 1);
@@ -110,8 +132,12 @@ class Recorder {
       }
       vcd_->sample(sim::cycle_start_ps(cycle, uint64_t(job_.clock_hz())));
     }
-    if (options_.pins) options_.pins(cycle, out.step, out.dir);
-    if (options_.progress && (cycle & 0xFFFF) == 0) options_.progress(run_.move_cycles.size(), job_.moves());
+    if (options_.pins)
+      for (uint64_t i = 0; i < count; ++i) options_.pins(cycle + i, out.step, out.dir);
+    // About every 65536 cycles: in each span that holds a multiple of it.
+    const uint64_t low = cycle & 0xFFFF;
+    if (options_.progress && (low == 0 || low + count > 0x10000))
+      options_.progress(run_.move_cycles.size(), job_.moves());
     if (in.rst) {
       primed_ = false;
       return;
@@ -183,9 +209,15 @@ class Recorder {
   plan::PerAxis<int64_t> pins_{};
 };
 
-template <class Card>
+// The stepper of each engine; the Verilated card may trace every signal.
+template <class Dut>
+std::unique_ptr<Dut> make_dut(const SimRunOptions& o) {
+  if constexpr (std::is_constructible_v<Dut, std::string>) return std::make_unique<Dut>(o.fst);
+  else return std::make_unique<Dut>();
+}
+
+template <class Card, class Dut>
 CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
-  using Dut = sim::RtlDut<Card>;
   static_assert(Card::kAxes == plan::kAxes);
   CardRun run;
   std::ofstream vcd_file;
@@ -196,10 +228,12 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
     vcd = std::make_unique<sim::VcdWriter>(vcd_file, "1ps", "cpstep");
   }
   Recorder rec(job, run, vcd.get(), o);
-  Dut dut;
+  const std::unique_ptr<Dut> dut_ptr = make_dut<Dut>(o);
+  Dut& dut = *dut_ptr;
   const sim::SpiTiming timing = sim::spi_timing_for_divider(o.sck_div);
-  sim::SpiMaster<Dut> spi(dut, timing, [&rec](uint64_t c, const sim::CardIn& in, const sim::CardOut& out) {
-    rec.observe(c, in, out);
+  sim::SpiMaster<Dut> spi(dut, timing);
+  spi.set_span_observer([&rec](uint64_t c, uint64_t n, const sim::CardIn& in, const sim::CardOut& out) {
+    rec.observe(c, n, in, out);
   });
   sim::SimLink<Dut> sim_link(spi, double(Card::kBuild.clock_hz));
   const std::unique_ptr<card::Link> wrapped = o.wrap_link ? o.wrap_link(sim_link) : nullptr;
@@ -261,6 +295,8 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
     run.faults.push_back(host_fault(HostFault::link, e.what()));
   }
   run.sim_cycles = dut.cycle();
+  run.engine = o.engine;
+  if constexpr (requires { dut.skipped(); }) run.skipped_cycles = dut.skipped();
   run.link = {"sim", sim_link.name(), client.stats(), job.clock_hz() / o.sck_div, o.sck_div,
               sim_link.busy_cycles(), double(run.sim_cycles) / job.clock_hz()};
   if (o.progress) o.progress(run.move_cycles.size(), job.moves());
@@ -282,9 +318,8 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   return run;
 }
 
-template <class Card>
+template <class Card, class Dut>
 card::CardCaps connect_card() {
-  using Dut = sim::RtlDut<Card>;
   Dut dut;
   sim::SpiMaster<Dut> spi(dut, sim::spi_timing_for_divider(8));
   sim::SimLink<Dut> link(spi, double(Card::kBuild.clock_hz));
@@ -294,6 +329,33 @@ card::CardCaps connect_card() {
   spi.reset();
   client.poll();
   return card::read_caps(client);
+}
+
+template <class Card>
+CardRun run_on_engine(const CardJob& job, const SimRunOptions& o) {
+  switch (o.engine) {
+    case Engine::model: return run_on_card<Card, sim::FastCardDut<Card>>(job, o);
+    case Engine::rtl: return run_on_card<Card, sim::RtlDut<Card>>(job, o);
+    case Engine::lockstep: break;
+  }
+  try {
+    return run_on_card<Card, sim::TwinCardDut<Card>>(job, o);
+  } catch (const sim::EngineMismatch& m) {
+    // The same run on the Verilated card alone, traced, up to a little past the
+    // cycle: the waveform the fault points at.
+    SimRunOptions again = o;
+    again.engine = Engine::rtl;
+    again.fst = o.fst.empty() ? "cpstep-engine-mismatch.fst" : o.fst;
+    again.max_cycles = m.cycle + 16;
+    again.vcd.clear();
+    again.progress = nullptr;
+    CardRun run = run_on_card<Card, sim::RtlDut<Card>>(job, again);
+    run.engine = Engine::lockstep;
+    run.faults.insert(run.faults.begin(),
+                      host_fault(HostFault::engine, fmt::format("{}; waveform of the Verilated card: {}", m.what(),
+                                                                again.fst)));
+    return run;
+  }
 }
 
 }  // namespace
@@ -316,15 +378,19 @@ CardRun run_on_sim(const CardJob& job, const SimRunOptions& o) {
   }
   const std::string board = sim_board_for(job, o);
 #define CPSTEP_RUN_ON(name) \
-  if (board == #name) return run_on_card<sim::CardOf<builds::name, Vcp_card_##name>>(job, o);
+  if (board == #name) return run_on_engine<sim::CardOf<builds::name, Vcp_card_##name>>(job, o);
   CPSTEP_FOR_EACH_BOARD(CPSTEP_RUN_ON)
 #undef CPSTEP_RUN_ON
   throw std::invalid_argument(fmt::format("no simulated board '{}' (boards: {})", board, card::board_names()));
 }
 
-card::CardCaps connect_sim(std::string_view board) {
-#define CPSTEP_CONNECT(name) \
-  if (board == #name) return connect_card<sim::CardOf<builds::name, Vcp_card_##name>>();
+card::CardCaps connect_sim(std::string_view board, Engine engine) {
+#define CPSTEP_CONNECT(name)                                                                      \
+  if (board == #name) {                                                                           \
+    using Card = sim::CardOf<builds::name, Vcp_card_##name>;                                      \
+    return engine == Engine::rtl ? connect_card<Card, sim::RtlDut<Card>>()                        \
+                                 : connect_card<Card, sim::FastCardDut<Card>>();                  \
+  }
   CPSTEP_FOR_EACH_BOARD(CPSTEP_CONNECT)
 #undef CPSTEP_CONNECT
   throw std::invalid_argument(fmt::format("no simulated board '{}' (boards: {})", board, card::board_names()));

@@ -7,7 +7,9 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "card/card_client.h"
@@ -28,7 +30,15 @@ enum class HostFault : uint32_t {
   stall = 105,       // the card stopped taking command words while stopped
   link = 106,        // the card refused a frame the host does not repair, or stopped answering
   late = 107,        // the card stretched moves: they fired after their planned cycle
+  engine = 108,      // --engine lockstep: the fast engine and the Verilated card differed
 };
+
+// What simulates the card (docs/SIM.md "Engines"): the fast engine (the golden
+// model advanced event to event), the Verilated RTL, or both in lockstep.
+enum class Engine { model, rtl, lockstep };
+const char* engine_name(Engine e);
+// "model", "rtl", "lockstep"; nullopt for anything else.
+std::optional<Engine> parse_engine(std::string_view name);
 const char* host_fault_name(HostFault f);
 
 struct Fault {
@@ -65,6 +75,8 @@ struct CardRun {
   uint32_t stretch_count = 0, moves_done = 0, segments_done = 0;
   uint64_t cycles = 0;                   // clock cycles from reset to the end of motion
   uint64_t sim_cycles = 0;               // clock cycles simulated in all (the final POLL included)
+  Engine engine = Engine::model;         // what simulated the card
+  uint64_t skipped_cycles = 0;           // model: cycles advanced by event skipping
   bool pins_observed = true;             // false on a real card: pulses, move_cycles, checks empty
   plan::PerAxis<int64_t> start_position{};  // the card's position before the job (0 after a reset)
   LinkReport link;
@@ -74,7 +86,9 @@ struct CardRun {
 };
 
 struct SimRunOptions {
+  Engine engine = Engine::model;    // what simulates the card
   std::string board;                // rtl/builds.json's board to simulate; "": the job's (job.caps)
+  std::string fst;                  // rtl: an FST waveform of every RTL signal ("" for none)
   std::string vcd;                  // "" for none: step_<axis>, dir_<axis> per pin
   uint64_t max_cycles = 0;          // 0: twice the planned job time plus 10^7
   unsigned sck_div = 8;             // clock cycles per SCK period (8 or more)
@@ -97,6 +111,10 @@ struct SimRunOptions {
 // planned for (job.caps). The card simulated is the board options.board names
 // (rtl/builds.json), or else the build the job was planned for.
 // Throws std::invalid_argument for a board that is not in rtl/builds.json.
+// With Engine::lockstep, the first cycle the engines differ in ends the run with
+// an ENGINE fault naming it, and the run is made again on the Verilated card
+// alone up to that cycle with an FST waveform (options.fst, or
+// cpstep-engine-mismatch.fst) for the fault to point at.
 CardRun run_on_sim(const CardJob& job, const SimRunOptions& options);
 
 // The board run_on_sim() simulates for this job and these options.
@@ -104,7 +122,7 @@ std::string sim_board_for(const CardJob& job, const SimRunOptions& options);
 
 // Connects to a freshly reset simulated card of this board through its SPI pins
 // and reads its capabilities: what `cpstep run` plans with.
-card::CardCaps connect_sim(std::string_view board);
+card::CardCaps connect_sim(std::string_view board, Engine engine = Engine::model);
 
 // The parts of a run shared by every transport.
 Fault host_fault(HostFault f, std::string message);

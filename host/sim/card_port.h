@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 // Ports of rtl/cp_card.v (the card: SPI front end + motion core), and the port
-// adaptor for its Verilated configurations (see dut.h). There is no golden model
-// of the card as a whole: RtlDut<P> steps it; tests read it through its pins.
+// adaptor for its Verilated configurations (see dut.h). The card's golden model,
+// model::CpCard, steps behind these pins as sim::CardModel (card_model.h):
+// card_configs.h's CardOf<B, V> names it, so RtlDut<P>, ModelDut<P> and
+// tb/common/lockstep.h's Lockstep<P> all run a card.
 #pragma once
 
 #include <array>

@@ -5,7 +5,11 @@
 // (docs/PROTOCOL.md).
 //
 // Stepper: anything with `CardOut step(const CardIn&)` and `uint64_t cycle()`,
-// e.g. RtlDut<CardDefault>. One SCK period is sck_low + sck_high clock cycles
+// e.g. RtlDut<CardDefault>. A stepper that can also advance many cycles at once
+// with the pins held (`advance(in, cycles, on_span)`, calling on_span(first
+// cycle, count, outputs) for each run of cycles whose outputs stay the same: the
+// fast engine, fast_card.h) is advanced so wherever the master holds the pins,
+// and the observer sees spans: set_span_observer(). One SCK period is sck_low + sck_high clock cycles
 // (default 4 + 4: clk/8, the card's limit). MOSI changes in the first cycle SCK is
 // low (or at CS fall for the first bit); MISO is sampled in the first cycle SCK is
 // high, i.e. at the rising edge. An undriven MISO (miso_oe low) reads 1, like a
@@ -35,10 +39,19 @@ template <class Stepper>
 class SpiMaster {
  public:
   using Observer = std::function<void(uint64_t cycle, const CardIn&, const CardOut&)>;
+  // `count` cycles from `cycle` on, with these pins and these outputs in each
+  // (MISO excepted: a span inside a frame shows the MISO of its first cycle).
+  using SpanObserver = std::function<void(uint64_t cycle, uint64_t count, const CardIn&, const CardOut&)>;
 
   explicit SpiMaster(Stepper& dut, SpiTiming timing = {}, Observer observe = nullptr)
       : dut_(dut), observe_(std::move(observe)) {
     set_timing(timing);
+  }
+
+  // Replaces the per-cycle observer with one that sees runs of identical cycles.
+  void set_span_observer(SpanObserver s) {
+    span_ = std::move(s);
+    observe_ = nullptr;
   }
 
   // One clock with the given pins (E-stop as last set).
@@ -47,6 +60,7 @@ class SpiMaster {
     const uint64_t c = dut_.cycle();
     last_ = dut_.step(in);
     if (observe_) observe_(c, in, last_);
+    if (span_) span_(c, 1, in, last_);
     return last_;
   }
   void reset(unsigned cycles = 2) {
@@ -54,9 +68,7 @@ class SpiMaster {
     in.rst = true;
     for (unsigned i = 0; i < cycles; ++i) step(in);
   }
-  void idle(uint64_t cycles) {
-    for (uint64_t i = 0; i < cycles; ++i) step({});
-  }
+  void idle(uint64_t cycles) { hold({}, cycles); }
 
   // One CS-low period: every byte of `mosi` out, as many bytes of MISO back.
   std::vector<uint8_t> transfer(std::span<const uint8_t> mosi) { return transfer_bits(mosi, 8 * mosi.size()); }
@@ -73,9 +85,8 @@ class SpiMaster {
     hold(in, t_.cs_setup);
     for (size_t i = 0; i < bits; ++i) {
       in.sck = true;
-      const CardOut o = step(in);  // the rising edge: MISO sampled
+      const CardOut o = hold(in, t_.sck_high);  // the rising edge: MISO sampled in its first cycle
       if (!o.miso_oe || o.miso) miso[i / 8] |= uint8_t(0x80 >> (i % 8));
-      hold(in, t_.sck_high - 1);
       in.sck = false;
       if (i + 1 < bits) {
         in.mosi = bit(i + 1);  // the falling edge: next MOSI bit
@@ -99,12 +110,33 @@ class SpiMaster {
   Stepper& dut() { return dut_; }
 
  private:
-  void hold(const CardIn& in, unsigned cycles) {
-    for (unsigned i = 0; i < cycles; ++i) step(in);
+  // `cycles` clocks with the same pins (one advance() on a stepper that can);
+  // returns the outputs of the first.
+  CardOut hold(CardIn in, uint64_t cycles) {
+    CardOut first{};
+    if constexpr (requires { dut_.advance(in, cycles, [](uint64_t, uint64_t, const CardOut&) {}); }) {
+      in.estop = estop_;
+      bool any = false;
+      dut_.advance(in, cycles, [&](uint64_t c, uint64_t n, const CardOut& out) {
+        if (!any) first = out;
+        any = true;
+        last_ = out;
+        if (span_) span_(c, n, in, out);
+        if (observe_)
+          for (uint64_t i = 0; i < n; ++i) observe_(c + i, in, out);
+      });
+    } else {
+      for (uint64_t i = 0; i < cycles; ++i) {
+        const CardOut o = step(in);
+        if (i == 0) first = o;
+      }
+    }
+    return first;
   }
 
   Stepper& dut_;
   Observer observe_;
+  SpanObserver span_;
   SpiTiming t_;
   CardOut last_{};
   bool estop_ = false;

@@ -1,0 +1,101 @@
+// SPDX-License-Identifier: MIT
+#include "model/cp_card.h"
+
+#include <stdexcept>
+
+namespace cpstep::model {
+
+CpCard::CpCard(Params p) : p_(p), spi_({p.core.n, p.core.cbuf_aw}), core_(p.core) {
+  if (p_.core.pw != 32) throw std::invalid_argument("cp_card: the card's positions are 32 bits (PW = 32)");
+}
+
+const CpCoreOut& CpCard::core_outputs() const {
+  if (core_valid_ && core_.in.rst == in.rst) return core_out_;
+  CpCoreIn& c = core_.in;
+  c.rst = in.rst;
+  c.cmd_valid = spi_.cmd_valid();
+  c.cmd_data = spi_.cmd_data();
+  c.rsp_ready = true;  // cp_spi takes every READ reply
+  c.estop = estop_synced();
+  c.rd_addr = spi_.rd_addr();
+  core_out_ = core_.outputs();
+  core_valid_ = true;
+  return core_out_;
+}
+
+CpCard::Out CpCard::outputs() const {
+  const CpCoreOut& c = core_outputs();
+  Out o;
+  o.miso = spi_.miso();
+  o.miso_oe = !in.cs_n;
+  o.step = c.step;
+  o.dir = c.dir;
+  o.enable = c.enable;
+  o.running = c.running;
+  o.fault = c.fault;
+  o.stretched = c.stretched;
+  o.err_code = c.err_code;
+  for (unsigned a = 0; a < p_.core.n; ++a) o.position[a] = int32_t(uint32_t(c.position[a]));
+  return o;
+}
+
+uint64_t CpCard::quiet_for(uint64_t limit) const {
+  if (in.rst || !pins_settled() || !spi_.buffer_settled()) return 0;
+  if (core_outputs().rsp_valid) return 0;  // cp_spi counts the reply and keeps its register
+  // core_outputs() left the core's inputs as this clock has them.
+  return core_.quiet_for(limit);
+}
+
+void CpCard::skip(uint64_t cycles) {
+  core_.skip(cycles);
+  core_valid_ = false;
+}
+
+bool CpCard::clock_front_end(uint64_t cycles, bool* miso) {
+  if (in.rst || in.cs_n || cycles == 0 || !spi_.cs_low_settled() || estop_q_ != (in.estop ? 3u : 0u) ||
+      !spi_.buffer_settled())
+    return false;
+  const CpCoreOut& c = core_outputs();
+  if (c.rsp_valid || core_.quiet_for(cycles) < cycles) return false;
+  if (miso) *miso = spi_.miso();
+  CpSpiIn& s = spi_.in;
+  s.rst = false;
+  s.sck = in.sck;
+  s.cs_n = in.cs_n;
+  s.mosi = in.mosi;
+  s.cmd_ready = c.cmd_ready;
+  s.rsp_valid = false;
+  s.rsp_addr = c.rsp_addr;
+  s.estop = estop_synced();
+  s.enable = c.enable;
+  for (uint64_t k = 0; k < cycles; ++k) {
+    // Once the synchronizers hold the pins, nothing in the front end moves.
+    if (spi_.pins_settled(false, in.sck, in.cs_n, in.mosi)) break;
+    s.rd_data = core_.read_port(spi_.rd_addr());
+    spi_.tick();
+  }
+  core_.skip(cycles);
+  core_valid_ = false;
+  return true;
+}
+
+void CpCard::tick() {
+  const CpCoreOut& c = core_outputs();
+  CpSpiIn& s = spi_.in;
+  s.rst = in.rst;
+  s.sck = in.sck;
+  s.cs_n = in.cs_n;
+  s.mosi = in.mosi;
+  s.cmd_ready = c.cmd_ready;
+  s.rsp_valid = c.rsp_valid;
+  s.rsp_addr = c.rsp_addr;
+  s.rd_data = c.rd_data;
+  s.estop = estop_synced();
+  s.enable = c.enable;
+  core_.tick();
+  spi_.tick();
+  estop_q_ = (estop_q_ << 1 | uint32_t(in.estop)) & 3;
+  core_valid_ = false;
+}
+
+}  // namespace cpstep::model

@@ -1,0 +1,205 @@
+// SPDX-License-Identifier: MIT
+#include "model/cp_spi.h"
+
+#include <stdexcept>
+
+namespace cpstep::model {
+namespace {
+
+constexpr uint32_t kMagic = 0xC5;
+constexpr uint32_t kTypePoll = 0x00, kTypeCommands = 0x01;
+
+// Result codes (docs/PROTOCOL.md).
+constexpr uint32_t kOk = 0, kTruncated = 1, kBadCrc = 2, kBadType = 3, kNoRoom = 4, kBadCmd = 5, kSplit = 6;
+
+// Receive phases.
+constexpr uint32_t kPhHdr = 0, kPhWords = 1, kPhCrc = 2, kPhDone = 3;
+
+constexpr uint32_t kTxPos0 = 7;  // reply word of the first position
+
+// CRC-16/CCITT-FALSE, one bit: polynomial 0x1021, MSB first.
+inline uint32_t crc_bit(uint32_t crc, bool b) {
+  const bool top = (crc >> 15 & 1) != 0;
+  return ((crc << 1) & 0xFFFF) ^ (top != b ? 0x1021u : 0u);
+}
+
+}  // namespace
+
+CpSpi::CpSpi(Params p) : p_(p), tx_crc_((kTxPos0 + p.n) & 31), tx_zero_((8 + p.n) & 31), cbuf_({32, p.cbuf_aw}) {
+  if (p_.n < 1 || p_.n > 8) throw std::invalid_argument("cp_spi: N must be 1 to 8");
+  if (p_.cbuf_aw < 1 || p_.cbuf_aw > 14) throw std::invalid_argument("cp_spi: CBUF_AW must be 1 to 14");
+}
+
+uint32_t CpSpi::rd_addr() const {
+  // Registers 0x00..0x03, the one the last READ named, 0x10 + i; 0xFF reads 0.
+  const uint32_t t = r_.txn;
+  if (t >= 2 && t <= 5) return t - 2;
+  if (t == 6) return r_.last_addr;
+  if (t >= kTxPos0 && t < tx_crc_) return (0x10 + ((t - kTxPos0) & 31)) & 0xFF;
+  return 0xFF;
+}
+
+bool CpSpi::pins_settled(bool rst, bool sck_pin, bool cs_n_pin, bool mosi_pin) const {
+  const uint32_t sck = rst ? 0 : (sck_pin ? 7 : 0);
+  const uint32_t cs = rst ? 7 : (cs_n_pin ? 7 : 0);
+  const uint32_t mosi = mosi_pin ? 3 : 0;
+  return r_.sck == sck && r_.cs == cs && r_.mosi == mosi;
+}
+
+CpSpi::Out CpSpi::outputs() const {
+  const CpFifoOut b = cbuf_.outputs();
+  Out o;
+  o.miso = miso();
+  // The raw pin: released at once when CS rises.
+  o.miso_oe = !in.cs_n;
+  o.cmd_valid = b.out_valid;
+  o.cmd_data = uint32_t(b.out_data[0]);
+  o.rsp_ready = true;
+  o.rd_addr = rd_addr();
+  return o;
+}
+
+void CpSpi::tick() {
+  const Regs& q = r_;
+  const CpFifoOut b = cbuf_.outputs();
+  const uint32_t words = 1u << p_.cbuf_aw;
+
+  const bool cs1 = (q.cs >> 1 & 1) != 0, cs2 = (q.cs >> 2 & 1) != 0;
+  const bool cs_fall = !cs1 && cs2;
+  const bool cs_rise = cs1 && !cs2;
+  const bool shift = (q.sck >> 1 & 1) && !(q.sck >> 2 & 1) && !cs1 && !cs2;
+  const bool bit_in = (q.mosi >> 1 & 1) != 0;
+
+  // Free words: 2^CBUF_AW minus every word held (the head included).
+  const uint32_t free16 = b.used >= words ? 0 : words - b.used;
+  const uint32_t rx_word = q.sr << 1 | uint32_t(bit_in);
+  const uint32_t crc_tx_next = crc_bit(q.crc_tx, (q.sr >> 31 & 1) != 0);
+  const bool in_cmd = q.hdr_left != 0 || q.chunks_left != 0;
+  const bool word_end = shift && q.bit == 31;
+
+  // The reply word loaded at the end of the current one.
+  uint32_t tx_word;
+  if (q.txn == 1) tx_word = free16 << 16 | q.reads;
+  else if (q.txn == tx_crc_) tx_word = crc_tx_next << 16;
+  else tx_word = in.rd_data;
+
+  Regs d = q;
+  d.reads = in.rsp_valid ? (q.reads + 1) & 0xFFFF : q.reads;
+  bool buf_wr = false, buf_commit = false, buf_rollback = false;
+
+  if (cs_fall) {
+    // A frame begins: the reply's word 0 goes out at once.
+    d.sr = kMagic << 24 | q.seq << 16 | q.result << 8 | uint32_t(q.fresh) << 3 | uint32_t(in.enable) << 2 |
+           uint32_t(in.estop) << 1 | uint32_t(b.used != 0);
+    d.ph = kPhHdr;
+    d.bit = 0;
+    d.txn = 1;
+    d.crc_rx = d.crc_tx = 0xFFFF;
+    d.wr_ok = d.bad_type = d.no_room = d.bad_cmd = false;
+    d.hdr_left = 0;
+    d.chunks_left = 0;
+    d.cw = 0;
+  } else if (shift) {
+    d.bit = (q.bit + 1) & 31;
+    if (q.ph != kPhDone) d.crc_rx = crc_bit(q.crc_rx, bit_in);
+    if (q.txn <= tx_crc_) d.crc_tx = crc_tx_next;
+    if (word_end) {
+      // The received word comes off the register, the next reply word goes on.
+      d.sr = tx_word;
+      if (q.txn != tx_zero_) d.txn = (q.txn + 1) & 31;
+    } else {
+      d.sr = rx_word;
+    }
+
+    switch (q.ph) {
+      case kPhHdr:
+        if (q.bit == 15) d.seq = rx_word & 0xFF;
+        if (word_end) {
+          // {type, seq, nwords}; room is judged against reply word 1's free words.
+          const uint32_t type = rx_word >> 24, nwords = rx_word & 0xFFFF;
+          d.left = nwords;
+          d.bad_type = !(type == kTypeCommands || (type == kTypePoll && nwords == 0));
+          d.no_room = type == kTypeCommands && nwords > free16;
+          d.wr_ok = type == kTypeCommands && nwords <= free16;
+          d.ph = nwords == 0 ? kPhCrc : kPhWords;
+        }
+        break;
+      case kPhWords:
+        if (word_end) {
+          buf_wr = q.wr_ok;
+          d.left = (q.left - 1) & 0xFFFF;
+          if (q.left == 1) d.ph = kPhCrc;
+          if (!in_cmd) {
+            // A command starts: a SEGMENT has H1, N v words and its chunks to come.
+            switch (rx_word >> 28) {
+              case 0x1:
+                d.hdr_left = (1 + p_.n) & 15;
+                d.chunks_left = rx_word & 0xFFFF;
+                d.seg_add2 = (rx_word >> 22 & 1) != 0;
+                d.cw = 0;
+                break;
+              case 0x2:
+              case 0x3:
+              case 0x4: break;
+              default: d.bad_cmd = true;
+            }
+          } else if (q.hdr_left != 0) {
+            d.hdr_left = q.hdr_left - 1;
+          } else if (q.cw == (q.seg_add2 ? 2u : 1u)) {
+            d.cw = 0;
+            d.chunks_left = (q.chunks_left - 1) & 0xFFFF;
+          } else {
+            d.cw = (q.cw + 1) & 3;
+          }
+        }
+        break;
+      case kPhCrc:
+        if (q.bit == 15) d.ph = kPhDone;
+        break;
+      default: break;
+    }
+  }
+
+  if (cs_rise) {
+    // The frame ends: the first failing check is its result.
+    if (q.ph != kPhDone) d.result = kTruncated;
+    else if (q.crc_rx != 0) d.result = kBadCrc;
+    else if (q.bad_type) d.result = kBadType;
+    else if (q.no_room) d.result = kNoRoom;
+    else if (q.bad_cmd) d.result = kBadCmd;
+    else if (in_cmd) d.result = kSplit;
+    else d.result = kOk;
+    buf_commit = d.result == kOk;
+    buf_rollback = d.result != kOk;
+    d.fresh = false;
+  }
+
+  // Synchronizers.
+  d.mosi = (q.mosi << 1 | uint32_t(in.mosi)) & 3;
+  if (in.rst) {
+    d.sck = 0;
+    d.cs = 7;
+    d.seq = 0;
+    d.result = kOk;
+    d.fresh = true;
+    d.reads = 0;
+    d.last_addr = 0xFF;
+  } else {
+    d.sck = (q.sck << 1 | uint32_t(in.sck)) & 7;
+    d.cs = (q.cs << 1 | uint32_t(in.cs_n)) & 7;
+    if (in.rsp_valid) d.last_addr = in.rsp_addr & 0xFF;
+  }
+
+  CpFifoIn& f = cbuf_.in;
+  f.rst = in.rst;
+  f.clear = false;
+  f.wr = buf_wr;
+  f.wr_data[0] = rx_word;
+  f.commit = buf_commit;
+  f.rollback = buf_rollback;
+  f.out_ready = in.cmd_ready;
+  cbuf_.tick();
+  r_ = d;
+}
+
+}  // namespace cpstep::model

@@ -1,0 +1,98 @@
+// SPDX-License-Identifier: MIT
+// cp_spi — cycle-accurate, bit-exact model of rtl/cp_spi.v, the card's SPI front
+// end: the pin synchronizers, the frame receiver (phases, CRC, command tracking),
+// the reply shifter and the command buffer (a CpFifo, as the RTL's cp_fifo) with
+// its commit or rollback at CS rise (docs/PROTOCOL.md).
+// Same ports as the RTL; the bench sets `in`, reads outputs() (before the rising
+// edge), then calls tick() (the edge).
+#pragma once
+
+#include <cstdint>
+
+#include "model/cp_fifo.h"
+
+namespace cpstep::model {
+
+struct CpSpiParams {
+  unsigned n = 4;        // axes: the reply carries n positions, a SEGMENT 2 + n + ... words
+  unsigned cbuf_aw = 9;  // command buffer address width: it holds 2^cbuf_aw words
+};
+
+struct CpSpiIn {
+  bool rst = false;
+  // The SPI pins (asynchronous to the clock).
+  bool sck = false, cs_n = true, mosi = false;
+  // The core's command port and read port.
+  bool cmd_ready = false;
+  bool rsp_valid = false;
+  uint32_t rsp_addr = 0;  // 8 bits
+  uint32_t rd_data = 0;   // the core's register rd_addr, now
+  // What the reply reports (estop already synchronized).
+  bool estop = false, enable = false;
+};
+
+struct CpSpiOut {
+  bool miso = false, miso_oe = false;
+  bool cmd_valid = false;
+  uint32_t cmd_data = 0;
+  bool rsp_ready = false;
+  uint32_t rd_addr = 0;  // 8 bits
+};
+
+class CpSpi {
+ public:
+  using Params = CpSpiParams;
+  using In = CpSpiIn;
+  using Out = CpSpiOut;
+
+  explicit CpSpi(Params p = {});
+  In in;
+  Out outputs() const;
+  void tick();
+
+  const Params& params() const { return p_; }
+
+  // Registered outputs (no input reaches them), for the card's settle order.
+  bool miso() const { return (r_.sr >> 31 & 1) != 0; }
+  bool cmd_valid() const { return cbuf_.outputs().out_valid; }
+  uint32_t cmd_data() const { return uint32_t(cbuf_.outputs().out_data[0]); }
+  uint32_t rd_addr() const;
+  // Every synchronizer stage holds what the current inputs load into it: another
+  // cycle with the same pins changes no synchronizer (with rst: the reset values).
+  bool pins_settled() const { return pins_settled(in.rst, in.sck, in.cs_n, in.mosi); }
+  // The same for the pins given (a parent's inputs before it sets `in`).
+  bool pins_settled(bool rst, bool sck, bool cs_n, bool mosi) const;
+  // No committed word is on its way to the buffer's head (cp_fifo's prefetch):
+  // with the pins settled, no READ reply and no word taken, a clock changes
+  // nothing here (the event-skipping card's test, CpCard::quiet_for).
+  bool buffer_settled() const { return cbuf_.still(CpFifoIn{}); }
+  // CS has been low through every synchronizer stage: no CS edge is on its way
+  // (with the pin held low, no frame can end, so nothing commits).
+  bool cs_low_settled() const { return r_.cs == 0; }
+  // Words in the command buffer, committed or not (cp_fifo's used_o).
+  uint32_t cbuf_used() const { return cbuf_.outputs().used; }
+
+ private:
+  // The registers of rtl/cp_spi.v (the command buffer is cbuf_).
+  struct Regs {
+    uint32_t sck = 0, cs = 7, mosi = 0;  // synchronizers: [0] first flop, [1] second, [2] previous
+    // Control (reset).
+    uint32_t seq = 0, result = 0;
+    bool fresh = true;
+    uint32_t reads = 0;
+    uint32_t last_addr = 0xFF;
+    // Frame state (initialized at CS fall).
+    uint32_t ph = 0, bit = 0, txn = 0, crc_rx = 0, crc_tx = 0, left = 0;
+    bool wr_ok = false, bad_type = false, no_room = false, bad_cmd = false;
+    uint32_t hdr_left = 0, chunks_left = 0, cw = 0;
+    bool seg_add2 = false;
+    uint32_t sr = 0;
+  };
+
+  Params p_;
+  uint32_t tx_crc_, tx_zero_;  // reply word indices of the CRC and of the zeros
+  Regs r_;
+  CpFifo cbuf_;
+};
+
+}  // namespace cpstep::model
