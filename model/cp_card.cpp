@@ -71,11 +71,19 @@ bool CpCard::clock_front_end(uint64_t cycles, bool* miso) {
   for (uint64_t k = 0; k < cycles; ++k) {
     // Once the synchronizers hold the pins, nothing in the front end moves.
     if (spi_.pins_settled(false, in.sck, in.cs_n, in.mosi)) break;
-    s.rd_data = core_.read_port(spi_.rd_addr());
+    if (spi_.tick_synchronizers_only()) continue;
+    if (spi_.loads_rd_data()) s.rd_data = core_.read_port(spi_.rd_addr());
     spi_.tick();
   }
   core_.skip(cycles);
-  core_valid_ = false;
+  if (core_.quiet_for(1) > 0) {
+    // Still quiet with the same inputs: the same outputs, but for the read port,
+    // whose address the front end has moved.
+    core_.in.rd_addr = spi_.rd_addr();
+    core_out_.rd_data = core_.read_port(core_.in.rd_addr);
+  } else {
+    core_valid_ = false;
+  }
   return true;
 }
 

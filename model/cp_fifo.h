@@ -42,6 +42,10 @@ class CpFifo {
   In in;
   Out outputs() const;
   void tick();
+  // Single outputs without the whole of outputs() (the fast engine's hot path).
+  bool out_valid() const { return out_valid_; }
+  uint64_t out_word0() const { return out_valid_ ? rdata_[0] : 0; }
+  uint32_t used() const { return ((wptr_ - rptr_) & ptr_mask()) + out_valid_; }
   // True when a clock with inputs `i` changes nothing: no write, pop, commit or
   // rollback that moves a pointer, no clear of a queue not already empty, and no
   // committed word on its way to the head (the event-skipping core's test; see

@@ -59,9 +59,21 @@ CpSpi::Out CpSpi::outputs() const {
   return o;
 }
 
+bool CpSpi::tick_synchronizers_only() {
+  const Regs& q = r_;
+  if (in.rst || in.rsp_valid) return false;
+  const uint32_t cs12 = q.cs >> 1 & 3;
+  if (cs12 == 1 || cs12 == 2) return false;          // a CS edge (fall or rise)
+  if ((q.sck & 6) == 2 && cs12 == 0) return false;   // an SCK rise in a frame: a shift
+  r_.mosi = (q.mosi << 1 | uint32_t(in.mosi)) & 3;
+  r_.sck = (q.sck << 1 | uint32_t(in.sck)) & 7;
+  r_.cs = (q.cs << 1 | uint32_t(in.cs_n)) & 7;
+  return true;
+}
+
 void CpSpi::tick() {
   const Regs& q = r_;
-  const CpFifoOut b = cbuf_.outputs();
+  const uint32_t used = cbuf_.used();
   const uint32_t words = 1u << p_.cbuf_aw;
 
   const bool cs1 = (q.cs >> 1 & 1) != 0, cs2 = (q.cs >> 2 & 1) != 0;
@@ -71,7 +83,7 @@ void CpSpi::tick() {
   const bool bit_in = (q.mosi >> 1 & 1) != 0;
 
   // Free words: 2^CBUF_AW minus every word held (the head included).
-  const uint32_t free16 = b.used >= words ? 0 : words - b.used;
+  const uint32_t free16 = used >= words ? 0 : words - used;
   const uint32_t rx_word = q.sr << 1 | uint32_t(bit_in);
   const uint32_t crc_tx_next = crc_bit(q.crc_tx, (q.sr >> 31 & 1) != 0);
   const bool in_cmd = q.hdr_left != 0 || q.chunks_left != 0;
@@ -90,7 +102,7 @@ void CpSpi::tick() {
   if (cs_fall) {
     // A frame begins: the reply's word 0 goes out at once.
     d.sr = kMagic << 24 | q.seq << 16 | q.result << 8 | uint32_t(q.fresh) << 3 | uint32_t(in.enable) << 2 |
-           uint32_t(in.estop) << 1 | uint32_t(b.used != 0);
+           uint32_t(in.estop) << 1 | uint32_t(used != 0);
     d.ph = kPhHdr;
     d.bit = 0;
     d.txn = 1;

@@ -54,8 +54,8 @@ class CpSpi {
 
   // Registered outputs (no input reaches them), for the card's settle order.
   bool miso() const { return (r_.sr >> 31 & 1) != 0; }
-  bool cmd_valid() const { return cbuf_.outputs().out_valid; }
-  uint32_t cmd_data() const { return uint32_t(cbuf_.outputs().out_data[0]); }
+  bool cmd_valid() const { return cbuf_.out_valid(); }
+  uint32_t cmd_data() const { return uint32_t(cbuf_.out_word0()); }
   uint32_t rd_addr() const;
   // Every synchronizer stage holds what the current inputs load into it: another
   // cycle with the same pins changes no synchronizer (with rst: the reset values).
@@ -66,11 +66,19 @@ class CpSpi {
   // with the pins settled, no READ reply and no word taken, a clock changes
   // nothing here (the event-skipping card's test, CpCard::quiet_for).
   bool buffer_settled() const { return cbuf_.still(CpFifoIn{}); }
+  // The fast engine's frames (CpCard::clock_front_end: no READ reply, no word
+  // taken, the buffer settled). tick_synchronizers_only(): when this clock, with
+  // the pins in `in`, reaches the frame logic with no CS edge and no SCK rise, it
+  // only moves the synchronizers: done so, cheaply, and true; false (nothing
+  // done) when it needs tick(). loads_rd_data(): a tick() now ends a word and
+  // loads rd_data as the next reply word.
+  bool tick_synchronizers_only();
+  bool loads_rd_data() const { return (r_.sck & 6) == 2 && (r_.cs & 6) == 0 && r_.bit == 31; }
   // CS has been low through every synchronizer stage: no CS edge is on its way
   // (with the pin held low, no frame can end, so nothing commits).
   bool cs_low_settled() const { return r_.cs == 0; }
   // Words in the command buffer, committed or not (cp_fifo's used_o).
-  uint32_t cbuf_used() const { return cbuf_.outputs().used; }
+  uint32_t cbuf_used() const { return cbuf_.used(); }
 
  private:
   // The registers of rtl/cp_spi.v (the command buffer is cbuf_).

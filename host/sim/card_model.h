@@ -43,9 +43,9 @@ class CardModel {
   model::CpCard& card() { return card_; }
   const model::CpCard& card() const { return card_; }
 
- private:
   static model::CpCardIn pins(const CardIn& i) { return {i.rst, i.sck, i.cs_n, i.mosi, i.estop}; }
 
+ private:
   // outputs() is const like every model's; the card's `in` is the copy of ours.
   mutable model::CpCard card_;
 };

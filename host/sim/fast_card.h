@@ -12,9 +12,11 @@
 #include <algorithm>
 #include <cstdint>
 #include <string_view>
+#include <vector>
 
 #include "sim/card_configs.h"
 #include "sim/card_model.h"
+#include "sim/spi_master.h"
 
 namespace cpstep::sim {
 
@@ -66,6 +68,47 @@ class FastCardDut {
       on_span(cycle_, n, out);
       cycle_ += n;
       cycles -= n;
+    }
+  }
+
+  // A whole SPI transfer's pins (SpiMaster::transfer_bits): sampled[p] gets the
+  // MISO of phase p's first cycle (1 when undriven); on_span(first cycle,
+  // count, pins, outputs) as for advance(). Phases inside the frame with the
+  // core quiet throughout run in the front end alone, one span for a run of them.
+  template <class OnSpan>
+  void run_phases(const std::vector<SpiPhase>& phases, std::vector<bool>& sampled, OnSpan&& on_span) {
+    size_t p = 0;
+    while (p < phases.size()) {
+      const uint64_t first = cycle_;
+      CardOut out{};
+      uint64_t run = 0;
+      for (; p < phases.size(); ++p) {
+        const SpiPhase& ph = phases[p];
+        if (ph.cycles == 0) continue;
+        if (ph.in.cs_n) break;
+        model_.in = ph.in;
+        if (run == 0) out = model_.outputs();  // the others' are the same but for MISO
+        model_.card().in = CardModel::pins(ph.in);
+        bool miso = false;
+        if (!model_.card().clock_front_end(ph.cycles, &miso)) break;
+        sampled[p] = miso;  // CS low: MISO is driven
+        run += ph.cycles;
+      }
+      if (run > 0) {
+        cycle_ += run;
+        front_end_ += run;
+        on_span(first, run, phases[p - 1].in, out);
+        continue;
+      }
+      if (p == phases.size()) break;
+      const SpiPhase& ph = phases[p];
+      bool any = false;
+      advance(ph.in, ph.cycles, [&](uint64_t c, uint64_t n, const CardOut& o) {
+        if (!any) sampled[p] = !o.miso_oe || o.miso;
+        any = true;
+        on_span(c, n, ph.in, o);
+      });
+      ++p;
     }
   }
 

@@ -27,6 +27,13 @@
 
 namespace cpstep::sim {
 
+// `cycles` clocks with these pins; MISO is sampled in the first if `sample`.
+struct SpiPhase {
+  CardIn in;
+  uint64_t cycles = 0;
+  bool sample = false;
+};
+
 struct SpiTiming {
   unsigned sck_low = 4;   // clock cycles SCK is low per bit
   unsigned sck_high = 4;  // clock cycles SCK is high per bit
@@ -77,25 +84,50 @@ class SpiMaster {
   // Returns the MISO bits sampled, MSB first, the last byte padded with zeros.
   std::vector<uint8_t> transfer_bits(std::span<const uint8_t> mosi, size_t bits) {
     if (bits > 8 * mosi.size()) throw std::invalid_argument("SpiMaster: more bits than bytes given");
-    std::vector<uint8_t> miso((bits + 7) / 8, 0);
     auto bit = [&](size_t i) { return bool(mosi[i / 8] >> (7 - i % 8) & 1); };
+    // The pins, phase by phase: CS falls with the first MOSI bit; each bit is an
+    // SCK rise (MISO sampled in its first cycle) and, but for the last, a fall
+    // with the next MOSI bit; CS hold, then CS high for the idle time.
+    phases_.clear();
     CardIn in;
+    in.estop = estop_;
     in.cs_n = false;
     in.mosi = bits > 0 && bit(0);
-    hold(in, t_.cs_setup);
+    phases_.push_back({in, t_.cs_setup, false});
     for (size_t i = 0; i < bits; ++i) {
       in.sck = true;
-      const CardOut o = hold(in, t_.sck_high);  // the rising edge: MISO sampled in its first cycle
-      if (!o.miso_oe || o.miso) miso[i / 8] |= uint8_t(0x80 >> (i % 8));
+      phases_.push_back({in, t_.sck_high, true});
       in.sck = false;
       if (i + 1 < bits) {
-        in.mosi = bit(i + 1);  // the falling edge: next MOSI bit
-        hold(in, t_.sck_low);
+        in.mosi = bit(i + 1);
+        phases_.push_back({in, t_.sck_low, false});
       }
     }
-    hold(in, t_.cs_hold);
-    in = CardIn{};
-    hold(in, t_.cs_idle);
+    phases_.push_back({in, t_.cs_hold, false});
+    phases_.push_back({CardIn{.estop = estop_}, t_.cs_idle, false});
+    // A stepper that takes the whole schedule at once (the fast engine), else
+    // phase by phase.
+    sampled_.assign(phases_.size(), false);
+    if constexpr (requires { dut_.run_phases(phases_, sampled_, [](uint64_t, uint64_t, const CardIn&, const CardOut&) {}); }) {
+      dut_.run_phases(phases_, sampled_, [&](uint64_t c, uint64_t n, const CardIn& pins, const CardOut& out) {
+        last_ = out;
+        if (span_) span_(c, n, pins, out);
+        if (observe_)
+          for (uint64_t k = 0; k < n; ++k) observe_(c + k, pins, out);
+      });
+    } else {
+      for (size_t p = 0; p < phases_.size(); ++p) {
+        const CardOut o = hold(phases_[p].in, phases_[p].cycles);
+        sampled_[p] = !o.miso_oe || o.miso;
+      }
+    }
+    std::vector<uint8_t> miso((bits + 7) / 8, 0);
+    size_t i = 0;
+    for (size_t p = 0; p < phases_.size(); ++p)
+      if (phases_[p].sample) {
+        if (sampled_[p]) miso[i / 8] |= uint8_t(0x80 >> (i % 8));
+        ++i;
+      }
     return miso;
   }
 
@@ -137,6 +169,8 @@ class SpiMaster {
   Stepper& dut_;
   Observer observe_;
   SpanObserver span_;
+  std::vector<SpiPhase> phases_;
+  std::vector<bool> sampled_;  // per phase: MISO (1 when undriven) in its first cycle
   SpiTiming t_;
   CardOut last_{};
   bool estop_ = false;
