@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Every board of rtl/builds.json, end to end: its Verilated card is asked what it
-// is through its SPI pins (the capability registers must say what the table says),
+// is through its SPI pins (the capability registers must say what the table says;
+// the fast engine's too),
 // a G-code job is planned for what it said and run through its pins, checked
 // against the plan after every card segment; and a job planned for another card
 // is refused before anything moves.
@@ -36,7 +37,8 @@ std::vector<const builds::Build*> boards() {
 // UMAX, KMAX, queues, TW, PW, the command buffer, the protocol, the clock, the id.
 TEST_P(Boards, TheCardReportsItsBuild) {
   const builds::Build& b = *GetParam();
-  const card::CardCaps caps = run::connect_sim(b.name);
+  const card::CardCaps caps = run::connect_sim(b.name, run::Engine::rtl);
+  EXPECT_EQ(run::connect_sim(b.name, run::Engine::model), caps);
   EXPECT_EQ(caps.id, card::kCardId);
   EXPECT_EQ(caps.n, b.n);
   EXPECT_EQ(caps.w, b.w);
@@ -66,6 +68,7 @@ TEST_P(Boards, AGcodeJobRunsOnTheCard) {
   EXPECT_EQ(job.machine.card.pattern_capacity, b.w);
   run::SimRunOptions o;
   o.board = std::string(b.name);
+  o.engine = run::Engine::lockstep;  // the Verilated card, and the fast engine compared with it every cycle
   const run::CardRun r = run::run_on_sim(job, o);
   ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
   EXPECT_EQ(r.moves_done, job.moves());

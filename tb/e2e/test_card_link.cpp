@@ -142,6 +142,8 @@ struct Outcome {
 };
 
 Outcome run_job(const run::CardJob& job, run::SimRunOptions o) {
+  // Both engines, every output compared every cycle (docs/SIM.md "Engines").
+  o.engine = run::Engine::lockstep;
   struct Seen {
     uint64_t cycle;
     uint32_t step, dir;

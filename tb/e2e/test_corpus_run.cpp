@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // The G-code corpus (examples/gcode/, README there) run on the simulated card:
 // `cpstep run` as a user runs it, one program per ctest test (tb/e2e/CMakeLists.txt
-// names the program and its machine in CPSTEP_CORPUS_FILE / CPSTEP_CORPUS_MACHINE).
+// names the program and its machine in CPSTEP_CORPUS_FILE / CPSTEP_CORPUS_MACHINE,
+// and the engine, --engine, in CPSTEP_CORPUS_ENGINE).
 // The card must end every program where the G-code ends (the last block's end
 // rounded to whole steps, computed here from the parsed program, not from the
 // plan), with no fault, no stretched (late) move, every card segment's position
@@ -39,9 +40,14 @@ TEST(CorpusRun, LandsWhereTheProgramEndsNeverLateWithinLimits) {
   fs::create_directories(dir);
   const std::string stem = fs::path(file).stem().string();
   const fs::path report = dir / (stem + ".json");
-  fs::remove(report);
-  const cpstep::tb::Outcome run = cpstep::tb::run_program(
-      CPSTEP_BIN, {"run", file, "--machine", machine, "--report", report.string(), "--no-progress"}, dir, stem);
+  fs::remove(report.string() + ".model");
+  fs::remove(report.string() + ".lockstep");
+  const std::string engine = env("CPSTEP_CORPUS_ENGINE").empty() ? "model" : env("CPSTEP_CORPUS_ENGINE");
+  const cpstep::tb::Outcome run =
+      cpstep::tb::run_program(CPSTEP_BIN,
+                              {"run", file, "--machine", machine, "--engine", engine, "--report",
+                               report.string() + "." + engine, "--no-progress"},
+                              dir, stem + "." + engine);
   ASSERT_EQ(run.rc, 0) << file << "\n" << run.out << run.err;
 
   // Where the program ends, from the reader (the planner is not asked).
@@ -52,7 +58,8 @@ TEST(CorpusRun, LandsWhereTheProgramEndsNeverLateWithinLimits) {
   ASSERT_FALSE(job->blocks.empty());
   const auto& end_mm = job->blocks.back().end;
 
-  const json rep = json::parse(cpstep::tb::slurp(report));
+  const json rep = json::parse(cpstep::tb::slurp(report.string() + "." + engine));
+  EXPECT_EQ(rep.at("engine"), engine);
   EXPECT_EQ(rep.at("faults"), json::array()) << rep.at("faults").dump();
   EXPECT_EQ(rep.at("stretches").get<int>(), 0) << "a move fired late";
   EXPECT_EQ(rep.at("position_mismatches").get<int>(), 0);
