@@ -10,7 +10,15 @@ CpCard::CpCard(Params p) : p_(p), spi_({p.core.n, p.core.cbuf_aw}), core_(p.core
 }
 
 const CpCoreOut& CpCard::core_outputs() const {
-  if (core_valid_ && core_.in.rst == in.rst) return core_out_;
+  if (core_valid_ && core_.in.rst == in.rst) {
+    if (rd_stale_) {
+      // clock_front_end moved the read port's address; the rest holds.
+      core_.in.rd_addr = spi_.rd_addr();
+      core_out_.rd_data = core_.read_port(core_.in.rd_addr);
+      rd_stale_ = false;
+    }
+    return core_out_;
+  }
   CpCoreIn& c = core_.in;
   c.rst = in.rst;
   c.cmd_valid = spi_.cmd_valid();
@@ -20,6 +28,7 @@ const CpCoreOut& CpCard::core_outputs() const {
   c.rd_addr = spi_.rd_addr();
   core_out_ = core_.outputs();
   core_valid_ = true;
+  rd_stale_ = false;
   return core_out_;
 }
 
@@ -76,14 +85,10 @@ bool CpCard::clock_front_end(uint64_t cycles, bool* miso) {
     spi_.tick();
   }
   core_.skip(cycles);
-  if (core_.quiet_for(1) > 0) {
-    // Still quiet with the same inputs: the same outputs, but for the read port,
-    // whose address the front end has moved.
-    core_.in.rd_addr = spi_.rd_addr();
-    core_out_.rd_data = core_.read_port(core_.in.rd_addr);
-  } else {
-    core_valid_ = false;
-  }
+  // Still quiet with the same inputs: the same outputs, but for the read port,
+  // whose address the front end has moved (read when asked: core_outputs()).
+  if (core_.quiet_for(1) > 0) rd_stale_ = true;
+  else core_valid_ = false;
   return true;
 }
 

@@ -104,6 +104,7 @@ class CpCard {
   uint32_t estop_q_ = 0;  // [0] first flop, [1] the synchronized level
   mutable CpCoreOut core_out_{};
   mutable bool core_valid_ = false;
+  mutable bool rd_stale_ = false;  // core_out_ holds but for rd_data (clock_front_end)
 };
 
 }  // namespace cpstep::model
