@@ -92,6 +92,55 @@ bool CpCard::clock_front_end(uint64_t cycles, bool* miso) {
   return true;
 }
 
+size_t CpCard::clock_front_end(const CpPinPhase* phases, size_t n, uint8_t* miso) {
+  if (n == 0) return 0;
+  in = phases[0].pins;
+  if (in.rst || in.cs_n || !spi_.cs_low_settled() || estop_q_ != (in.estop ? 3u : 0u) || !spi_.buffer_settled())
+    return 0;
+  const CpCoreOut& c = core_outputs();
+  if (c.rsp_valid) return 0;
+  const uint64_t budget = core_.quiet_for(~uint64_t(0));
+  CpSpiIn& s = spi_.in;
+  s.rst = false;
+  s.cs_n = false;
+  s.cmd_ready = c.cmd_ready;
+  s.rsp_valid = false;
+  s.rsp_addr = c.rsp_addr;
+  s.estop = estop_synced();
+  s.enable = c.enable;
+  const bool estop = in.estop;
+  uint64_t total = 0;
+  size_t k = 0;
+  for (; k < n; ++k) {
+    const CpPinPhase& ph = phases[k];
+    if (ph.pins.rst || ph.pins.cs_n || ph.pins.estop != estop || ph.cycles > budget - total) break;
+    const bool settled = spi_.pins_settled(false, s.sck, false, s.mosi);
+    s.sck = ph.pins.sck;
+    s.mosi = ph.pins.mosi;
+    miso[k] = spi_.miso();
+    uint64_t i = 0;
+    if (settled && ph.cycles >= 3) {
+      // Pins that change after settling: two clocks that only move the
+      // synchronizers, then the one the change reaches the frame logic in.
+      spi_.shift_synchronizers(2);
+      i = 2;
+    }
+    for (; i < ph.cycles; ++i) {
+      if (spi_.pins_settled(false, s.sck, false, s.mosi)) break;
+      if (spi_.tick_synchronizers_only()) continue;
+      if (spi_.loads_rd_data()) s.rd_data = core_.read_port(spi_.rd_addr());
+      spi_.tick();
+    }
+    total += ph.cycles;
+  }
+  if (k == 0) return 0;
+  in = phases[k - 1].pins;
+  core_.skip(total);
+  if (core_.quiet_for(1) > 0) rd_stale_ = true;
+  else core_valid_ = false;
+  return k;
+}
+
 void CpCard::tick() {
   const CpCoreOut& c = core_outputs();
   CpSpiIn& s = spi_.in;

@@ -36,6 +36,14 @@ struct CpCardIn {
   bool estop = false;                           // raw E-stop input, active high
 };
 
+// `cycles` clocks with the pins `pins`; `sample`: the master samples MISO in the
+// first (the SPI master's schedule of a transfer, host/sim/spi_master.h).
+struct CpPinPhase {
+  CpCardIn pins;
+  uint64_t cycles = 0;
+  bool sample = false;
+};
+
 struct CpCardOut {
   bool miso = false, miso_oe = false;
   uint32_t step = 0, dir = 0;  // bit i: axis i's pin
@@ -74,6 +82,11 @@ class CpCard {
   // alone, skips the core, and returns true, with *miso the MISO of the first
   // clock; false, having done nothing, when that cannot be promised.
   bool clock_front_end(uint64_t cycles, bool* miso);
+  // The same over a transfer's phases from the first on, for as long as their CS
+  // stays low and the core's quiet lasts: returns how many phases it clocked (0:
+  // none), `in` left as the last one's pins, miso[k] the MISO of phase k's first
+  // clock.
+  size_t clock_front_end(const CpPinPhase* phases, size_t n, uint8_t* miso);
 
   const Params& params() const { return p_; }
   const CpCore& core() const { return core_; }

@@ -71,6 +71,14 @@ bool CpSpi::tick_synchronizers_only() {
   return true;
 }
 
+void CpSpi::shift_synchronizers(unsigned clocks) {
+  for (unsigned k = 0; k < clocks; ++k) {
+    r_.mosi = (r_.mosi << 1 | uint32_t(in.mosi)) & 3;
+    r_.sck = (r_.sck << 1 | uint32_t(in.sck)) & 7;
+    r_.cs = (r_.cs << 1 | uint32_t(in.cs_n)) & 7;
+  }
+}
+
 void CpSpi::tick() {
   const Regs& q = r_;
   const uint32_t used = cbuf_.used();

@@ -73,6 +73,9 @@ class CpSpi {
   // done) when it needs tick(). loads_rd_data(): a tick() now ends a word and
   // loads rd_data as the next reply word.
   bool tick_synchronizers_only();
+  // `clocks` such clocks at once, for a caller that knows none of them brings a
+  // CS edge or an SCK rise to the frame logic (pins settled before they changed).
+  void shift_synchronizers(unsigned clocks);
   bool loads_rd_data() const { return (r_.sck & 6) == 2 && (r_.cs & 6) == 0 && r_.bit == 31; }
   // CS has been low through every synchronizer stage: no CS edge is on its way
   // (with the pin held low, no frame can end, so nothing commits).

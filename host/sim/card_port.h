@@ -12,19 +12,16 @@
 #include <utility>
 #include <vector>
 
+#include "model/cp_card.h"
 #include "sim/dut.h"
 
 namespace cpstep::sim {
 
 constexpr unsigned kCardMaxAxes = 8;
 
-struct CardIn {
-  bool rst = false;
-  bool sck = false;    // SPI clock (mode 0: idles low)
-  bool cs_n = true;    // chip select, active low
-  bool mosi = false;
-  bool estop = false;  // raw E-stop input, active high
-};
+// The card's inputs: rst, SCK (mode 0: idles low), CS (active low), MOSI, and
+// the raw E-stop input (active high) — the golden model's own type.
+using CardIn = model::CpCardIn;
 
 struct CardOut {
   bool miso = false;

@@ -76,37 +76,35 @@ class FastCardDut {
   // count, pins, outputs) as for advance(). Phases inside the frame with the
   // core quiet throughout run in the front end alone, one span for a run of them.
   template <class OnSpan>
-  void run_phases(const std::vector<SpiPhase>& phases, std::vector<bool>& sampled, OnSpan&& on_span) {
+  void run_phases(const std::vector<SpiPhase>& phases, std::vector<uint8_t>& sampled, OnSpan&& on_span) {
     size_t p = 0;
     while (p < phases.size()) {
-      const uint64_t first = cycle_;
-      CardOut out{};
-      uint64_t run = 0;
-      for (; p < phases.size(); ++p) {
-        const SpiPhase& ph = phases[p];
-        if (ph.cycles == 0) continue;
-        if (ph.in.cs_n) break;
-        model_.in = ph.in;
-        if (run == 0) out = model_.outputs();  // the others' are the same but for MISO
-        model_.card().in = CardModel::pins(ph.in);
-        bool miso = false;
-        if (!model_.card().clock_front_end(ph.cycles, &miso)) break;
-        sampled[p] = miso;  // CS low: MISO is driven
-        run += ph.cycles;
-      }
-      if (run > 0) {
-        cycle_ += run;
-        front_end_ += run;
-        on_span(first, run, phases[p - 1].in, out);
+      if (phases[p].cycles == 0) {
+        ++p;
         continue;
       }
-      if (p == phases.size()) break;
+      // Inside the frame with the core quiet: as many phases as can, in the front
+      // end alone (model::CpCard::clock_front_end), one span for them all.
+      if (!phases[p].pins.cs_n) {
+        model_.in = phases[p].pins;
+        const CardOut out = model_.outputs();  // the others' are the same but for MISO
+        const size_t k = model_.card().clock_front_end(phases.data() + p, phases.size() - p, sampled.data() + p);
+        if (k > 0) {
+          uint64_t run = 0;
+          for (size_t q = p; q < p + k; ++q) run += phases[q].cycles;
+          on_span(cycle_, run, phases[p + k - 1].pins, out);
+          cycle_ += run;
+          front_end_ += run;
+          p += k;
+          continue;
+        }
+      }
       const SpiPhase& ph = phases[p];
       bool any = false;
-      advance(ph.in, ph.cycles, [&](uint64_t c, uint64_t n, const CardOut& o) {
+      advance(ph.pins, ph.cycles, [&](uint64_t c, uint64_t n, const CardOut& o) {
         if (!any) sampled[p] = !o.miso_oe || o.miso;
         any = true;
-        on_span(c, n, ph.in, o);
+        on_span(c, n, ph.pins, o);
       });
       ++p;
     }

@@ -27,12 +27,8 @@
 
 namespace cpstep::sim {
 
-// `cycles` clocks with these pins; MISO is sampled in the first if `sample`.
-struct SpiPhase {
-  CardIn in;
-  uint64_t cycles = 0;
-  bool sample = false;
-};
+// `cycles` clocks with these pins (`pins`); MISO is sampled in the first if `sample`.
+using SpiPhase = model::CpPinPhase;
 
 struct SpiTiming {
   unsigned sck_low = 4;   // clock cycles SCK is low per bit
@@ -88,23 +84,24 @@ class SpiMaster {
     // The pins, phase by phase: CS falls with the first MOSI bit; each bit is an
     // SCK rise (MISO sampled in its first cycle) and, but for the last, a fall
     // with the next MOSI bit; CS hold, then CS high for the idle time.
-    phases_.clear();
+    phases_.resize(bits > 0 ? 2 * bits + 2 : 3);
+    SpiPhase* ph = phases_.data();
     CardIn in;
     in.estop = estop_;
     in.cs_n = false;
     in.mosi = bits > 0 && bit(0);
-    phases_.push_back({in, t_.cs_setup, false});
+    *ph++ = {in, t_.cs_setup, false};
     for (size_t i = 0; i < bits; ++i) {
       in.sck = true;
-      phases_.push_back({in, t_.sck_high, true});
+      *ph++ = {in, t_.sck_high, true};
       in.sck = false;
       if (i + 1 < bits) {
         in.mosi = bit(i + 1);
-        phases_.push_back({in, t_.sck_low, false});
+        *ph++ = {in, t_.sck_low, false};
       }
     }
-    phases_.push_back({in, t_.cs_hold, false});
-    phases_.push_back({CardIn{.estop = estop_}, t_.cs_idle, false});
+    *ph++ = {in, t_.cs_hold, false};
+    *ph++ = {CardIn{.estop = estop_}, t_.cs_idle, false};
     // A stepper that takes the whole schedule at once (the fast engine), else
     // phase by phase.
     sampled_.assign(phases_.size(), false);
@@ -117,7 +114,7 @@ class SpiMaster {
       });
     } else {
       for (size_t p = 0; p < phases_.size(); ++p) {
-        const CardOut o = hold(phases_[p].in, phases_[p].cycles);
+        const CardOut o = hold(phases_[p].pins, phases_[p].cycles);
         sampled_[p] = !o.miso_oe || o.miso;
       }
     }
@@ -170,7 +167,7 @@ class SpiMaster {
   Observer observe_;
   SpanObserver span_;
   std::vector<SpiPhase> phases_;
-  std::vector<bool> sampled_;  // per phase: MISO (1 when undriven) in its first cycle
+  std::vector<uint8_t> sampled_;  // per phase: MISO (1 when undriven) in its first cycle
   SpiTiming t_;
   CardOut last_{};
   bool estop_ = false;
