@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
   moves->add_flag("--table", mo.table, "print the register table (x, y, M1, M2) first");
 
   cli::SimOptions so;
-  auto* simc = app.add_subcommand("sim", "Run a script of raw segments and commands on the Verilated card "
+  auto* simc = app.add_subcommand("sim", "Run a script of raw segments and commands on the simulated card "
                                          "(docs/SIM.md)");
   simc->add_option("FILE", so.file, "the script")->required();
   simc->add_option("--vcd", so.vcd, "write the STEP/DIR pins (and estop) to this VCD file");
@@ -142,6 +142,11 @@ int main(int argc, char** argv) {
   simc->add_option("--sck-div", so.sck_div, "clock cycles per SCK period of the SPI link (8 or more)")
       ->capture_default_str()
       ->check(CLI::Range(8u, 1'000'000u));
+  simc->add_option("--engine", so.engine,
+                   "rtl (the Verilated card, every cycle) or model (the fast engine: the golden model, event "
+                   "to event; docs/SIM.md)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"rtl", "model"}));
 
   cli::RunOptions ro;
   auto* runc = cli::add_run_command(app, ro);

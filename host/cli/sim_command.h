@@ -15,6 +15,7 @@ struct SimOptions {
   std::string board;                    // rtl/builds.json's board; "": the default board
   uint64_t clock_hz = 0;                // 0: the board's; otherwise it must be the board's
   unsigned sck_div = 8;                 // clock cycles per SCK period (8 or more)
+  std::string engine = "rtl";           // rtl (the Verilated card) or model (the fast engine)
 };
 
 // Exit codes: 0 the run ended without a fault; 1 it ended with a fault, or did
