@@ -118,14 +118,19 @@ size_t CpCard::clock_front_end(const CpPinPhase* phases, size_t n, uint8_t* miso
     s.sck = ph.pins.sck;
     s.mosi = ph.pins.mosi;
     miso[k] = spi_.miso();
-    uint64_t i = 0;
     if (settled && ph.cycles >= 3) {
       // Pins that change after settling: two clocks that only move the
-      // synchronizers, then the one the change reaches the frame logic in.
+      // synchronizers, then the one the change reaches the frame logic in; then
+      // every stage holds the pins, and the rest of the phase changes nothing.
       spi_.shift_synchronizers(2);
-      i = 2;
+      if (!spi_.tick_synchronizers_only() && !spi_.tick_shift_only()) {
+        if (spi_.loads_rd_data()) s.rd_data = core_.read_port(spi_.rd_addr());
+        spi_.tick();
+      }
+      total += ph.cycles;
+      continue;
     }
-    for (; i < ph.cycles; ++i) {
+    for (uint64_t i = 0; i < ph.cycles; ++i) {
       if (spi_.pins_settled(false, s.sck, false, s.mosi)) break;
       if (spi_.tick_synchronizers_only()) continue;
       if (spi_.loads_rd_data()) s.rd_data = core_.read_port(spi_.rd_addr());

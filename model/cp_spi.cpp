@@ -71,6 +71,26 @@ bool CpSpi::tick_synchronizers_only() {
   return true;
 }
 
+bool CpSpi::tick_shift_only() {
+  Regs& q = r_;
+  if (in.rst || in.rsp_valid || (q.cs & 6) != 0 || (q.sck & 6) != 2 || q.bit == 31) return false;
+  // The shift branch of tick() for a bit that does not end its word.
+  const bool bit_in = (q.mosi >> 1 & 1) != 0;
+  const uint32_t rx_word = q.sr << 1 | uint32_t(bit_in);
+  if (q.ph != kPhDone) q.crc_rx = crc_bit(q.crc_rx, bit_in);
+  if (q.txn <= tx_crc_) q.crc_tx = crc_bit(q.crc_tx, (q.sr >> 31 & 1) != 0);
+  if (q.bit == 15) {
+    if (q.ph == kPhHdr) q.seq = rx_word & 0xFF;
+    else if (q.ph == kPhCrc) q.ph = kPhDone;
+  }
+  q.sr = rx_word;
+  q.bit = q.bit + 1;
+  q.mosi = (q.mosi << 1 | uint32_t(in.mosi)) & 3;
+  q.sck = (q.sck << 1 | uint32_t(in.sck)) & 7;
+  q.cs = (q.cs << 1 | uint32_t(in.cs_n)) & 7;
+  return true;
+}
+
 void CpSpi::shift_synchronizers(unsigned clocks) {
   for (unsigned k = 0; k < clocks; ++k) {
     r_.mosi = (r_.mosi << 1 | uint32_t(in.mosi)) & 3;

@@ -73,6 +73,10 @@ class CpSpi {
   // done) when it needs tick(). loads_rd_data(): a tick() now ends a word and
   // loads rd_data as the next reply word.
   bool tick_synchronizers_only();
+  // A clock that shifts a bit in and out without ending a word (31 of 32), done
+  // cheaply: true; false (nothing done) for any other clock. For the same callers
+  // (no reply, no word taken, the buffer settled): nothing else happens in it.
+  bool tick_shift_only();
   // `clocks` such clocks at once, for a caller that knows none of them brings a
   // CS edge or an SCK rise to the frame logic (pins settled before they changed).
   void shift_synchronizers(unsigned clocks);
