@@ -131,7 +131,7 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
       }
       // Whole periods: axis a makes v_a steps every u_a moves.
       std::array<uint64_t, plan::kAxes> d{};
-      uint64_t g = 0;
+      uint64_t g = n;  // (a pause steps no axis: k from its moves alone)
       for (int a = 0; a < plan::kAxes; ++a) {
         d[a] = uint64_t(seg.v[a]) * (n / seg.u[a]);
         g = std::gcd(g, d[a]);

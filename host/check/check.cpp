@@ -155,7 +155,9 @@ class Checker {
     const plan::PlannedJob& pj = job_.planned;
     uint64_t first = 0;
     std::map<size_t, std::vector<plan::CardSegment>> parts;
-    for (const plan::PlannedCardSegment& c : pj.card) parts[c.segment.step_segment].push_back(c.segment);
+    // Pause segments (a long dwell's moves that step no axis) never show at the pins.
+    for (const plan::PlannedCardSegment& c : pj.card)
+      if (!c.segment.pause) parts[c.segment.step_segment].push_back(c.segment);
     for (const auto& [p, list] : parts) {
       LinePlan& l = lines_[p];
       l.start = pj.step_segments[p].start;
@@ -164,6 +166,7 @@ class Checker {
       l.limit = std::max(0.5, plan::max_deviation(l.delta, list));
     }
     for (const plan::PlannedCardSegment& c : pj.card) {
+      if (c.segment.pause) continue;
       SegmentPlan s;
       s.first = first;
       s.moves = c.segment.moves;

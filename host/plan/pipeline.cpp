@@ -37,10 +37,39 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
     const double tol = m.chunk_tolerance_cycles();
     std::int64_t prev = 0;  // the job starts at cycle 0
     // Dwells since the last move: the card times a pause as the next move's first
-    // interval, so it needs a next move, and at most 2^32 - 1 cycles of it.
+    // interval, at most 2^32 - 1 cycles; a longer one, and one after the last
+    // move, as pause moves (moves that step no axis) in between.
     constexpr std::size_t kNone = static_cast<std::size_t>(-1);
     std::size_t dwell_first = kNone;
     double dwell_s = 0;
+    // Pause moves from `prev` to cycle `until`, in `n` equal steps of at most
+    // 2^32 - 1 cycles (the last at `until`), as one card segment of their own.
+    const auto add_pause = [&](double until, std::uint64_t n, std::size_t dwell) -> bool {
+        std::vector<double> times(n);
+        for (std::uint64_t j = 0; j < n; ++j)
+            times[j] = double(prev) + (until - double(prev)) * double(j + 1) / double(n);
+        auto chunks = compress(times, prev, tol, lim);
+        if (!chunks.ok()) {
+            result.errors.push_back({job.file, pj.step_segments[dwell].loc, fmt::format("pause timing: {}", chunks.error)});
+            return false;
+        }
+        CardSegment pause;
+        pause.moves = static_cast<std::uint32_t>(n);
+        pause.u.fill(1);
+        pause.dir_positive.fill(true);
+        pause.loc = pj.step_segments[dwell].loc;
+        pause.step_segment = dwell;
+        pause.pause = true;
+        prev = chunks.last_event;
+        pj.stats.pause_moves += n;
+        pj.stats.chunks += chunks.chunks.size();
+        pj.card.push_back({pause, std::move(chunks.chunks)});
+        return true;
+    };
+    // Equal intervals, each under 2^32 - 1 cycles, that make up `cycles`.
+    const auto intervals = [](double cycles) {
+        return static_cast<std::uint64_t>(std::floor(cycles / double(kMaxMoveDelayCycles))) + 1;
+    };
     for (std::size_t i = 0; i < pj.step_segments.size(); ++i) {
         const StepSegment& s = pj.step_segments[i];
         if (s.kind == MotionKind::dwell) {  // a pause shows as a longer first interval
@@ -59,15 +88,12 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
                                                 m.card.clock_hz);
             if (dwell_first != kNone && !ideal.empty() &&
                 ideal.front() - double(prev) > double(kMaxMoveDelayCycles)) {
-                const double longest = double(kMaxMoveDelayCycles) / m.card.clock_hz;
-                result.errors.push_back(
-                    {job.file, pj.step_segments[dwell_first].loc,
-                     fmt::format("a pause of {:g} s (this dwell and any right after it; with the moves' ramps to and from "
-                                 "rest around it) is longer than the card "
-                                 "can time between two moves: {:.1f} s (2^32 - 1 cycles at {:g} MHz); G4 blocks in "
-                                 "a row are one pause, a move between them splits it",
-                                 dwell_s, longest, m.card.clock_hz / 1e6)});
-                return result;
+                // Longer than one interval: pause moves split the gap, the move
+                // after them times the last part (each at most 2^32 - 1 cycles).
+                const double gap = ideal.front() - double(prev);
+                const std::uint64_t parts = intervals(gap);
+                if (!add_pause(double(prev) + gap * double(parts - 1) / double(parts), parts - 1, dwell_first))
+                    return result;
             }
             auto chunks = compress(ideal, prev, tol, lim);
             if (!chunks.ok()) {
@@ -82,20 +108,22 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
         dwell_first = kNone;
         dwell_s = 0;
     }
-    if (dwell_first != kNone && dwell_s > 0)
-        result.warnings.push_back(
-            {job.file, pj.step_segments[dwell_first].loc,
-             fmt::format("a dwell of {:g} s after the last move is not run: the card times a pause by the move "
-                         "after it, and the job ends with its last move",
-                         dwell_s)});
-    pj.stats.step_segments = pj.step_segments.size();
-    pj.stats.card_segments = pj.card.size();
-    // The job ends with its last move (a dwell after it is not run, warned above).
+    // The job ends with its last move, or with the dwells after it: pause moves
+    // up to their end (the card runs until the last one).
+    double end_s = 0;
     for (std::size_t i = pj.feeds.size(); i-- > 0;) {
         if (pj.step_segments[i].kind == MotionKind::dwell) continue;
-        pj.stats.duration_s = pj.feeds[i].t_start + pj.feeds[i].duration;
+        end_s = pj.feeds[i].t_start + pj.feeds[i].duration;
         break;
     }
+    if (dwell_first != kNone && dwell_s > 0) {
+        const double until = double(prev) + dwell_s * m.card.clock_hz;
+        if (!add_pause(until, intervals(until - double(prev)), dwell_first)) return result;
+        end_s = double(prev) / m.card.clock_hz;
+    }
+    pj.stats.step_segments = pj.step_segments.size();
+    pj.stats.card_segments = pj.card.size();
+    pj.stats.duration_s = end_s;
     result.value = std::move(pj);
     return result;
 }
@@ -113,6 +141,7 @@ std::vector<double> ideal_times(const PlannedJob& job, double clock_hz) {
             total += job.card[end++].segment.moves;
         for (; c < end; ++c) {
             const CardSegment& part = job.card[c].segment;
+            if (part.pause) continue;  // the pins show no pause move
             const auto t = ideal_move_times(job.feeds[step_segment], total, part.first_move,
                                             part.moves, clock_hz);
             out.insert(out.end(), t.begin(), t.end());

@@ -20,7 +20,8 @@ struct PlannedCardSegment {
 };
 
 struct PlanStats {
-    std::uint64_t moves = 0;
+    std::uint64_t moves = 0;         // moves that step (what the pins show)
+    std::uint64_t pause_moves = 0;   // moves of pause segments (CardSegment::pause): the card counts them too
     std::uint64_t chunks = 0;
     std::uint64_t step_segments = 0;
     std::uint64_t card_segments = 0;

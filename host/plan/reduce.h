@@ -22,6 +22,11 @@ struct CardSegment {
     std::uint32_t first_move = 0;        // offset of its first move in the parent segment
     SourceLoc loc;
     std::size_t step_segment = 0;        // index of the parent step segment
+    // Moves that step no axis (every v = 0): a pause the card times, for a dwell
+    // longer than one move interval can be (2^32 - 1 cycles) or after the last
+    // move (docs/PLANNING.md "Dwells"). Not counted in the job's moves: the pins
+    // never show them.
+    bool pause = false;
 };
 
 struct SplitResult {

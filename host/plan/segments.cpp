@@ -364,7 +364,13 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
             double rad = inf;
             for (std::size_t v = seg_first[k] + 1; v < last && v < r.size(); ++v) rad = std::min(rad, r[v]);
             const std::size_t v0 = seg_first[k], v1 = std::min(last, r.size() - 1);
-            const double r0 = r[v0], r1 = r[v1];
+            // A dwell is a stop: the path's bend across it (through its repeated
+            // vertex) caps nothing. (A trailing dwell's repeated vertex, the
+            // polyline's last, used to give the move before it a radius of 0: a
+            // cruise of 0 and "internal: no feasible profile".)
+            const bool dwell_before = k > 0 && out[k - 1].kind == MotionKind::dwell;
+            const bool dwell_after = k + 1 < out.size() && out[k + 1].kind == MotionKind::dwell;
+            const double r0 = dwell_before ? inf : r[v0], r1 = dwell_after ? inf : r[v1];
             // A chord whose both ends are on a curve is part of it. A straight
             // block (G0/G1) between two arcs is not: the arcs' radii at its ends
             // are theirs (the junction caps take them), the line is straight.

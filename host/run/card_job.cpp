@@ -70,18 +70,22 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
   cj.words = card::encode_job(cj.machine, cj.wire);
   cj.ideal_cycles = plan::ideal_times(cj.planned, cj.clock_hz());
 
-  std::vector<plan::Chunk> chunks;
   plan::PerAxis<int64_t> pos = start;
   if (!cj.planned.step_segments.empty()) pos = cj.planned.step_segments.front().start;
   cj.start = pos;
   uint64_t moves = 0;
+  int64_t last_event = 0;
   for (const plan::PlannedCardSegment& c : cj.planned.card) {
-    chunks.insert(chunks.end(), c.chunks.begin(), c.chunks.end());
+    // Every move's time from its chunks; a pause's moves time the next move's
+    // first interval, but the pins show neither them nor a checkpoint.
+    const std::vector<int64_t> t = plan::expand(c.chunks, last_event);
+    if (!t.empty()) last_event = t.back();
+    if (c.segment.pause) continue;
+    cj.chunk_cycles.insert(cj.chunk_cycles.end(), t.begin(), t.end());
     moves += c.segment.moves;
     for (int a = 0; a < plan::kAxes; ++a) pos[a] += c.segment.delta[a];
     cj.checkpoints.push_back({moves, pos, c.segment.loc});
   }
-  cj.chunk_cycles = plan::expand(chunks, 0);
   cj.warnings = r.warnings;
   return r;
 }

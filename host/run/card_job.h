@@ -37,6 +37,8 @@ struct CardJob {
   std::vector<plan::Diagnostic> warnings;  // the planner's (also in the Result)
 
   [[nodiscard]] uint64_t moves() const { return planned.stats.moves; }
+  // Every move the card makes and counts: those that step and the pause moves.
+  [[nodiscard]] uint64_t card_moves() const { return planned.stats.moves + planned.stats.pause_moves; }
   [[nodiscard]] uint64_t wire_chunks() const;
   card::CardCaps caps;                   // the card it is planned for
   [[nodiscard]] double clock_hz() const { return machine.card.clock_hz; }

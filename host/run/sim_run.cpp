@@ -88,14 +88,17 @@ void add_card_faults(const CardJob& job, CardRun& run) {
         HostFault::late, fmt::format("{} move(s) fired late: the card stretched them (a STEP pulse or DIR "
                                      "change was not ready at the planned cycle; docs/PULSE.md)",
                                      run.stretch_count)));
-  if (run.pins_observed ? run.move_cycles.size() != job.moves() || run.moves_done != job.moves()
-                        : run.moves_done != job.moves())
+  // The pins show the moves that step; the card also counts the pause moves.
+  const uint64_t pauses = job.card_moves() - job.moves();
+  const std::string paused = pauses ? fmt::format(" (and {} pause moves)", pauses) : std::string();
+  if (run.pins_observed ? run.move_cycles.size() != job.moves() || run.moves_done != job.card_moves()
+                        : run.moves_done != job.card_moves())
     run.faults.push_back(host_fault(
         HostFault::move_count,
-        run.pins_observed ? fmt::format("{} move events on the pins, {} counted by the card, {} planned",
-                                        run.move_cycles.size(), run.moves_done, job.moves())
-                          : fmt::format("{} move events counted by the card, {} planned", run.moves_done,
-                                        job.moves())));
+        run.pins_observed ? fmt::format("{} move events on the pins, {} counted by the card, {} planned{}",
+                                        run.move_cycles.size(), run.moves_done, job.moves(), paused)
+                          : fmt::format("{} move events counted by the card, {} planned{}", run.moves_done,
+                                        job.moves(), paused)));
 }
 
 namespace {

@@ -147,6 +147,63 @@ INSTANTIATE_TEST_SUITE_P(ExampleJobs, Engines,
                                               info.param.damage ? "_damaged" : "");
                          });
 
+// A dwell longer than the card can time between two moves (2^32 - 1 cycles: 260
+// s at the iCEBreaker's 16.5 MHz) and one after the last move run as pause
+// moves (docs/PLANNING.md "Dwells"): on the card they step no axis, the pins show
+// the gap, the card counts them, and it runs on to the trailing dwell's end.
+// 4.6 * 10^9 cycles: about 20 minutes on the Verilated card, seconds here.
+TEST(EngineLongJobs, ADwellLongerThanAMoveIntervalAndATrailingOneRunAsPauseMoves) {
+  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "engines";
+  fs::create_directories(dir);
+  const fs::path gcode = dir / "long_dwell.ngc";
+  std::ofstream(gcode) << "G21 G90\nG1 X1 F600\nG4 P270\nG1 X2\nG4 P3\nM2\n";
+  const card::CardCaps caps = run::connect_sim("icebreaker", run::Engine::model);
+  auto prepared = run::prepare_job(gcode.string(), kSource + "/examples/machines/seed002.toml", caps);
+  ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
+  const run::CardJob& job = *prepared.value;
+  EXPECT_TRUE(job.warnings.empty()) << plan::join(job.warnings);
+  ASSERT_GT(job.card_moves(), job.moves());
+  const run::CardRun r = run::run_on_sim(job, {});
+  ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
+  const double hz = double(caps.clock_hz);
+  EXPECT_EQ(r.move_cycles.size(), job.moves());
+  EXPECT_EQ(r.moves_done, job.card_moves());
+  EXPECT_EQ(r.position[0], 2 * 80);
+  // The gap at the pins between the last step of X1 and the first of X2: the
+  // dwell and the ramps around it, each move on its planned time.
+  const size_t half = job.moves() / 2;
+  const double gap_s = double(r.move_cycles[half] - r.move_cycles[half - 1]) / hz;
+  EXPECT_GT(gap_s, 270.0);
+  EXPECT_LT(gap_s, 270.5);
+  for (size_t i = 0; i < r.move_cycles.size(); ++i)
+    ASSERT_NEAR(double(r.move_cycles[i] - r.start_cycle), double(job.chunk_cycles[i]), 1.0) << "move " << i;
+  // The card ran on for the trailing dwell: running_o fell 3 s after the last step.
+  const double tail_s = double(r.cycles - r.move_cycles.back()) / hz;
+  EXPECT_GT(tail_s, 3.0 - 1e-3);
+  EXPECT_LT(tail_s, 3.0 + 1e-3);
+  EXPECT_NEAR(double(r.cycles - r.start_cycle) / hz, job.planned.stats.duration_s, 1e-3);
+  EXPECT_GT(r.skipped_cycles, r.sim_cycles / 2);
+}
+
+// A pause segment (every v = 0) on the Verilated card, in lockstep with the fast
+// engine: a trailing dwell of 0.2 s.
+TEST(EngineLongJobs, ATrailingDwellRunsInLockstep) {
+  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "engines";
+  fs::create_directories(dir);
+  const fs::path gcode = dir / "trailing_dwell.ngc";
+  std::ofstream(gcode) << "G21 G90\nG1 X1 F600\nG4 P0.2\nM2\n";
+  const card::CardCaps caps = run::connect_sim("icebreaker", run::Engine::rtl);
+  auto prepared = run::prepare_job(gcode.string(), kSource + "/examples/machines/seed002.toml", caps);
+  ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
+  run::SimRunOptions o;
+  o.engine = run::Engine::lockstep;
+  const run::CardRun r = run::run_on_sim(*prepared.value, o);
+  ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
+  EXPECT_EQ(r.moves_done, prepared.value->card_moves());
+  EXPECT_EQ(r.moves_done, r.move_cycles.size() + 1);
+  EXPECT_NEAR(double(r.cycles - r.move_cycles.back()) / double(caps.clock_hz), 0.2, 1e-3);
+}
+
 // The lockstep engine's check: a fast engine built for another card (STEP
 // active low after reset instead of high) differs from the Verilated card in the
 // very first cycle, and the mismatch names the cycle, the signal and both values.

@@ -274,41 +274,102 @@ TEST(Planner, CollinearRapidIntoFeedFromRestToRestTakesTime) {
 }
 
 // A pause is the next move's first interval on the card (32 bits of cycles): at
-// 48 MHz, 89.478 s at most. Longer is refused at the dwell's line, not as a
-// timing error at the move after it; a dwell with no move after it is not run,
-// said so, and not counted in the job's time.
-TEST(Pipeline, PausesLongerThanTheCardCanTimeAreRefusedAtTheDwell) {
+// 48 MHz, 89.478 s at most. A longer one, and one after the last move, is run as
+// pause moves — moves that step no axis, a card segment of their own — each
+// interval under 2^32 - 1 cycles, the move after them on its planned time; the
+// pins never show them, so the job's moves and ideal times leave them out.
+TEST(Pipeline, PausesLongerThanOneMoveIntervalAndTrailingDwellsArePauseMoves) {
     const Machine m = machine();
-    const double longest = double((std::int64_t{1} << 32) - 1) / 48e6;
+    const double longest = double(kMaxMoveDelayCycles) / 48e6;
     const std::string head = "G21 G90\nG1 X1 F600\n";
+    // Every interval of the card's timer, pause moves included, fits 32 bits.
+    const auto intervals_fit = [](const PlannedJob& pj) {
+        std::int64_t prev = 0;
+        for (const auto& c : pj.card)
+            for (std::int64_t t : expand(c.chunks, prev)) {
+                if (t - prev > kMaxMoveDelayCycles || t <= prev) return false;
+                prev = t;
+            }
+        return true;
+    };
+    const auto pauses = [](const PlannedJob& pj) {
+        std::uint64_t n = 0;
+        for (const auto& c : pj.card) n += c.segment.pause ? 1 : 0;
+        return n;
+    };
     // The gap between the two moves' steps is the dwell plus their ramps to and
-    // from rest (a few tens of ms here).
+    // from rest (a few tens of ms here): under one interval, no pause moves.
     auto fits = parse_gcode(head + fmt::format("G4 P{:.3f}\nG1 X2\nM2\n", longest - 0.5), "job.ngc");
     ASSERT_TRUE(fits.ok());
     auto p = plan_job(*fits, m);
-    EXPECT_TRUE(p.ok()) << join(p.errors);
+    ASSERT_TRUE(p.ok()) << join(p.errors);
+    EXPECT_EQ(pauses(*p.value), 0u);
+    EXPECT_EQ(p->stats.pause_moves, 0u);
 
-    // Two dwells in a row add up.
-    auto two = parse_gcode(head + fmt::format("G4 P{:.3f}\nG4 P1\nG1 X2\nM2\n", longest - 0.5), "job.ngc");
-    ASSERT_TRUE(two.ok());
-    auto q = plan_job(*two, m);
-    ASSERT_FALSE(q.ok());
-    ASSERT_EQ(q.errors.size(), 1u);
-    EXPECT_EQ(q.errors[0].loc.line, 3);
-    EXPECT_NE(q.errors[0].message.find("longer than the card can time between two moves: 89.5 s"),
-              std::string::npos)
-        << q.errors[0].message;
+    // Two dwells in a row add up to more than one interval, 1000 s to many: pause
+    // moves in between, the second move where it was planned.
+    for (const double second : {1.0, 1000.0}) {
+        auto two = parse_gcode(head + fmt::format("G4 P{:.3f}\nG4 P{}\nG1 X2\nM2\n", longest - 0.5, second),
+                               "job.ngc");
+        ASSERT_TRUE(two.ok());
+        auto q = plan_job(*two, m);
+        ASSERT_TRUE(q.ok()) << join(q.errors);
+        EXPECT_EQ(pauses(*q.value), 1u) << second;
+        const double gap_cycles = (longest - 0.5 + second) * 48e6;
+        EXPECT_GE(q->stats.pause_moves, std::uint64_t(gap_cycles / double(kMaxMoveDelayCycles))) << second;
+        EXPECT_LE(q->stats.pause_moves, std::uint64_t(gap_cycles / double(kMaxMoveDelayCycles)) + 1) << second;
+        EXPECT_TRUE(intervals_fit(*q.value)) << second;
+        // The pause is at the dwell's line, between the two moves; the moves and
+        // their ideal times are the 160 steps of X.
+        ASSERT_EQ(q->card.size(), 3u);
+        EXPECT_TRUE(q->card[1].segment.pause);
+        EXPECT_EQ(q->card[1].segment.loc.line, 3);
+        EXPECT_EQ(q->card[1].segment.delta, (PerAxis<std::int64_t>{}));
+        EXPECT_EQ(q->stats.moves, 160u);
+        const auto ideal = ideal_times(*q.value, 48e6);
+        ASSERT_EQ(ideal.size(), 160u);
+        // The second move's first step, timed across the pause moves, is on its
+        // ideal time (within the chunk tolerance of a cycle or two).
+        std::int64_t prev = 0, first_after = 0;
+        for (std::size_t c = 0; c < q->card.size(); ++c) {
+            const auto t = expand(q->card[c].chunks, prev);
+            if (c == 2) first_after = t.front();
+            prev = t.back();
+        }
+        EXPECT_NEAR(double(first_after), ideal[80], m.chunk_tolerance_cycles() + 1) << second;
+        EXPECT_GT(ideal[80] - ideal[79], gap_cycles * 0.999) << second;
+    }
 
+    // A dwell after the last move: pause moves to its end, which is the job's end.
     auto trailing = parse_gcode(head + "G4 P30\nM2\n", "job.ngc");
     ASSERT_TRUE(trailing.ok());
     auto r = plan_job(*trailing, m);
     ASSERT_TRUE(r.ok()) << join(r.errors);
-    ASSERT_EQ(r.warnings.size(), 1u) << join(r.warnings);
-    EXPECT_EQ(r.warnings[0].loc.line, 3);
-    EXPECT_NE(r.warnings[0].message.find("after the last move is not run"), std::string::npos);
-    // 1 mm at 10 mm/s with its S-curve ends: well under the 30 s dwell.
-    EXPECT_GT(r->stats.duration_s, 0.1);
-    EXPECT_LT(r->stats.duration_s, 1.0);
+    EXPECT_EQ(r.warnings.size(), 0u) << join(r.warnings);
+    ASSERT_EQ(r->card.size(), 2u);
+    EXPECT_TRUE(r->card[1].segment.pause);
+    EXPECT_EQ(r->card[1].segment.moves, 1u);
+    EXPECT_EQ(r->stats.pause_moves, 1u);
+    const auto last_move = expand(r->card[0].chunks, 0).back();
+    const auto end = expand(r->card[1].chunks, last_move).back();
+    EXPECT_NEAR(double(end - last_move), 30 * 48e6, m.chunk_tolerance_cycles() + 1);
+    EXPECT_NEAR(r->stats.duration_s, double(end) / 48e6, 1e-9);
+    // 1 mm at 10 mm/s with its S-curve ends, then the 30 s.
+    EXPECT_GT(r->stats.duration_s, 30.1);
+    EXPECT_LT(r->stats.duration_s, 31.0);
+    // After two moves that join (the polyline's last vertex repeated for the dwell
+    // used to give the second a radius of 0: "internal: no feasible profile").
+    auto two_moves = parse_gcode(head + "G1 X2\nG4 P3\nM2\n", "job.ngc");
+    auto r3 = plan_job(*two_moves, m);
+    ASSERT_TRUE(r3.ok()) << join(r3.errors);
+    EXPECT_EQ(r3->stats.pause_moves, 1u);
+    EXPECT_GT(r3->feeds[1].cruise, 9.9);
+    // 200 s after the last move: three intervals of 66.7 s.
+    auto longer = parse_gcode(head + "G4 P200\nM2\n", "job.ngc");
+    auto r2 = plan_job(*longer, m);
+    ASSERT_TRUE(r2.ok()) << join(r2.errors);
+    EXPECT_EQ(r2->stats.pause_moves, 3u);
+    EXPECT_TRUE(intervals_fit(*r2.value));
 }
 
 namespace {
