@@ -147,18 +147,22 @@ INSTANTIATE_TEST_SUITE_P(ExampleJobs, Engines,
                                               info.param.damage ? "_damaged" : "");
                          });
 
+// A G-code program written into the test's directory, planned on seed002.toml for the card `caps`.
+plan::Result<run::CardJob> job_of(const std::string& name, const std::string& gcode, const card::CardCaps& caps) {
+  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "engines";
+  fs::create_directories(dir);
+  std::ofstream(dir / name) << gcode;
+  return run::prepare_job((dir / name).string(), kSource + "/examples/machines/seed002.toml", caps);
+}
+
 // A dwell longer than the card can time between two moves (2^32 - 1 cycles: 260
 // s at the iCEBreaker's 16.5 MHz) and one after the last move run as pause
 // moves (docs/PLANNING.md "Dwells"): on the card they step no axis, the pins show
 // the gap, the card counts them, and it runs on to the trailing dwell's end.
 // 4.6 * 10^9 cycles: about 20 minutes on the Verilated card, seconds here.
 TEST(EngineLongJobs, ADwellLongerThanAMoveIntervalAndATrailingOneRunAsPauseMoves) {
-  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "engines";
-  fs::create_directories(dir);
-  const fs::path gcode = dir / "long_dwell.ngc";
-  std::ofstream(gcode) << "G21 G90\nG1 X1 F600\nG4 P270\nG1 X2\nG4 P3\nM2\n";
   const card::CardCaps caps = run::connect_sim("icebreaker", run::Engine::model);
-  auto prepared = run::prepare_job(gcode.string(), kSource + "/examples/machines/seed002.toml", caps);
+  auto prepared = job_of("long_dwell.ngc", "G21 G90\nG1 X1 F600\nG4 P270\nG1 X2\nG4 P3\nM2\n", caps);
   ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
   const run::CardJob& job = *prepared.value;
   EXPECT_TRUE(job.warnings.empty()) << plan::join(job.warnings);
@@ -188,12 +192,8 @@ TEST(EngineLongJobs, ADwellLongerThanAMoveIntervalAndATrailingOneRunAsPauseMoves
 // A pause segment (every v = 0) on the Verilated card, in lockstep with the fast
 // engine: a trailing dwell of 0.2 s.
 TEST(EngineLongJobs, ATrailingDwellRunsInLockstep) {
-  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "engines";
-  fs::create_directories(dir);
-  const fs::path gcode = dir / "trailing_dwell.ngc";
-  std::ofstream(gcode) << "G21 G90\nG1 X1 F600\nG4 P0.2\nM2\n";
   const card::CardCaps caps = run::connect_sim("icebreaker", run::Engine::rtl);
-  auto prepared = run::prepare_job(gcode.string(), kSource + "/examples/machines/seed002.toml", caps);
+  auto prepared = job_of("trailing_dwell.ngc", "G21 G90\nG1 X1 F600\nG4 P0.2\nM2\n", caps);
   ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
   run::SimRunOptions o;
   o.engine = run::Engine::lockstep;
