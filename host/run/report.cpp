@@ -83,7 +83,10 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
 
   const LinkReport& l = run.link;
   json link;
-  link["device"] = l.transport == "sim" ? std::string("Verilated cp_card") : l.link;
+  link["device"] = l.transport != "sim"            ? l.link
+                   : run.engine == Engine::model    ? std::string("cp_card, the fast engine (golden model)")
+                   : run.engine == Engine::rtl      ? std::string("Verilated cp_card")
+                                                    : std::string("Verilated cp_card and the fast engine in lockstep");
   link["sck_hz"] = l.sck_hz;
   if (l.sck_div) link["sck_div"] = l.sck_div;
   link["frames"] = l.stats.transfers;

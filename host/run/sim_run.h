@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
-// Runs a CardJob on the simulated card (the Verilated cp_card: the SPI front end
-// and the motion core) through its SPI pins, and records what its pins and
-// counters did: the transport `sim` of `cpstep run`.
+// Runs a CardJob on the simulated card (cp_card: the SPI front end and the
+// motion core; the fast engine, the Verilated RTL or both in lockstep, Engine)
+// through its SPI pins, and records what its pins and counters did: the
+// transport `sim` of `cpstep run`.
 #pragma once
 
 #include <cstdint>
