@@ -481,16 +481,21 @@ class Reader : public DL_CreationAdapter {
 }  // namespace
 
 DxfResult load_dxf(const std::string& path, const DxfOptions& options) {
-  DxfResult out;
-  out.drawing.file = path;
   std::ifstream f(path, std::ios::binary);
   if (!f) {
+    DxfResult out;
+    out.drawing.file = path;
     out.errors.push_back(path + ": cannot read the file");
     return out;
   }
   std::stringstream ss;
   ss << f.rdbuf();
-  const std::string text = ss.str();
+  return parse_dxf(ss.str(), path, options);
+}
+
+DxfResult parse_dxf(const std::string& text, const std::string& path, const DxfOptions& options) {
+  DxfResult out;
+  out.drawing.file = path;
   const PreScan ps = prescan(text);
   if (ps.binary) {
     out.errors.push_back(path + ": binary DXF is not supported (save it as ASCII DXF)");

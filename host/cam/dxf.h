@@ -40,6 +40,8 @@ struct DxfResult {
 };
 
 DxfResult load_dxf(const std::string& path, const DxfOptions& options = {});
+// The same for a drawing's text, named `path` in messages (the fuzz target's entry).
+DxfResult parse_dxf(const std::string& text, const std::string& path, const DxfOptions& options = {});
 
 // mm per drawing unit for a $INSUNITS code; 0 for codes that are not lengths.
 double insunits_mm(int code);
