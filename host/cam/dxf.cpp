@@ -5,6 +5,8 @@
 // the k-th LINE record. Nothing is parsed twice: geometry comes from libdxflib.
 #include "cam/dxf.h"
 
+#include <fmt/format.h>
+
 #include <dxflib/dl_creationadapter.h>
 #include <dxflib/dl_dxf.h>
 
@@ -406,9 +408,16 @@ class Reader : public DL_CreationAdapter {
     const plan::Nurbs curve(p + 1, std::move(pts), std::move(weights), std::move(kn));
     const int code = insunits_.value_or(0);
     const double unit = code == 0 || insunits_mm(code) == 0 ? opt_.unitless_mm : insunits_mm(code);
+    const std::vector<double> us = curve.chord_parameters(opt_.spline_tolerance_mm / unit);
+    if (us.empty()) {
+      error(s.src, fmt::format("sampling the spline within {:g} mm takes more than {} chords (control points "
+                               "too far apart for the tolerance)",
+                               opt_.spline_tolerance_mm, plan::Nurbs::kMaxChords));
+      return;
+    }
     Vec2 prev{};
     bool have = false;
-    for (double u : curve.chord_parameters(opt_.spline_tolerance_mm / unit)) {
+    for (double u : us) {
       const Eigen::Vector3d c = curve.point(u);
       const Vec2 q{c.x(), c.y()};
       if (have && dist(prev, q) > 1e-12) emit(Seg::line(prev, q, s.src));

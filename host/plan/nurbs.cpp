@@ -254,11 +254,17 @@ double Nurbs::chord_error(double ua, double ub) const {
     return std::max({best, f1, f2});
 }
 
-std::vector<double> Nurbs::chord_parameters(double tol_mm) const {
+std::vector<double> Nurbs::chord_parameters(double tol_mm, std::size_t max_chords) const {
     std::vector<double> out;
     const std::vector<double> br = breakpoints();
     out.push_back(br.front());
+    bool over = false;
     auto split = [&](auto&& self, double a, double b, int depth) -> void {
+        if (over) return;
+        if (out.size() > max_chords) {
+            over = true;
+            return;
+        }
         if (depth < 40 && chord_error(a, b) > tol_mm) {
             const double m = (a + b) / 2;
             self(self, a, m, depth + 1);
@@ -272,11 +278,13 @@ std::vector<double> Nurbs::chord_parameters(double tol_mm) const {
         split(split, br[i], m, 0);
         split(split, m, br[i + 1], 0);
     }
+    if (over) out.clear();
     return out;
 }
 
 CurveDistance::CurveDistance(const Nurbs& c, double tol_mm) {
     for (double u : c.chord_parameters(tol_mm)) pts_.push_back(c.point(u));
+    if (pts_.empty()) pts_.push_back(c.point(c.breakpoints().front()));  // (a curve the planner refused)
 }
 
 double CurveDistance::operator()(const Eigen::Vector3d& p) {

@@ -75,8 +75,11 @@ public:
 
     // Parameters u_min = u_0 < ... < u_n = u_max of a polyline whose chords
     // stand off the curve by at most tol_mm (every knot span split into at
-    // least two, then halved until chord_error() fits).
-    [[nodiscard]] std::vector<double> chord_parameters(double tol_mm) const;
+    // least two, then halved until chord_error() fits). Empty when that takes
+    // more than max_chords chords (a curve far too large for the tolerance:
+    // callers refuse it rather than sample for ever).
+    static constexpr std::size_t kMaxChords = 1'000'000;
+    [[nodiscard]] std::vector<double> chord_parameters(double tol_mm, std::size_t max_chords = kMaxChords) const;
 
 private:
     [[nodiscard]] std::size_t span(double u) const;

@@ -138,6 +138,7 @@ std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& b, double tol) 
 std::vector<PerAxis<double>> nurbs_chord_points(const MotionBlock& b, double tol, std::vector<double>* radii) {
     const Nurbs& c = *b.curve;
     const std::vector<double> us = c.chord_parameters(tol);
+    if (us.empty()) return {};  // more chords than Nurbs::kMaxChords: refused by the caller
     const std::size_t n = us.size();
     std::vector<double> r(n);
     for (std::size_t i = 0; i < n; ++i) r[i] = c.radius(us[i]);
@@ -309,6 +310,13 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
         std::vector<double> curve_r;  // nurbs: the true radius at each point (start first)
         if (b.kind == MotionKind::nurbs) {
             pts = nurbs_chord_points(b, m.planner.arc_tolerance_mm, &curve_r);
+            if (pts.empty()) {
+                result.errors.push_back(
+                    {job.file, b.loc,
+                     fmt::format("the curve needs more than {} chords within arc_tolerance_mm = {:g}",
+                                 Nurbs::kMaxChords, m.planner.arc_tolerance_mm)});
+                continue;
+            }
             arc_r.back() = std::min(arc_r.back(), curve_r.front());  // the curve's start point
         } else if (is_arc) {
             const ArcGeom g = arc_geom(b);

@@ -164,6 +164,19 @@ TEST(Dxf, SplineSampledWithinTolerance) {
   check_spline(d, "spl.dxf", 0.01, 10, {0, 0}, {20, 0}, 1e-6, curve);
 }
 
+// A spline far too large for its tolerance (a parabola 10^16 mm across sampled
+// within 0.01 mm needs some 10^8 chords) is refused at its entity instead of
+// being sampled for hours (Nurbs::kMaxChords).
+TEST(Dxf, SplineTooLargeForItsToleranceIsRefused) {
+  DxfText d;
+  const std::string handle = d.spline(2, {0, 0, 0, 1, 1, 1}, {{0, 0}, {1e16, 1e16}, {2e16, 0}});
+  const DxfResult r = load(d, "huge_spline.dxf");
+  ASSERT_FALSE(r.ok());
+  ASSERT_EQ(r.errors.size(), 1u);
+  EXPECT_NE(r.errors[0].find("SPLINE handle " + handle), std::string::npos) << r.errors[0];
+  EXPECT_NE(r.errors[0].find("more than 1000000 chords"), std::string::npos) << r.errors[0];
+}
+
 // DXF allows unclamped knots (a closed spline is often periodic, its knots
 // uniform). A uniform quadratic B-spline is, span by span, the curve
 // ((1-t)^2 P_j + (1 + 2t - 2t^2) P_j+1 + t^2 P_j+2) / 2 between the midpoints of

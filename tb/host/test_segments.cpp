@@ -161,6 +161,15 @@ TEST(Segments, HugeArcsAreRefusedBeforeTheirChords) {
     const std::string e = join(run("G0 X150 Y0\nG2 X150 Y0 I-50 J0 F60\n", fine).errors);
     EXPECT_EQ(e.rfind("job.ngc:2:1: an arc of radius 50 mm needs ", 0), 0u) << e;
     EXPECT_NE(e.find("chords within arc_tolerance_mm = 1e-10; at most 1000000 are made"), std::string::npos) << e;
+    // A NURBS curve (G5.2/G5.3) inside the travel likewise: a parabola 280 mm
+    // across sampled within 1e-12 mm would need some 6·10^6 chords; refused at
+    // its block, without making them.
+    Machine finer = m;
+    finer.planner.arc_tolerance_mm = 1e-12;
+    const std::string n =
+        join(run("G0 X10 Y10\nG5.2 X10 Y10 P1 L3 F60\nX150 Y90 P1\nX290 Y10 P1\nG5.3\n", finer).errors);
+    EXPECT_EQ(n.rfind("job.ngc:2:1: the curve needs more than 1000000 chords within arc_tolerance_mm = 1e-12", 0), 0u)
+        << n;
 }
 
 // An arc's radius (which caps its speed) is measured in its own plane: a G18
