@@ -392,8 +392,8 @@ class Reader : public DL_CreationAdapter {
     std::vector<Eigen::Vector4d> hom;
     for (const auto& c : s.ctrl) hom.emplace_back(c.x * c.w, c.y * c.w, 0.0, c.w);
     std::vector<double> knots = s.knots;
-    clamp_at(lo, p, knots, hom);
-    clamp_at(hi, p, knots, hom);
+    clamp_at(lo, p, knots, hom, false);
+    clamp_at(hi, p, knots, hom, true);
     const auto first = std::size_t(std::lower_bound(knots.begin(), knots.end(), lo) - knots.begin());
     const auto last = std::size_t(std::upper_bound(knots.begin(), knots.end(), hi) - knots.begin()) - 1;
     std::vector<double> kn(knots.begin() + std::ptrdiff_t(first), knots.begin() + std::ptrdiff_t(last) + 1);
@@ -428,12 +428,19 @@ class Reader : public DL_CreationAdapter {
 
   // Inserts knot u into (knots, homogeneous points) of degree p until it is
   // there p + 1 times (Boehm's algorithm, one insertion at a time).
-  static void clamp_at(double u, int p, std::vector<double>& knots, std::vector<Eigen::Vector4d>& hom) {
+  // `end`: u is the end of the curve's range, knots[n] (n control points): its
+  // span is the last one before it, knots[k] < u <= knots[k + 1], so the points
+  // it takes stay within the control polygon (with knots after u, the span
+  // knots[k] <= u < knots[k + 1] would reach past it: the dxf fuzz target's
+  // heap overflow, fuzz/corpus/dxf/regress_spline_end_knots.dxf.in). At the
+  // start, u = knots[p]: knots[k] <= u < knots[k + 1].
+  static void clamp_at(double u, int p, std::vector<double>& knots, std::vector<Eigen::Vector4d>& hom, bool end) {
     auto multiplicity = [&] { return int(std::count(knots.begin(), knots.end(), u)); };
     while (multiplicity() < p + 1) {
-      // k: the last index with knots[k] <= u (u inside the knots' range), capped
-      // so that k + 1 is an index.
-      auto k = std::size_t(std::upper_bound(knots.begin(), knots.end(), u) - knots.begin()) - 1;
+      auto k = std::size_t((end ? std::lower_bound(knots.begin(), knots.end(), u)
+                                : std::upper_bound(knots.begin(), knots.end(), u)) -
+                           knots.begin()) -
+               1;
       k = std::min(k, knots.size() - 2);
       std::vector<Eigen::Vector4d> q(hom.size() + 1);
       for (std::size_t i = 0; i < q.size(); ++i) {

@@ -177,6 +177,30 @@ TEST(Dxf, SplineTooLargeForItsToleranceIsRefused) {
   EXPECT_NE(r.errors[0].find("more than 1000000 chords"), std::string::npos) << r.errors[0];
 }
 
+// Knots that go on past the curve's end (degree 3, five control points, the end
+// knot 1 only three times, then 2): every sampled point lies in the control
+// points' box (a B-spline's convex hull property). The fuzzer found a heap
+// overflow here (the end's knot insertion read control points past the last);
+// the overflow itself shows only under ASan: the fuzz build's replay of
+// fuzz/corpus/dxf/regress_spline_end_knots.dxf.in (scripts/fuzz) catches it.
+TEST(Dxf, SplineWithKnotsPastItsEndStaysInItsControlPolygon) {
+  DxfText d;
+  const std::vector<std::pair<double, double>> ctrl = {{0, 0}, {10, 20}, {20, 0}, {30, 20}, {40, 0}};
+  d.spline(3, {0, 0, 0, 0, 0.5, 1, 1, 1, 2}, ctrl);
+  const DxfResult r = load(d, "end_knots.dxf");
+  ASSERT_TRUE(r.ok()) << r.errors.front();
+  ASSERT_FALSE(r.drawing.segs.empty());
+  for (const Seg& s : r.drawing.segs)
+    for (const Vec2 p : {s.a, s.b}) {
+      EXPECT_GE(p.x, -1e-9);
+      EXPECT_LE(p.x, 40 + 1e-9);
+      EXPECT_GE(p.y, -1e-9);
+      EXPECT_LE(p.y, 20 + 1e-9);
+    }
+  EXPECT_NEAR(r.drawing.segs.front().a.x, 0, 1e-9);
+  EXPECT_NEAR(r.drawing.segs.front().a.y, 0, 1e-9);
+}
+
 // DXF allows unclamped knots (a closed spline is often periodic, its knots
 // uniform). A uniform quadratic B-spline is, span by span, the curve
 // ((1-t)^2 P_j + (1 + 2t - 2t^2) P_j+1 + t^2 P_j+2) / 2 between the midpoints of
