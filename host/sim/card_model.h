@@ -19,7 +19,7 @@ class CardModel {
   CardIn in;
 
   CardOut outputs() const {
-    card_.in = pins(in);
+    card_.in = in;
     const model::CpCardOut m = card_.outputs();
     CardOut o;
     o.miso = m.miso;
@@ -36,14 +36,12 @@ class CardModel {
     return o;
   }
   void tick() {
-    card_.in = pins(in);
+    card_.in = in;
     card_.tick();
   }
 
   model::CpCard& card() { return card_; }
   const model::CpCard& card() const { return card_; }
-
-  static model::CpCardIn pins(const CardIn& i) { return {i.rst, i.sck, i.cs_n, i.mosi, i.estop}; }
 
  private:
   // outputs() is const like every model's; the card's `in` is the copy of ours.
