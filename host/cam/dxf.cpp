@@ -25,6 +25,8 @@
 
 namespace cpstep::cam {
 
+static_assert(DxfOptions{}.max_spline_chords == plan::Nurbs::kMaxChords);
+
 std::string Source::where(const std::string& file) const {
   std::string s = file + ":" + std::to_string(line) + ": " + type;
   s += handle.empty() ? " (no handle)" : " handle " + handle;
@@ -408,11 +410,11 @@ class Reader : public DL_CreationAdapter {
     const plan::Nurbs curve(p + 1, std::move(pts), std::move(weights), std::move(kn));
     const int code = insunits_.value_or(0);
     const double unit = code == 0 || insunits_mm(code) == 0 ? opt_.unitless_mm : insunits_mm(code);
-    const std::vector<double> us = curve.chord_parameters(opt_.spline_tolerance_mm / unit);
+    const std::vector<double> us = curve.chord_parameters(opt_.spline_tolerance_mm / unit, opt_.max_spline_chords);
     if (us.empty()) {
       error(s.src, fmt::format("sampling the spline within {:g} mm takes more than {} chords (control points "
                                "too far apart for the tolerance)",
-                               opt_.spline_tolerance_mm, plan::Nurbs::kMaxChords));
+                               opt_.spline_tolerance_mm, opt_.max_spline_chords));
       return;
     }
     Vec2 prev{};

@@ -6,6 +6,7 @@
 // the line it starts on.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,10 @@ struct Drawing {
 struct DxfOptions {
   double spline_tolerance_mm = 0.01;
   double unitless_mm = 1;        // $INSUNITS 0 or missing: one unit is this many mm
+  // A SPLINE that needs more chords than this within spline_tolerance_mm is
+  // refused (plan::Nurbs::chord_parameters: told from its estimate before any
+  // chord is made when far over). The fuzz target lowers it to keep each input quick.
+  std::size_t max_spline_chords = 1'000'000;  // plan::Nurbs::kMaxChords
 };
 
 struct DxfResult {

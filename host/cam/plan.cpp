@@ -63,7 +63,6 @@ std::vector<Seg> restart_at(const std::vector<Seg>& path, Vec2 p, double tol) {
   const Seg& s = path[n.seg];
   std::vector<Seg> out;
   std::size_t first = n.seg;
-  std::optional<Seg> tail;
   if (dist(n.p, s.a) <= tol) {
     first = n.seg;
   } else if (dist(n.p, s.b) <= tol) {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -219,6 +220,10 @@ double Nurbs::length(double ua, double ub, double rel_tol) const {
 }
 
 double Nurbs::chord_error(double ua, double ub) const {
+    return chord_error_until(ua, ub, std::numeric_limits<double>::infinity());
+}
+
+double Nurbs::chord_error_until(double ua, double ub, double stop) const {
     const Eigen::Vector3d P = point(ua), Q = point(ub);
     const Eigen::Vector3d chord = Q - P;
     const double len = chord.norm();
@@ -236,6 +241,7 @@ double Nurbs::chord_error(double ua, double ub) const {
     int bi = 0;
     for (int i = 1; i < kN; ++i) {
         const double d = dist(ua + (ub - ua) * i / kN);
+        if (d > stop) return d;
         if (d > best) { best = d; bi = i; }
     }
     if (bi == 0) return best;
@@ -254,8 +260,37 @@ double Nurbs::chord_error(double ua, double ub) const {
     return std::max({best, f1, f2});
 }
 
+double Nurbs::chord_estimate(double tol_mm, double stop) const {
+    // 8-point Gauss-Legendre nodes and weights on [-1, 1] (Abramowitz & Stegun 25.4.30).
+    static constexpr double kX[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
+                                     0.9602898564975363};
+    static constexpr double kW[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
+                                     0.1012285362903763};
+    // sqrt(kappa) |C'| = sqrt(|C' x C''| / |C'|): the integrand over the parameter.
+    auto f = [&](double u) {
+        const NurbsPoint e = eval(u);
+        const double s = e.d1.norm();
+        return s > 0 ? std::sqrt(e.d1.cross(e.d2).norm() / s) : 0.0;
+    };
+    const std::vector<double> br = breakpoints();
+    const double k = 1 / std::sqrt(8 * tol_mm);
+    double total = 0;
+    for (std::size_t i = 0; i + 1 < br.size() && !(total > stop); ++i) {
+        const double m = (br[i] + br[i + 1]) / 2;
+        for (const auto& [a, b] : {std::pair{br[i], m}, std::pair{m, br[i + 1]}}) {
+            const double c = (a + b) / 2, h = (b - a) / 2;
+            double sum = 0;
+            for (int j = 0; j < 4; ++j) sum += kW[j] * (f(c - h * kX[j]) + f(c + h * kX[j]));
+            total += std::max(1.0, k * h * sum);
+        }
+    }
+    return total;
+}
+
 std::vector<double> Nurbs::chord_parameters(double tol_mm, std::size_t max_chords) const {
     std::vector<double> out;
+    const double limit = kEstimateMargin * static_cast<double>(max_chords);
+    if (chord_estimate(tol_mm, limit) > limit) return out;  // (NaN: not told here; the cap below holds)
     const std::vector<double> br = breakpoints();
     out.push_back(br.front());
     bool over = false;
@@ -265,7 +300,7 @@ std::vector<double> Nurbs::chord_parameters(double tol_mm, std::size_t max_chord
             over = true;
             return;
         }
-        if (depth < 40 && chord_error(a, b) > tol_mm) {
+        if (depth < 40 && chord_error_until(a, b, tol_mm) > tol_mm) {
             const double m = (a + b) / 2;
             self(self, a, m, depth + 1);
             self(self, m, b, depth + 1);

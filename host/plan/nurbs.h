@@ -8,6 +8,7 @@
 // a G5.x curve lies in the XY plane at the Z where it starts.
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -77,12 +78,29 @@ public:
     // stand off the curve by at most tol_mm (every knot span split into at
     // least two, then halved until chord_error() fits). Empty when that takes
     // more than max_chords chords (a curve far too large for the tolerance:
-    // callers refuse it rather than sample for ever).
+    // callers refuse it rather than sample for ever). A curve whose
+    // chord_estimate() is over kEstimateMargin x max_chords is refused that
+    // way before any chord is made.
     static constexpr std::size_t kMaxChords = 1'000'000;
+    static constexpr double kEstimateMargin = 2;
     [[nodiscard]] std::vector<double> chord_parameters(double tol_mm, std::size_t max_chords = kMaxChords) const;
+
+    // The fewest chords within tol_mm any polyline of the curve can have, in
+    // the limit of short chords: the integral of sqrt(kappa / (8 tol)) over
+    // the arc length (a chord of length h over curvature kappa stands off by
+    // kappa h^2 / 8), by Gauss-Legendre quadrature on each half knot span,
+    // at least one per half span. Cheap (16 evaluations per span): how a curve
+    // far too large for its tolerance is told before it is sampled. Stops
+    // adding once past `stop` (returns a value > stop); NaN when the curve's
+    // numbers overflow.
+    [[nodiscard]] double chord_estimate(double tol_mm,
+                                        double stop = std::numeric_limits<double>::infinity()) const;
 
 private:
     [[nodiscard]] std::size_t span(double u) const;
+    // chord_error(), returning as soon as one sample stands off by more than
+    // `stop` (that sample's distance): the same answer to "> stop?" for less.
+    [[nodiscard]] double chord_error_until(double ua, double ub, double stop) const;
 
     int order_;
     std::vector<Eigen::Vector3d> points_;

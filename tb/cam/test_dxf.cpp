@@ -166,7 +166,8 @@ TEST(Dxf, SplineSampledWithinTolerance) {
 
 // A spline far too large for its tolerance (a parabola 10^16 mm across sampled
 // within 0.01 mm needs some 10^8 chords) is refused at its entity instead of
-// being sampled for hours (Nurbs::kMaxChords).
+// being sampled for hours (Nurbs::kMaxChords): from its chord estimate, before
+// a chord is made (plan::Nurbs::chord_parameters).
 TEST(Dxf, SplineTooLargeForItsToleranceIsRefused) {
   DxfText d;
   const std::string handle = d.spline(2, {0, 0, 0, 1, 1, 1}, {{0, 0}, {1e16, 1e16}, {2e16, 0}});
@@ -175,6 +176,28 @@ TEST(Dxf, SplineTooLargeForItsToleranceIsRefused) {
   ASSERT_EQ(r.errors.size(), 1u);
   EXPECT_NE(r.errors[0].find("SPLINE handle " + handle), std::string::npos) << r.errors[0];
   EXPECT_NE(r.errors[0].find("more than 1000000 chords"), std::string::npos) << r.errors[0];
+}
+
+// DxfOptions::max_spline_chords caps each spline: a parabola 200 mm across and
+// 200 mm high within 0.01 mm takes more than 100 chords (its least count,
+// the integral of sqrt(kappa / 8 tol) ds, is about 80; halving makes 128), so it
+// is refused at a cap of 100 and taken at the default or at one over its count.
+TEST(Dxf, SplineChordCapIsAnOption) {
+  DxfText d;
+  const std::string handle = d.spline(2, {0, 0, 0, 1, 1, 1}, {{0, 0}, {100, 200}, {200, 0}});
+  const auto dir = camtest::temp_dir("dxf");
+  const std::string path = camtest::write(dir / "cap.dxf", d.text());
+  const DxfResult all = load_dxf(path);
+  ASSERT_TRUE(all.ok()) << all.errors.front();
+  EXPECT_GT(all.drawing.segs.size(), 100u);
+  DxfOptions o;
+  o.max_spline_chords = 100;
+  const DxfResult capped = load_dxf(path, o);
+  ASSERT_EQ(capped.errors.size(), 1u);
+  EXPECT_NE(capped.errors[0].find("SPLINE handle " + handle), std::string::npos) << capped.errors[0];
+  EXPECT_NE(capped.errors[0].find("more than 100 chords"), std::string::npos) << capped.errors[0];
+  o.max_spline_chords = all.drawing.segs.size() + 1;
+  EXPECT_TRUE(load_dxf(path, o).ok());
 }
 
 // Knots that go on past the curve's end (degree 3, five control points, the end

@@ -99,6 +99,9 @@ TEST(Gcode, ReadBackByThePlannersReader) {
         dwell += b.dwell_s;
         EXPECT_TRUE(b.spindle_on);  // the pierce: torch on, not moving
         break;
+      case plan::MotionKind::nurbs:
+        ADD_FAILURE() << "a NURBS block at line " << b.loc.line << ": the CAM writes lines and arcs only";
+        break;
     }
   }
   EXPECT_EQ(dwells, 6);

@@ -5,7 +5,9 @@
 // on its own, finite differences and the Bezier closed forms.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -167,6 +169,59 @@ TEST(Nurbs, ChordParametersKeepTheTolerance) {
     const double need = 2 * std::numbers::pi / (2 * std::acos(1 - tol / 10));
     EXPECT_GE(static_cast<double>(us.size() - 1), need);
     EXPECT_LE(static_cast<double>(us.size() - 1), 2 * need + 8);
+}
+
+TEST(Nurbs, ChordEstimateIsTheCircleCountAndNeverAboveAFactorOfTheChords) {
+    // A circle: the estimate is the equal-chord count 2 pi / (2 acos(1 - tol / r)) ~ 2 pi sqrt(r / (8 tol)).
+    for (const double r : {1.0, 10.0, 250.0}) {
+        for (const double tol : {0.1, 0.01, 0.0005}) {
+            const double need = 2 * std::numbers::pi / (2 * std::acos(1 - tol / r));
+            EXPECT_NEAR(full_circle(r, 3, -4).chord_estimate(tol), need, 0.02 * need + 8) << r << " mm at " << tol;
+        }
+    }
+    // Random curves (orders 2..6, weights 0.2..5, uneven knots, points up to 10^3 mm):
+    // the chords chord_parameters makes are never fewer than the estimate over
+    // kEstimateMargin, so refusing by the estimate refuses nothing sampling would take.
+    uint64_t s = 0x9e3779b97f4a7c15ULL;
+    auto rnd = [&s] {
+        s ^= s << 13; s ^= s >> 7; s ^= s << 17;
+        return static_cast<double>(s >> 11) / 9007199254740992.0;  // [0, 1)
+    };
+    double worst = 0;
+    for (int t = 0; t < 300; ++t) {
+        const int order = 2 + static_cast<int>(rnd() * 5);
+        const std::size_t n = static_cast<std::size_t>(order) + static_cast<std::size_t>(rnd() * 8);
+        const double scale = std::pow(10.0, 3 * rnd());
+        std::vector<Vector3d> p;
+        std::vector<double> w;
+        for (std::size_t i = 0; i < n; ++i) {
+            p.emplace_back(scale * (rnd() - 0.5), scale * (rnd() - 0.5), 0);
+            w.push_back(0.2 + 4.8 * rnd() * rnd());
+        }
+        std::vector<double> k(static_cast<std::size_t>(order), 0.0);
+        double u = 0;
+        for (std::size_t i = 0; i + static_cast<std::size_t>(order) < n; ++i) k.push_back(u += 0.05 + rnd());
+        k.insert(k.end(), static_cast<std::size_t>(order), u + 0.05 + rnd());
+        const Nurbs c(order, p, w, k);
+        const double tol = std::pow(10.0, -1 - 3 * rnd());
+        const auto us = c.chord_parameters(tol, 100'000'000);
+        ASSERT_FALSE(us.empty());
+        const double ratio = c.chord_estimate(tol) / static_cast<double>(us.size() - 1);
+        worst = std::max(worst, ratio);
+        EXPECT_LE(ratio, Nurbs::kEstimateMargin) << "curve " << t << ": estimate " << c.chord_estimate(tol)
+                                                 << ", chords " << us.size() - 1;
+    }
+    EXPECT_LT(worst, 1.5);  // (so the margin is wide)
+    // Past the margin the curve is refused from the estimate, before sampling;
+    // just under it, sampling decides.
+    const Nurbs big = full_circle(1000, 0, 0);
+    const double est = big.chord_estimate(0.001);
+    const auto cap = static_cast<std::size_t>(est / Nurbs::kEstimateMargin) - 1;
+    EXPECT_GT(big.chord_estimate(0.001, Nurbs::kEstimateMargin * static_cast<double>(cap)),
+              Nurbs::kEstimateMargin * static_cast<double>(cap));
+    EXPECT_TRUE(big.chord_parameters(0.001, cap).empty());
+    const auto all = big.chord_parameters(0.001);
+    EXPECT_EQ(big.chord_parameters(0.001, all.size()), all);
 }
 
 // ---- G-code ----
