@@ -115,9 +115,13 @@ size_t CpCard::clock_front_end(const CpPinPhase* phases, size_t n, uint8_t* miso
     const CpPinPhase& ph = phases[k];
     if (ph.pins.rst || ph.pins.cs_n || ph.pins.estop != estop || ph.cycles > budget - total) break;
     const bool settled = spi_.pins_settled(false, s.sck, false, s.mosi);
+    miso[k] = spi_.miso();
+    if (settled && ph.cycles >= 3 && spi_.settled_phase(ph.pins.sck, ph.pins.mosi)) {
+      total += ph.cycles;  // (the phase at once: no word ends in it)
+      continue;
+    }
     s.sck = ph.pins.sck;
     s.mosi = ph.pins.mosi;
-    miso[k] = spi_.miso();
     if (settled && ph.cycles >= 3) {
       // Pins that change after settling: two clocks that only move the
       // synchronizers, then the one the change reaches the frame logic in; then

@@ -12,16 +12,8 @@ constexpr uint32_t kTypePoll = 0x00, kTypeCommands = 0x01;
 // Result codes (docs/PROTOCOL.md).
 constexpr uint32_t kOk = 0, kTruncated = 1, kBadCrc = 2, kBadType = 3, kNoRoom = 4, kBadCmd = 5, kSplit = 6;
 
-// Receive phases.
-constexpr uint32_t kPhHdr = 0, kPhWords = 1, kPhCrc = 2, kPhDone = 3;
 
 constexpr uint32_t kTxPos0 = 7;  // reply word of the first position
-
-// CRC-16/CCITT-FALSE, one bit: polynomial 0x1021, MSB first.
-inline uint32_t crc_bit(uint32_t crc, bool b) {
-  const bool top = (crc >> 15 & 1) != 0;
-  return ((crc << 1) & 0xFFFF) ^ (top != b ? 0x1021u : 0u);
-}
 
 }  // namespace
 
@@ -37,13 +29,6 @@ uint32_t CpSpi::rd_addr() const {
   if (t == 6) return r_.last_addr;
   if (t >= kTxPos0 && t < tx_crc_) return (0x10 + ((t - kTxPos0) & 31)) & 0xFF;
   return 0xFF;
-}
-
-bool CpSpi::pins_settled(bool rst, bool sck_pin, bool cs_n_pin, bool mosi_pin) const {
-  const uint32_t sck = rst ? 0 : (sck_pin ? 7 : 0);
-  const uint32_t cs = rst ? 7 : (cs_n_pin ? 7 : 0);
-  const uint32_t mosi = mosi_pin ? 3 : 0;
-  return r_.sck == sck && r_.cs == cs && r_.mosi == mosi;
 }
 
 CpSpi::Out CpSpi::outputs() const {
@@ -74,17 +59,7 @@ bool CpSpi::tick_synchronizers_only() {
 bool CpSpi::tick_shift_only() {
   Regs& q = r_;
   if (in.rst || in.rsp_valid || (q.cs & 6) != 0 || (q.sck & 6) != 2 || q.bit == 31) return false;
-  // The shift branch of tick() for a bit that does not end its word.
-  const bool bit_in = (q.mosi >> 1 & 1) != 0;
-  const uint32_t rx_word = q.sr << 1 | uint32_t(bit_in);
-  if (q.ph != kPhDone) q.crc_rx = crc_bit(q.crc_rx, bit_in);
-  if (q.txn <= tx_crc_) q.crc_tx = crc_bit(q.crc_tx, (q.sr >> 31 & 1) != 0);
-  if (q.bit == 15) {
-    if (q.ph == kPhHdr) q.seq = rx_word & 0xFF;
-    else if (q.ph == kPhCrc) q.ph = kPhDone;
-  }
-  q.sr = rx_word;
-  q.bit = q.bit + 1;
+  shift_in((q.mosi >> 1 & 1) != 0);
   q.mosi = (q.mosi << 1 | uint32_t(in.mosi)) & 3;
   q.sck = (q.sck << 1 | uint32_t(in.sck)) & 7;
   q.cs = (q.cs << 1 | uint32_t(in.cs_n)) & 7;
@@ -131,7 +106,7 @@ void CpSpi::tick() {
     // A frame begins: the reply's word 0 goes out at once.
     d.sr = kMagic << 24 | q.seq << 16 | q.result << 8 | uint32_t(q.fresh) << 3 | uint32_t(in.enable) << 2 |
            uint32_t(in.estop) << 1 | uint32_t(used != 0);
-    d.ph = kPhHdr;
+    d.ph = kPhaseHeader;
     d.bit = 0;
     d.txn = 1;
     d.crc_rx = d.crc_tx = 0xFFFF;
@@ -141,7 +116,7 @@ void CpSpi::tick() {
     d.cw = 0;
   } else if (shift) {
     d.bit = (q.bit + 1) & 31;
-    if (q.ph != kPhDone) d.crc_rx = crc_bit(q.crc_rx, bit_in);
+    if (q.ph != kPhaseDone) d.crc_rx = crc_bit(q.crc_rx, bit_in);
     if (q.txn <= tx_crc_) d.crc_tx = crc_tx_next;
     if (word_end) {
       // The received word comes off the register, the next reply word goes on.
@@ -152,7 +127,7 @@ void CpSpi::tick() {
     }
 
     switch (q.ph) {
-      case kPhHdr:
+      case kPhaseHeader:
         if (q.bit == 15) d.seq = rx_word & 0xFF;
         if (word_end) {
           // {type, seq, nwords}; room is judged against reply word 1's free words.
@@ -161,14 +136,14 @@ void CpSpi::tick() {
           d.bad_type = !(type == kTypeCommands || (type == kTypePoll && nwords == 0));
           d.no_room = type == kTypeCommands && nwords > free16;
           d.wr_ok = type == kTypeCommands && nwords <= free16;
-          d.ph = nwords == 0 ? kPhCrc : kPhWords;
+          d.ph = nwords == 0 ? kPhaseCrc : kPhaseWords;
         }
         break;
-      case kPhWords:
+      case kPhaseWords:
         if (word_end) {
           buf_wr = q.wr_ok;
           d.left = (q.left - 1) & 0xFFFF;
-          if (q.left == 1) d.ph = kPhCrc;
+          if (q.left == 1) d.ph = kPhaseCrc;
           if (!in_cmd) {
             // A command starts: a SEGMENT has H1, N v words and its chunks to come.
             switch (rx_word >> 28) {
@@ -193,8 +168,8 @@ void CpSpi::tick() {
           }
         }
         break;
-      case kPhCrc:
-        if (q.bit == 15) d.ph = kPhDone;
+      case kPhaseCrc:
+        if (q.bit == 15) d.ph = kPhaseDone;
         break;
       default: break;
     }
@@ -202,7 +177,7 @@ void CpSpi::tick() {
 
   if (cs_rise) {
     // The frame ends: the first failing check is its result.
-    if (q.ph != kPhDone) d.result = kTruncated;
+    if (q.ph != kPhaseDone) d.result = kTruncated;
     else if (q.crc_rx != 0) d.result = kBadCrc;
     else if (q.bad_type) d.result = kBadType;
     else if (q.no_room) d.result = kNoRoom;

@@ -61,7 +61,11 @@ class CpSpi {
   // cycle with the same pins changes no synchronizer (with rst: the reset values).
   bool pins_settled() const { return pins_settled(in.rst, in.sck, in.cs_n, in.mosi); }
   // The same for the pins given (a parent's inputs before it sets `in`).
-  bool pins_settled(bool rst, bool sck, bool cs_n, bool mosi) const;
+  bool pins_settled(bool rst, bool sck, bool cs_n, bool mosi) const {
+    const uint32_t sck_q = rst ? 0 : (sck ? 7 : 0);
+    const uint32_t cs_q = rst ? 7 : (cs_n ? 7 : 0);
+    return r_.sck == sck_q && r_.cs == cs_q && r_.mosi == (mosi ? 3u : 0u);
+  }
   // No committed word is on its way to the buffer's head (cp_fifo's prefetch):
   // with the pins settled, no READ reply and no word taken, a clock changes
   // nothing here (the event-skipping card's test, CpCard::quiet_for).
@@ -80,6 +84,25 @@ class CpSpi {
   // `clocks` such clocks at once, for a caller that knows none of them brings a
   // CS edge or an SCK rise to the frame logic (pins settled before they changed).
   void shift_synchronizers(unsigned clocks);
+  // A whole phase of 3 clocks or more with the pins `sck`, `mosi` (CS low), for
+  // the same callers, from synchronizers settled with CS low: the first two
+  // clocks only move the synchronizers, the third brings the change to the
+  // frame logic, the rest change nothing. Done at once, with the synchronizers
+  // left settled, and true, when the third clock is an SCK rise that shifts a
+  // bit without ending a word or no SCK rise at all; false (nothing done) when
+  // it ends a word (tick() then). The fast engine's step for one SCK phase.
+  bool settled_phase(bool sck, bool mosi) {
+    const bool rise = sck && r_.sck == 0;
+    if (rise) {
+      if (r_.bit == 31) return false;
+      shift_in(mosi);  // the new MOSI: both its synchronizer stages hold it by then
+    }
+    r_.sck = sck ? 7 : 0;
+    r_.mosi = mosi ? 3 : 0;
+    in.sck = sck;
+    in.mosi = mosi;
+    return true;
+  }
   bool loads_rd_data() const { return (r_.sck & 6) == 2 && (r_.cs & 6) == 0 && r_.bit == 31; }
   // CS has been low through every synchronizer stage: no CS edge is on its way
   // (with the pin held low, no frame can end, so nothing commits).
@@ -88,6 +111,29 @@ class CpSpi {
   uint32_t cbuf_used() const { return cbuf_.used(); }
 
  private:
+  // Receive phases (rtl/cp_spi.v): the header word, the command words, the CRC, done.
+  static constexpr uint32_t kPhaseHeader = 0, kPhaseWords = 1, kPhaseCrc = 2, kPhaseDone = 3;
+  // CRC-16/CCITT-FALSE, one bit: polynomial 0x1021, MSB first.
+  static uint32_t crc_bit(uint32_t crc, bool b) {
+    const bool top = (crc >> 15 & 1) != 0;
+    return ((crc << 1) & 0xFFFF) ^ (top != b ? 0x1021u : 0u);
+  }
+
+  // The frame logic's shift of a bit that does not end its word (tick()'s
+  // shift branch for bits 0..30), the synchronizers left alone.
+  void shift_in(bool bit_in) {
+    Regs& q = r_;
+    const uint32_t rx_word = q.sr << 1 | uint32_t(bit_in);
+    if (q.ph != kPhaseDone) q.crc_rx = crc_bit(q.crc_rx, bit_in);
+    if (q.txn <= tx_crc_) q.crc_tx = crc_bit(q.crc_tx, (q.sr >> 31 & 1) != 0);
+    if (q.bit == 15) {
+      if (q.ph == kPhaseHeader) q.seq = rx_word & 0xFF;
+      else if (q.ph == kPhaseCrc) q.ph = kPhaseDone;
+    }
+    q.sr = rx_word;
+    q.bit = q.bit + 1;
+  }
+
   // The registers of rtl/cp_spi.v (the command buffer is cbuf_).
   struct Regs {
     uint32_t sck = 0, cs = 7, mosi = 0;  // synchronizers: [0] first flop, [1] second, [2] previous

@@ -2,6 +2,7 @@
 #include "card/frame.h"
 
 #include <algorithm>
+#include <array>
 #include <iterator>
 #include <stdexcept>
 #include <string>
@@ -27,13 +28,22 @@ std::string hex(uint32_t v, int digits) {
   return s;
 }
 
+// CRC-16/CCITT-FALSE a byte at a time: entry b is the register's change for a
+// top byte b, eight steps of the bitwise form (polynomial 0x1021, MSB first).
+constexpr std::array<uint16_t, 256> kCrcTable = [] {
+  std::array<uint16_t, 256> t{};
+  for (unsigned b = 0; b < 256; ++b) {
+    uint16_t c = uint16_t(b << 8);
+    for (int i = 0; i < 8; ++i) c = uint16_t((c & 0x8000) ? (c << 1) ^ 0x1021 : c << 1);
+    t[b] = c;
+  }
+  return t;
+}();
+
 }  // namespace
 
 uint16_t crc16(std::span<const uint8_t> bytes, uint16_t crc) {
-  for (uint8_t byte : bytes) {
-    crc ^= uint16_t(byte) << 8;
-    for (int i = 0; i < 8; ++i) crc = uint16_t((crc & 0x8000) ? (crc << 1) ^ 0x1021 : crc << 1);
-  }
+  for (uint8_t byte : bytes) crc = uint16_t(crc << 8) ^ kCrcTable[(crc >> 8 ^ byte) & 0xFF];
   return crc;
 }
 
