@@ -167,7 +167,7 @@ void CpCore::catch_up() {
 void CpCore::set_lazy(bool on) {
   catch_up();
   lazy_ = on;
-  backoff_ = 1;
+  backoff_ = 0;
   backoff_left_ = 0;
 }
 
@@ -288,11 +288,14 @@ void CpCore::tick() {
       lazy_st_ = w.st_in;
       lazy_pending_ = 1;
       lazy_left_ = h - 1;
-      backoff_ = 1;
+      backoff_ = 0;
       return;
     } else {
-      backoff_ = std::min(2 * backoff_, 16u);
+      // Not quiet: look again next clock, then after 1, 2, 4 ... 16 clocks
+      // while it stays so (a move's one busy clock costs one look; a segment's
+      // build, hundreds of busy clocks, few).
       backoff_left_ = backoff_;
+      backoff_ = std::clamp(2 * backoff_, 1u, 16u);
     }
   }
   auto edge = [&](CpFifo& f, const CpFifoIn& fi) {

@@ -111,7 +111,7 @@ class CpCore {
   Out lazy_out_{};
   CpStatusIn lazy_st_{};
   uint64_t lazy_left_ = 0, lazy_pending_ = 0;
-  unsigned backoff_ = 1, backoff_left_ = 0;
+  unsigned backoff_ = 0, backoff_left_ = 0;  // clocks between looks for a quiet, after a look found none
 };
 
 }  // namespace cpstep::model
