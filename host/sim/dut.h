@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -49,9 +50,14 @@ class RtlDut {
     }
     rtl_ = std::make_unique<typename P::Rtl>(ctx_.get(), "top");
     if (!trace_path.empty()) {
-      trace_ = std::make_unique<VerilatedFstC>();
-      rtl_->trace(trace_.get(), 99);
-      trace_->open(trace_path.c_str());
+      // (a build without tracing compiled in, as scripts/bench-verilator's, has no trace())
+      if constexpr (requires(VerilatedFstC* t) { rtl_->trace(t, 99); }) {
+        trace_ = std::make_unique<VerilatedFstC>();
+        rtl_->trace(trace_.get(), 99);
+        trace_->open(trace_path.c_str());
+      } else {
+        throw std::invalid_argument("this Verilated build has no tracing: no waveform for " + trace_path);
+      }
     }
     rtl_->clk = 0;
   }
