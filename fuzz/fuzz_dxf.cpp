@@ -24,8 +24,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // At most 200 chords a spline (the default is 10^6): a spline the fuzzer
   // grows past that is refused quickly, from its estimate or at the cap, and
   // the refusal is what is checked (a spline of 10^6 chords is seconds under ASan).
+  // Likewise at most 20,000 segments placed by INSERTs (the default is 10^6).
   cam::DxfOptions o;
   o.max_spline_chords = 200;
+  o.max_segments = 20000;
   const cam::DxfResult r = cam::parse_dxf(text, "fuzz.dxf", o);
   if (!r.ok()) {
     for (const std::string& e : r.errors) FUZZ_CHECK(e.rfind("fuzz.dxf", 0) == 0, "error without the file: %s", e.c_str());

@@ -11,8 +11,10 @@
 #include <dxflib/dl_dxf.h>
 
 #include <algorithm>
+#include <charconv>
 #include <optional>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -67,7 +69,29 @@ std::string kind_of(const std::string& type) {
 struct Record {
   std::string type, handle;
   int line = 0;
+  // SPLINE and LWPOLYLINE: how many of each group code the entity has, and the
+  // counts it declares (72, 73, 74, 90), which libdxflib allocates for.
+  std::map<std::string, std::size_t> groups;
+  std::map<std::string, std::string> declared;
 };
+
+// The counts a SPLINE or LWPOLYLINE declares, each with the group code of what
+// it counts: libdxflib allocates what a count says and calls back as many
+// times, so a count past what the entity holds is refused before it reads.
+struct DeclaredCount {
+  const char* type;
+  const char* count_code;
+  const char* item_code;
+  const char* what;
+};
+constexpr DeclaredCount kDeclaredCounts[] = {
+    {"SPLINE", "72", "40", "knots"},
+    {"SPLINE", "73", "10", "control points"},
+    {"SPLINE", "74", "11", "fit points"},
+    {"LWPOLYLINE", "90", "10", "vertices"},
+};
+
+bool counted(const std::string& type) { return type == "SPLINE" || type == "LWPOLYLINE"; }
 
 // Where each entity record of the ENTITIES and BLOCKS sections starts.
 struct PreScan {
@@ -109,6 +133,10 @@ PreScan prescan(const std::string& text) {
       continue;
     }
     if (code == "5" && cur && cur->handle.empty()) cur->handle = value;
+    if (cur && counted(cur->type)) {
+      ++cur->groups[code];
+      if (code == "72" || code == "73" || code == "74" || code == "90") cur->declared[code] = value;
+    }
   }
   for (const Record& r : ps.all) ps.by_kind[kind_of(r.type)].push_back(r);
   return ps;
@@ -252,7 +280,18 @@ class Reader : public DL_CreationAdapter {
   // After libdxflib: blocks expanded into model space, units applied.
   void finish() {
     flush();
-    for (const InsertRef& r : inserts_) expand(r, Affine{}, 0);
+    for (const InsertRef& r : inserts_) {
+      // Arrays of arrays multiply: count what the insert places before placing it.
+      const std::uint64_t n = placed(r);
+      if (model_.size() + n > opt_.max_segments) {
+        const std::string count =
+            n > opt_.max_segments ? fmt::format("more than {}", opt_.max_segments) : std::to_string(n);
+        error(r.src, fmt::format("block \"{}\" inserted {} x {} times places {} segments; a drawing holds at most {}",
+                                 r.block, r.cols, r.rows, count, opt_.max_segments));
+        continue;
+      }
+      expand(r, Affine{}, 0);
+    }
     int code = insunits_.value_or(0);
     double mm = insunits_mm(code);
     if (mm == 0) {
@@ -461,6 +500,32 @@ class Reader : public DL_CreationAdapter {
     }
   }
 
+  // The segments one insert places, nested inserts counted (its block's count
+  // memoized), saturating just past max_segments; undefined or recursive blocks
+  // count nothing here (expand() refuses them).
+  std::uint64_t placed(const InsertRef& r) {
+    const std::uint64_t cap = std::uint64_t(opt_.max_segments) + 1;
+    const std::uint64_t one = block_segments(r.block, 0);
+    const std::uint64_t copies = std::uint64_t(r.rows) * std::uint64_t(r.cols);
+    return one == 0 ? 0 : copies > cap / one ? cap : std::min(cap, copies * one);
+  }
+  std::uint64_t block_segments(const std::string& name, int depth) {
+    const auto memo = placed_.find(name);
+    if (memo != placed_.end()) return memo->second;
+    const auto it = blocks_.find(name);
+    if (it == blocks_.end() || depth > 16) return 0;
+    placed_[name] = 0;  // (while counting it: a block inside itself counts nothing)
+    const std::uint64_t cap = std::uint64_t(opt_.max_segments) + 1;
+    std::uint64_t n = it->second.segs.size();
+    for (const InsertRef& inner : it->second.inserts) {
+      const std::uint64_t one = block_segments(inner.block, depth + 1);
+      const std::uint64_t copies = std::uint64_t(inner.rows) * std::uint64_t(inner.cols);
+      n = std::min(cap, n + (one == 0 ? 0 : copies > cap / one ? cap : copies * one));
+    }
+    placed_[name] = n;
+    return n;
+  }
+
   void expand(const InsertRef& r, const Affine& outer, int depth) {
     auto it = blocks_.find(r.block);
     if (it == blocks_.end()) { error(r.src, "block \"" + r.block + "\" is not defined"); return; }
@@ -470,8 +535,12 @@ class Reader : public DL_CreationAdapter {
     }
     stack_.push_back(r.block);
     const BlockDef& b = it->second;
-    for (int row = 0; row < r.rows; ++row)
-      for (int col = 0; col < r.cols; ++col) {
+    // A block that places nothing is gone through once (for its nested errors),
+    // not once a copy: an empty array of 10^10 copies is no work.
+    const bool empty = block_segments(r.block, depth) == 0;
+    const int rows = empty ? 1 : r.rows, cols = empty ? 1 : r.cols;
+    for (int row = 0; row < rows; ++row)
+      for (int col = 0; col < cols; ++col) {
         const Affine m = outer * r.ocs * Affine::translate(r.ipx, r.ipy) * Affine::rotate_deg(r.angle_deg) *
                          Affine::translate(col * r.col_sp, row * r.row_sp) * Affine::scale(r.sx, r.sy) *
                          Affine::translate(-b.base.x, -b.base.y);
@@ -489,6 +558,7 @@ class Reader : public DL_CreationAdapter {
   std::optional<int> insunits_;
   std::optional<std::string> cur_block_;
   std::map<std::string, BlockDef> blocks_;
+  std::map<std::string, std::uint64_t> placed_;  // block_segments()'s memo
   std::vector<InsertRef> inserts_;
   std::vector<Seg> model_;
   std::optional<Poly> poly_;
@@ -523,6 +593,19 @@ DxfResult parse_dxf(const std::string& text, const std::string& path, const DxfO
     out.errors.push_back(path + ":1: not a DXF file (no SECTION)");
     return out;
   }
+  for (const Record& r : ps.all)
+    for (const DeclaredCount& c : kDeclaredCounts) {
+      if (r.type != c.type || !r.declared.count(c.count_code)) continue;
+      const std::string& v = r.declared.at(c.count_code);
+      const auto it = r.groups.find(c.item_code);
+      const std::size_t present = it == r.groups.end() ? 0 : it->second;
+      long long n = -1;
+      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+      if (ec != std::errc{} || end != v.data() + v.size() || n < 0 || std::size_t(n) > present)
+        out.errors.push_back(Source{r.type, r.handle, r.line}.where(path) + ": group " + c.count_code +
+                             " declares " + v + " " + c.what + ", the entity has " + std::to_string(present));
+    }
+  if (!out.errors.empty()) return out;  // (before libdxflib allocates for them)
   static const std::set<std::string> supported = {"LINE", "ARC", "CIRCLE", "ELLIPSE", "LWPOLYLINE",
                                                    "POLYLINE", "SPLINE", "INSERT"};
   for (const Record& r : ps.all)

@@ -36,6 +36,9 @@ struct DxfOptions {
   // refused (plan::Nurbs::chord_parameters: told from its estimate before any
   // chord is made when far over). The fuzz target lowers it to keep each input quick.
   std::size_t max_spline_chords = 1'000'000;  // plan::Nurbs::kMaxChords
+  // The drawing's segments after its INSERTs are placed (arrays of arrays
+  // multiply): an INSERT that would place more is refused before it is placed.
+  std::size_t max_segments = 1'000'000;
 };
 
 struct DxfResult {

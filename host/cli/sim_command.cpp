@@ -46,7 +46,7 @@ class SimRun {
         vcd_(vcd),
         spi_(dut_, sim::spi_timing_for_divider(o.sck_div)),
         link_(spi_, double(kClockHz)),
-        client_(link_, client_options(o)) {
+        client_(link_, client_options()) {
     spi_.set_span_observer([this](uint64_t c, uint64_t n, const sim::CardIn& in, const sim::CardOut& out) {
       observe(c, n, in, out);
     });
@@ -126,7 +126,7 @@ class SimRun {
   }
 
  private:
-  static card::ClientOptions client_options(const SimOptions& o) {
+  static card::ClientOptions client_options() {
     card::ClientOptions c;
     c.axes = sim::kSimAxes;
     c.confirm_each_frame = false;  // the next frame's reply carries each result (pipelined)

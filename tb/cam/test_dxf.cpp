@@ -273,6 +273,88 @@ TEST(Dxf, InsertArrayRotatedScaledBlock) {
     }
 }
 
+// Arrays of arrays multiply: a 1000 x 1000 array of a block that is itself a
+// 1000 x 1000 array of a line would place 10^12 segments (the dxf fuzz target
+// timed out on such a drawing, finding 10). The INSERT is refused with the
+// count before anything is placed; the cap (DxfOptions::max_segments) is exact.
+TEST(Dxf, InsertsPlacingTooManySegmentsAreRefusedBeforePlacing) {
+  DxfText d;
+  d.begin_block("L");
+  d.line(0, 0, 1, 0, true);
+  d.begin_block("A");
+  d.insert("L", 0, 0, 1, 1, 0, 1000, 1000, 2, 2, true);
+  const std::string top = d.insert("A", 0, 0, 1, 1, 0, 1000, 1000, 3000, 3000);
+  const DxfResult r = load(d, "arrays.dxf");
+  ASSERT_EQ(r.errors.size(), 1u);
+  EXPECT_NE(r.errors[0].find("INSERT handle " + top), std::string::npos) << r.errors[0];
+  EXPECT_NE(r.errors[0].find("block \"A\" inserted 1000 x 1000 times places more than 1000000 segments; a drawing "
+                             "holds at most 1000000"),
+            std::string::npos)
+      << r.errors[0];
+
+  DxfText small;
+  small.line(0, 0, 0, 1);  // one segment in model space
+  small.begin_block("L");
+  small.line(0, 0, 1, 0, true);
+  small.insert("L", 0, 0, 1, 1, 0, 3, 2, 2, 2);  // 6 more
+  const auto dir = camtest::temp_dir("dxf");
+  const std::string path = camtest::write(dir / "six.dxf", small.text());
+  DxfOptions o;
+  o.max_segments = 7;
+  const DxfResult fits = load_dxf(path, o);
+  ASSERT_TRUE(fits.ok()) << fits.errors.front();
+  EXPECT_EQ(fits.drawing.segs.size(), 7u);
+  o.max_segments = 6;
+  const DxfResult over = load_dxf(path, o);
+  ASSERT_EQ(over.errors.size(), 1u);
+  EXPECT_NE(over.errors[0].find("block \"L\" inserted 3 x 2 times places 6 segments; a drawing holds at most 6"),
+            std::string::npos)
+      << over.errors[0];
+}
+
+// A block that places nothing, inserted as a 30000 x 30000 array, is gone
+// through once: one error for the undefined block inside it, not 9 * 10^8
+// (the fuzz target's timeout, finding 10, was an empty block's huge array).
+TEST(Dxf, EmptyBlockArrayIsGoneThroughOnce) {
+  DxfText d;
+  d.line(0, 0, 1, 0);
+  d.begin_block("E");
+  d.insert("NOPE", 0, 0, 1, 1, 0, 1, 1, 0, 0, true);
+  d.insert("E", 0, 0, 1, 1, 0, 30000, 30000, 1, 1);
+  const DxfResult r = load(d, "empty_array.dxf");
+  ASSERT_EQ(r.errors.size(), 1u);
+  EXPECT_NE(r.errors[0].find("block \"NOPE\" is not defined"), std::string::npos) << r.errors[0];
+}
+
+// libdxflib allocates what a SPLINE's or LWPOLYLINE's count groups declare and
+// calls back as many times: a count past what the entity holds (73 = 5309503
+// with two control points: 9 s under the fuzz build, finding 10) is refused,
+// naming the entity, before libdxflib reads the drawing.
+TEST(Dxf, DeclaredCountsPastTheEntityAreRefused) {
+  DxfText d;
+  d.line(0, 0, 1, 0);
+  d.raw("0\nSPLINE\n5\nA1\n100\nAcDbEntity\n8\n0\n100\nAcDbSpline\n70\n8\n71\n1\n72\n4\n73\n5309503\n74\n0\n"
+        "40\n0\n40\n0\n40\n1\n40\n1\n10\n0\n20\n0\n30\n0\n10\n5\n20\n5\n30\n0\n");
+  d.raw("0\nLWPOLYLINE\n5\nA2\n100\nAcDbEntity\n8\n0\n100\nAcDbPolyline\n90\n99999999999\n70\n0\n"
+        "10\n0\n20\n0\n10\n1\n20\n1\n");
+  const DxfResult r = load(d, "counts.dxf");
+  ASSERT_EQ(r.errors.size(), 2u) << r.errors[0];
+  EXPECT_NE(r.errors[0].find("SPLINE handle A1: group 73 declares 5309503 control points, the entity has 2"),
+            std::string::npos)
+      << r.errors[0];
+  EXPECT_NE(r.errors[1].find("LWPOLYLINE handle A2: group 90 declares 99999999999 vertices, the entity has 2"),
+            std::string::npos)
+      << r.errors[1];
+  // The same entities with their true counts are read.
+  DxfText ok;
+  ok.raw("0\nSPLINE\n5\nA1\n100\nAcDbEntity\n8\n0\n100\nAcDbSpline\n70\n8\n71\n1\n72\n4\n73\n2\n74\n0\n"
+         "40\n0\n40\n0\n40\n1\n40\n1\n10\n0\n20\n0\n30\n0\n10\n5\n20\n5\n30\n0\n");
+  ok.raw("0\nLWPOLYLINE\n5\nA2\n100\nAcDbEntity\n8\n0\n100\nAcDbPolyline\n90\n2\n70\n0\n"
+         "10\n0\n20\n0\n10\n1\n20\n1\n");
+  const DxfResult good = load(ok, "counts_ok.dxf");
+  EXPECT_TRUE(good.ok()) << good.errors.front();
+}
+
 TEST(Dxf, NestedBlocksAndUnevenScaleMakeAnEllipse) {
   DxfText d;
   d.begin_block("C");

@@ -87,6 +87,44 @@ class Lockstep {
     });
   }
 
+  // A whole SPI transfer's pin schedule (sim::SpiPhase: pins, cycles, sample),
+  // for a model stepper that takes one at once (sim::FastCardDut::run_phases: the
+  // front end alone, several phases to a span): the RTL steps through every cycle
+  // with each phase's pins and is compared in each as advance() does, and the
+  // MISO the model gives for each phase's first cycle (`sampled`, 1 when
+  // undriven: what the master samples) is compared with the RTL's there.
+  template <class Phase, class OnSpan>
+    requires requires(typename sim::ModelStepperOf<P>::type& m, const std::vector<Phase>& ph,
+                      std::vector<uint8_t>& s) {
+      m.run_phases(ph, s, [](uint64_t, uint64_t, const In&, const Out&) {});
+    }
+  void run_phases(const std::vector<Phase>& phases, std::vector<uint8_t>& sampled, OnSpan&& on_span) {
+    size_t p = 0;
+    uint64_t into = 0;  // cycles of phase p done
+    model_.run_phases(phases, sampled, [&](uint64_t c, uint64_t n, const In& pins, const Out& want) {
+      for (uint64_t i = 0; i < n; ++i) {
+        while (into == phases[p].cycles) {
+          ++p;
+          into = 0;
+        }
+        const In& in = phases[p].pins;
+        if (stimulus_.size() < max_history_) stimulus_.push_back(in);
+        else recording_ = false;
+        const Out got = rtl_.step(in);
+        if (into++ == 0) {
+          const bool rtl_miso = !got.miso_oe || got.miso;
+          if (sampled[p] != uint8_t(rtl_miso)) fail("spi_miso_o (as sampled)", sampled[p], rtl_miso);
+        }
+        for (const auto& f : P::fields()) {
+          if (i > 0 && !P::span_holds(f.name)) continue;
+          const uint64_t e = f.get(want), a = f.get(got);
+          if (e != a) fail(f.name, e, a);
+        }
+      }
+      on_span(c, n, pins, want);
+    });
+  }
+
   // Synchronous reset for `cycles` clocks (compared like any other cycle).
   void reset(unsigned cycles = 2) {
     In in{};
