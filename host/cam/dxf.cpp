@@ -15,6 +15,7 @@
 #include <optional>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -69,10 +70,6 @@ std::string kind_of(const std::string& type) {
 struct Record {
   std::string type, handle;
   int line = 0;
-  // SPLINE and LWPOLYLINE: how many of each group code the entity has, and the
-  // counts it declares (72, 73, 74, 90), which libdxflib allocates for.
-  std::map<std::string, std::size_t> groups;
-  std::map<std::string, std::string> declared;
 };
 
 // The counts a SPLINE or LWPOLYLINE declares, each with the group code of what
@@ -91,7 +88,51 @@ constexpr DeclaredCount kDeclaredCounts[] = {
     {"LWPOLYLINE", "90", "10", "vertices"},
 };
 
-bool counted(const std::string& type) { return type == "SPLINE" || type == "LWPOLYLINE"; }
+// Every SPLINE or LWPOLYLINE count past what its entity holds, wherever it sits:
+// the pairs read as libdxflib reads them (a group code is the number its line
+// starts with, 0 when none: a damaged section header does not hide an entity).
+std::vector<std::string> declared_count_errors(const std::string& text, const std::string& path) {
+  struct Entity {
+    std::string type, handle;
+    int line = 0;
+    std::map<std::string, std::size_t> groups;
+    std::map<std::string, std::string> declared;
+  };
+  std::vector<std::string> errors;
+  auto check = [&](const Entity& e) {
+    for (const DeclaredCount& c : kDeclaredCounts) {
+      if (e.type != c.type || !e.declared.count(c.count_code)) continue;
+      const std::string& v = e.declared.at(c.count_code);
+      const auto it = e.groups.find(c.item_code);
+      const std::size_t present = it == e.groups.end() ? 0 : it->second;
+      long long n = -1;
+      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+      if (ec != std::errc{} || end != v.data() + v.size() || n < 0 || std::size_t(n) > present)
+        errors.push_back(Source{e.type, e.handle, e.line}.where(path) + ": group " + c.count_code + " declares " + v +
+                         " " + c.what + ", the entity has " + std::to_string(present));
+    }
+  };
+  std::istringstream in(text);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(trim(l));
+  std::optional<Entity> cur;
+  for (std::size_t i = 0; i + 1 < lines.size(); i += 2) {
+    const std::string code = std::to_string(std::atoi(lines[i].c_str()));
+    const std::string& value = lines[i + 1];
+    if (code == "0") {
+      if (cur) check(*cur);
+      cur.reset();
+      if (value == "SPLINE" || value == "LWPOLYLINE") cur = Entity{value, "", int(i) + 1, {}, {}};
+      continue;
+    }
+    if (!cur) continue;
+    if (code == "5" && cur->handle.empty()) cur->handle = value;
+    ++cur->groups[code];
+    if (code == "72" || code == "73" || code == "74" || code == "90") cur->declared[code] = value;
+  }
+  if (cur) check(*cur);
+  return errors;
+}
 
 // Where each entity record of the ENTITIES and BLOCKS sections starts.
 struct PreScan {
@@ -133,10 +174,6 @@ PreScan prescan(const std::string& text) {
       continue;
     }
     if (code == "5" && cur && cur->handle.empty()) cur->handle = value;
-    if (cur && counted(cur->type)) {
-      ++cur->groups[code];
-      if (code == "72" || code == "73" || code == "74" || code == "90") cur->declared[code] = value;
-    }
   }
   for (const Record& r : ps.all) ps.by_kind[kind_of(r.type)].push_back(r);
   return ps;
@@ -593,18 +630,7 @@ DxfResult parse_dxf(const std::string& text, const std::string& path, const DxfO
     out.errors.push_back(path + ":1: not a DXF file (no SECTION)");
     return out;
   }
-  for (const Record& r : ps.all)
-    for (const DeclaredCount& c : kDeclaredCounts) {
-      if (r.type != c.type || !r.declared.count(c.count_code)) continue;
-      const std::string& v = r.declared.at(c.count_code);
-      const auto it = r.groups.find(c.item_code);
-      const std::size_t present = it == r.groups.end() ? 0 : it->second;
-      long long n = -1;
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-      if (ec != std::errc{} || end != v.data() + v.size() || n < 0 || std::size_t(n) > present)
-        out.errors.push_back(Source{r.type, r.handle, r.line}.where(path) + ": group " + c.count_code +
-                             " declares " + v + " " + c.what + ", the entity has " + std::to_string(present));
-    }
+  out.errors = declared_count_errors(text, path);
   if (!out.errors.empty()) return out;  // (before libdxflib allocates for them)
   static const std::set<std::string> supported = {"LINE", "ARC", "CIRCLE", "ELLIPSE", "LWPOLYLINE",
                                                    "POLYLINE", "SPLINE", "INSERT"};

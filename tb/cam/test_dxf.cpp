@@ -353,6 +353,17 @@ TEST(Dxf, DeclaredCountsPastTheEntityAreRefused) {
          "10\n0\n20\n0\n10\n1\n20\n1\n");
   const DxfResult good = load(ok, "counts_ok.dxf");
   EXPECT_TRUE(good.ok()) << good.errors.front();
+  // Wherever the entity sits: behind a damaged section header ("'" for the 0
+  // before SECTION, which libdxflib reads as 0 all the same) it is refused too.
+  const auto dir = camtest::temp_dir("dxf");
+  const std::string path = camtest::write(dir / "hidden.dxf",
+                                          "0\nSECTION\n2\nHEADER\n0\nENDSEC\n'\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n5\nB7\n"
+                                          "100\nAcDbPolyline\n90\n8777777777\n0\nENDSEC\n0\nEOF\n");
+  const DxfResult hidden = load_dxf(path);
+  ASSERT_EQ(hidden.errors.size(), 1u);
+  EXPECT_NE(hidden.errors[0].find("LWPOLYLINE handle B7: group 90 declares 8777777777 vertices, the entity has 0"),
+            std::string::npos)
+      << hidden.errors[0];
 }
 
 TEST(Dxf, NestedBlocksAndUnevenScaleMakeAnEllipse) {
