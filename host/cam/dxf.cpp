@@ -540,9 +540,9 @@ class Reader : public DL_CreationAdapter {
   // The segments one insert places, nested inserts counted (its block's count
   // memoized), saturating just past max_segments; undefined or recursive blocks
   // count nothing here (expand() refuses them).
-  std::uint64_t placed(const InsertRef& r) {
+  std::uint64_t placed(const InsertRef& r, int depth = 0) {
     const std::uint64_t cap = std::uint64_t(opt_.max_segments) + 1;
-    const std::uint64_t one = block_segments(r.block, 0);
+    const std::uint64_t one = block_segments(r.block, depth);
     const std::uint64_t copies = std::uint64_t(r.rows) * std::uint64_t(r.cols);
     return one == 0 ? 0 : copies > cap / one ? cap : std::min(cap, copies * one);
   }
@@ -554,11 +554,7 @@ class Reader : public DL_CreationAdapter {
     placed_[name] = 0;  // (while counting it: a block inside itself counts nothing)
     const std::uint64_t cap = std::uint64_t(opt_.max_segments) + 1;
     std::uint64_t n = it->second.segs.size();
-    for (const InsertRef& inner : it->second.inserts) {
-      const std::uint64_t one = block_segments(inner.block, depth + 1);
-      const std::uint64_t copies = std::uint64_t(inner.rows) * std::uint64_t(inner.cols);
-      n = std::min(cap, n + (one == 0 ? 0 : copies > cap / one ? cap : copies * one));
-    }
+    for (const InsertRef& inner : it->second.inserts) n = std::min(cap, n + placed(inner, depth + 1));
     placed_[name] = n;
     return n;
   }

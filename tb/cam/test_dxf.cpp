@@ -331,13 +331,18 @@ TEST(Dxf, EmptyBlockArrayIsGoneThroughOnce) {
 // with two control points: 9 s under the fuzz build, finding 10) is refused,
 // naming the entity, before libdxflib reads the drawing.
 TEST(Dxf, DeclaredCountsPastTheEntityAreRefused) {
-  DxfText d;
-  d.line(0, 0, 1, 0);
-  d.raw("0\nSPLINE\n5\nA1\n100\nAcDbEntity\n8\n0\n100\nAcDbSpline\n70\n8\n71\n1\n72\n4\n73\n5309503\n74\n0\n"
-        "40\n0\n40\n0\n40\n1\n40\n1\n10\n0\n20\n0\n30\n0\n10\n5\n20\n5\n30\n0\n");
-  d.raw("0\nLWPOLYLINE\n5\nA2\n100\nAcDbEntity\n8\n0\n100\nAcDbPolyline\n90\n99999999999\n70\n0\n"
-        "10\n0\n20\n0\n10\n1\n20\n1\n");
-  const DxfResult r = load(d, "counts.dxf");
+  // A SPLINE of two control points and an LWPOLYLINE of two vertices, with the
+  // counts they declare.
+  auto drawing = [](const std::string& control, const std::string& vertices) {
+    DxfText d;
+    d.line(0, 0, 1, 0);
+    d.raw("0\nSPLINE\n5\nA1\n100\nAcDbEntity\n8\n0\n100\nAcDbSpline\n70\n8\n71\n1\n72\n4\n73\n" + control +
+          "\n74\n0\n40\n0\n40\n0\n40\n1\n40\n1\n10\n0\n20\n0\n30\n0\n10\n5\n20\n5\n30\n0\n");
+    d.raw("0\nLWPOLYLINE\n5\nA2\n100\nAcDbEntity\n8\n0\n100\nAcDbPolyline\n90\n" + vertices +
+          "\n70\n0\n10\n0\n20\n0\n10\n1\n20\n1\n");
+    return d;
+  };
+  const DxfResult r = load(drawing("5309503", "99999999999"), "counts.dxf");
   ASSERT_EQ(r.errors.size(), 2u) << r.errors[0];
   EXPECT_NE(r.errors[0].find("SPLINE handle A1: group 73 declares 5309503 control points, the entity has 2"),
             std::string::npos)
@@ -346,12 +351,7 @@ TEST(Dxf, DeclaredCountsPastTheEntityAreRefused) {
             std::string::npos)
       << r.errors[1];
   // The same entities with their true counts are read.
-  DxfText ok;
-  ok.raw("0\nSPLINE\n5\nA1\n100\nAcDbEntity\n8\n0\n100\nAcDbSpline\n70\n8\n71\n1\n72\n4\n73\n2\n74\n0\n"
-         "40\n0\n40\n0\n40\n1\n40\n1\n10\n0\n20\n0\n30\n0\n10\n5\n20\n5\n30\n0\n");
-  ok.raw("0\nLWPOLYLINE\n5\nA2\n100\nAcDbEntity\n8\n0\n100\nAcDbPolyline\n90\n2\n70\n0\n"
-         "10\n0\n20\n0\n10\n1\n20\n1\n");
-  const DxfResult good = load(ok, "counts_ok.dxf");
+  const DxfResult good = load(drawing("2", "2"), "counts_ok.dxf");
   EXPECT_TRUE(good.ok()) << good.errors.front();
   // Wherever the entity sits: behind a damaged section header ("'" for the 0
   // before SECTION, which libdxflib reads as 0 all the same) it is refused too.
