@@ -20,7 +20,7 @@ cmake_minimum_required(VERSION 3.25)
 
 set(CPSTEP_BUILDS_JSON "${CMAKE_CURRENT_LIST_DIR}/../rtl/builds.json")
 # The parameters every build names, in the order the build id hashes them.
-set(CPSTEP_BUILD_PARAM_NAMES N W UMAX KMAX CAW SAW TW MUL_DSP CBUF_AW STEP_POL_RESET DIR_POL_RESET)
+set(CPSTEP_BUILD_PARAM_NAMES N W UMAX KMAX CAW SAW TW CBUF_AW STEP_POL_RESET DIR_POL_RESET)
 
 function(cpstep_builds_fail msg)
   message(FATAL_ERROR "rtl/builds.json: ${msg}")
@@ -159,7 +159,7 @@ struct Build {
   std::string_view top;        // the board's top module (boards only)
   std::uint32_t clock_hz = 0;  // the card clock
   std::uint32_t build_id = 0;  // READ 0x25 (docs/CORE.md)
-  unsigned n = 0, w = 0, umax = 0, kmax = 0, caw = 0, saw = 0, tw = 0, mul_dsp = 0, cbuf_aw = 0;
+  unsigned n = 0, w = 0, umax = 0, kmax = 0, caw = 0, saw = 0, tw = 0, cbuf_aw = 0;
   unsigned step_pol_reset = 1, dir_pol_reset = 1;
 };
 

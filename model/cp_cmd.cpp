@@ -33,16 +33,19 @@ bool CpCmd::ready(const In& i) const {
   }
 }
 
-// The chunk check's multiplier: one bit of mul_a a cycle; false when no bit is
-// left (the product is complete). The RTL's MUL_DSP build takes the same cycles
-// and ends with the same product.
-bool CpCmd::multiply_step(Regs& d) const {
-  const Regs& q = r_;
-  if (q.mul_a == 0) return false;
-  if (q.mul_a & 1) d.product = q.product + q.mul_b;
-  d.mul_a = q.mul_a >> 1;
-  d.mul_b = q.mul_b * 2;
-  return true;
+// The chunk check's verdict on a chunk (docs/CORE.md "Chunk check"): the last
+// increment add + (count-2)·add2 (no add2 term when count < 2) must not have the
+// opposite sign of add; the last delay interval + (count-1)·(add + last
+// increment)/2 must be 1 .. 2^32-1. Exact in 64 bits: |products| < 2^47.
+CoreError CpCmd::chunk_verdict(const Regs& q) {
+  const int64_t add = bits::sext16(q.add);
+  const int64_t m1 = q.count < 2 ? 0 : int64_t(q.count) - 2;
+  const int64_t m2 = int64_t((q.count - 1) & 0xFFFF);
+  const int64_t last_inc = add + m1 * bits::sext16(q.add2);
+  if ((add > 0 && last_inc < 0) || (add < 0 && last_inc > 0)) return CoreError::seg_add2;
+  const int64_t last_delay = int64_t(q.interval) + m2 * (add + last_inc) / 2;  // the product is even
+  if (last_delay <= 0 || last_delay > int64_t(0xFFFFFFFF)) return CoreError::seg_delay;
+  return CoreError::none;
 }
 
 CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
@@ -152,15 +155,13 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
         refuse(CoreError::seg_chunk_zero);
         d.discard = true;
       }
-      d.product = 0;
       if (q.seg_add2) {
         d.parse = Parse::chunk_add2;
       } else {
-        // The chunk's last word: add2 = 0, straight to pass 2 with 2·add.
+        // The chunk's last word: add2 = 0.
         d.add2 = 0;
         o.ch_wr = keep;
-        d.mul_a = (count - 1) & 0xFFFF;
-        d.mul_b = 2 * bits::sext16(add);
+        d.check_clock = 0;
         d.parse = Parse::chunk_check;
       }
       break;
@@ -170,41 +171,19 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
       const uint32_t add2 = word & 0xFFFF;
       d.add2 = add2;
       o.ch_wr = keep;
-      d.product = 0;
-      if (add2 == 0) {
-        d.mul_a = (q.count - 1) & 0xFFFF;
-        d.mul_b = 2 * bits::sext16(q.add);
-        d.parse = Parse::chunk_check;
-      } else {
-        // Pass 1: (count-2)·add2, no multiplier bit when count < 2.
-        d.mul_a = q.count < 2 ? 0 : q.count - 2;
-        d.mul_b = bits::sext16(add2);
-        d.parse = Parse::chunk_inc;
-      }
-      break;
-    }
-    case Parse::chunk_inc: {
-      // Pass 1 done: the last increment add + (count-2)·add2 must not have the
-      // opposite sign of add; then pass 2's multiplicand add + last increment.
-      if (multiply_step(d)) break;
-      const int64_t add = bits::sext16(q.add), last_inc = add + q.product;
-      if (keep && ((add > 0 && last_inc < 0) || (add < 0 && last_inc > 0))) {
-        refuse(CoreError::seg_add2);
-        d.discard = true;
-      }
-      d.product = 0;
-      d.mul_a = (q.count - 1) & 0xFFFF;
-      d.mul_b = add + last_inc;
+      d.check_clock = 0;
       d.parse = Parse::chunk_check;
       break;
     }
     case Parse::chunk_check: {
-      // Pass 2 done: the last delay interval + (count-1)·(add + last increment)/2;
-      // after the segment's last chunk, the count sum and the commit.
-      if (multiply_step(d)) break;
-      const int64_t last_delay = int64_t(q.interval) + (q.product >> 1);  // product is even
-      if (keep && (last_delay <= 0 || last_delay > int64_t(0xFFFFFFFF))) {
-        refuse(CoreError::seg_delay);
+      // The check takes kCheckClocks clocks (the RTL's is bit-serial); its verdict
+      // on the last; then, after the segment's last chunk, the count sum and the commit.
+      if (q.check_clock + 1 < kCheckClocks) {
+        d.check_clock = q.check_clock + 1;
+        break;
+      }
+      if (const CoreError e = chunk_verdict(q); keep && e != CoreError::none) {
+        refuse(e);
         d.discard = true;
       }
       d.chunks_left = (q.chunks_left - 1) & 0xFFFF;

@@ -42,6 +42,10 @@ struct CpCmdOut {
 
 class CpCmd {
  public:
+  // Clocks a chunk's check takes in the chunk_check state, whatever its values: the
+  // RTL checks it bit-serially, bit i of every value in clock i (docs/CORE.md).
+  static constexpr uint32_t kCheckClocks = 51;
+
   using Params = CpCmdParams;
   using In = CpCmdIn;
   using Out = CpCmdOut;
@@ -58,7 +62,7 @@ class CpCmd {
 
  private:
   enum class Parse {
-    command, seg_h1, seg_v, chunk_interval, chunk_count, chunk_add2, chunk_inc, chunk_check, reply
+    command, seg_h1, seg_v, chunk_interval, chunk_count, chunk_add2, chunk_check, reply
   };
   struct Regs {
     // Reset.
@@ -72,15 +76,12 @@ class CpCmd {
     uint32_t chunks_left = 0, v_index = 0;
     uint32_t interval = 0, count = 0, add = 0, add2 = 0;
     uint64_t count_sum = 0;
-    // The chunk check's products: pass 1 (count-2)·add2, pass 2
-    // (count-1)·(add + last increment); both fit 49 bits, never wrap.
-    int64_t product = 0, mul_b = 0;
-    uint32_t mul_a = 0;
+    uint32_t check_clock = 0;  // the chunk check's clock, 0 .. kCheckClocks-1
     uint32_t rsp_data = 0, rsp_addr = 0;
     bool operator==(const Regs&) const = default;
   };
   Out eval(const In& i, Regs& d) const;
-  bool multiply_step(Regs& d) const;
+  static CoreError chunk_verdict(const Regs& q);
   bool ready(const In& i) const;
 
   Params p_;

@@ -40,6 +40,7 @@ CpPulseIn CpCore::pulse_in(unsigned a, bool step) const {
   pi.cfg_dir_hold = c.dir_hold;
   pi.cfg_step_pol = c.step_pol;
   pi.cfg_dir_pol = c.dir_pol;
+  pi.cfg_new = status_.cfg_new();
   pi.dir = (run_.dir() >> a & 1) != 0;
   pi.step = step;
   return pi;

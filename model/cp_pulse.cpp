@@ -25,9 +25,10 @@ CpPulse::Regs CpPulse::reset_state() const {
 }
 
 // quiet: a STEP edge (leading or polarity) may happen now —
-//   !active && low_cnt >= step_low && dir_pin == want_dir && setup_cnt >= dir_setup
+//   !cfg_new && !active && low_cnt >= step_low && dir_pin == want_dir && setup_cnt >= dir_setup
+// (none in the cycle after a configuration write).
 bool CpPulse::quiet(const CpPulseIn& i) const {
-  return !r_.active && r_.low_cnt >= (i.cfg_step_low & sat_) && r_.dir_pin == want_dir(i) &&
+  return !i.cfg_new && !r_.active && r_.low_cnt >= (i.cfg_step_low & sat_) && r_.dir_pin == want_dir(i) &&
          r_.setup_cnt >= (i.cfg_dir_setup & sat_);
 }
 
@@ -75,7 +76,7 @@ void CpPulse::tick() {
 
 uint64_t CpPulse::quiet_for(const CpPulseIn& i) const {
   const Regs& q = r_;
-  if (i.rst) return 0;
+  if (i.rst || i.cfg_new) return 0;
   // This clock starts a pulse, moves the STEP polarity or the DIR pin: an event.
   if ((i.step && ready(i)) || (quiet(i) && q.step_pol != i.cfg_step_pol)) return 0;
   if (!q.active && q.dir_pin != want_dir(i) && q.low_cnt >= (i.cfg_dir_hold & sat_)) return 0;

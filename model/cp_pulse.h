@@ -21,6 +21,7 @@ struct CpPulseIn {
   bool rst = false;
   uint32_t cfg_step_high = 1, cfg_step_low = 1, cfg_dir_setup = 0, cfg_dir_hold = 0;
   bool cfg_step_pol = true, cfg_dir_pol = true;
+  bool cfg_new = false;  // the configuration was written at the last edge: no STEP edge now
   bool dir = false;
   bool step = false;
 };

@@ -90,6 +90,7 @@ CpStatus::Out CpStatus::eval_outputs(const In& i) const {
   o.moves_done = q.moves_done;
   o.segments_done = q.segments_done;
   o.cfg = q.cfg;
+  o.cfg_new = q.cfg_new;
   return o;
 }
 
@@ -118,6 +119,7 @@ CpStatus::Regs CpStatus::next(const In& i) const {
     d.fault = true;
     d.err = f.code;
   }
+  d.cfg_new = i.cfg_write;
   if (i.cfg_write) {
     const uint32_t word = i.cfg_word;
     const uint32_t axis = word >> 24 & 0xF;

@@ -51,6 +51,7 @@ struct CpStatusOut {
   bool flush = false, stretched = false, enable = false;
   uint32_t status = 0, stretch_count = 0, moves_done = 0, segments_done = 0;
   std::array<PulseConfig, kCoreMaxAxes> cfg{};
+  bool cfg_new = false;  // CONFIG was written at the last edge
 };
 
 // The fault priority encoder: which fault (if any) a cycle raises. Highest
@@ -81,6 +82,7 @@ class CpStatus {
   // Registered outputs, for the core's other parts.
   bool fault() const { return r_.fault; }
   const PulseConfig& config(unsigned axis) const { return r_.cfg[axis]; }
+  bool cfg_new() const { return r_.cfg_new; }
   // Register `reg` as READ shows it for the inputs `i`.
   uint32_t read(const In& i, uint32_t reg) const;
 
@@ -91,6 +93,7 @@ class CpStatus {
     bool stretched = false, enable = false;
     uint32_t stretch_count = 0, moves_done = 0, segments_done = 0;
     std::array<PulseConfig, kCoreMaxAxes> cfg{};
+    bool cfg_new = false;
     bool operator==(const Regs&) const = default;
   };
   Regs reset_state() const;

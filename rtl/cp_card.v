@@ -23,8 +23,6 @@ module cp_card #(
     parameter integer SAW = 2,
     // Width of the pulse timing fields.
     parameter integer TW = 16,
-    // The chunk check's multiplier: 0 bit-serial, 1 DSP blocks (docs/CORE.md).
-    parameter integer MUL_DSP = 0,
     // Command buffer address width: it holds 2^CBUF_AW words.
     parameter integer CBUF_AW = 9,
     // Pulse timing after reset, in clock cycles (the host configures the real ones).
@@ -88,7 +86,7 @@ cp_spi #(.N(N), .CBUF_AW(CBUF_AW)) u_spi (
     .rd_addr_o(rd_addr), .rd_data_i(rd_data),
     .estop_i(estop), .enable_i(enable_o));
 
-cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32), .MUL_DSP(MUL_DSP),
+cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32),
           .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID),
           .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
           .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),

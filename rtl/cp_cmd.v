@@ -5,9 +5,12 @@
 // validates every segment whole: its header and v_i go into the segment queue
 // and its chunks into the chunk queue uncommitted; after its last chunk both are
 // committed together, or both rolled back when any check failed. Each chunk's
-// last delay is checked with a multiplier (bit-serial, or the hard one with
-// MUL_DSP). CONFIG, CONTROL and READ become one-cycle requests to cp_status and
-// cp_run; a refusal is a fault request with its code (cp_status decides).
+// last increment and last delay are checked bit-serially, least significant bit
+// first, in 51 clocks: two serial-parallel multipliers and three serial
+// adders, a few dozen logic cells instead of 49-bit datapaths (the link brings a
+// chunk in hundreds of clocks). CONFIG, CONTROL and READ become one-cycle
+// requests to cp_status and cp_run; a refusal is a fault request with its code
+// (cp_status decides).
 //
 // Part of cp_core (docs/CORE.md "Structure"); model twin model/cp_cmd.*, bench
 // tb/core/test_core_parts.cpp.
@@ -20,8 +23,7 @@ module cp_cmd #(
     parameter integer UMAX = 1048575,
     parameter integer KMAX = 8,
     parameter integer CAW = 6,
-    parameter integer TW = 16,
-    parameter integer MUL_DSP = 0
+    parameter integer TW = 16
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -89,12 +91,13 @@ localparam [3:0] P_H1   = 4'd1;   // segment: dir and U
 localparam [3:0] P_V    = 4'd2;   // segment: v_i
 localparam [3:0] P_C0   = 4'd3;   // chunk: interval
 localparam [3:0] P_C1   = 4'd4;   // chunk: add and count
-localparam [3:0] P_MUL  = 4'd5;   // chunk: checking its last delay
+localparam [3:0] P_CHK  = 4'd5;   // chunk: checking its last increment and last delay
 localparam [3:0] P_RSP  = 4'd6;   // a reply waits to be taken
 localparam [3:0] P_C2   = 4'd7;   // chunk: add2 (segments whose chunks carry it)
-localparam [3:0] P_INC  = 4'd8;   // chunk: its last increment add + (count-2)*add2
-// Width of the products: |(count-1)*(add + last increment)| < 2^47.
-localparam integer MW = 49;
+// The check's clocks: bit i of every serial value in clock i = 0 .. 50. The values
+// are exact in 50-bit two's complement (|(count-1)*(add + last increment)| < 2^47),
+// and bits past that are the sign's copies.
+localparam [5:0] CHECK_LAST = 6'd50;
 
 // ---------------------------------------------------------------- state
 reg [3:0]    p_state_q, p_state_d;       // reset
@@ -111,10 +114,20 @@ reg [15:0]   count_q, count_d;
 reg [15:0]   add_q, add_d;
 reg [15:0]   add2_q, add2_d;
 reg [33:0]   sum_q, sum_d;               // chunk counts so far
-reg [MW-1:0] prod_q, prod_d;             // a product, built bit by bit
-reg [15:0]   mul_a_q, mul_a_d;           // multiplier bits left
-reg [MW-1:0] mul_b_q, mul_b_d;           // multiplicand (shifted when bit-serial)
-reg [15:0]   mul_a0_q, mul_a0_d;         // the multiplier whole (MUL_DSP)
+// The serial check (P_CHK): the clock's bit index, the two multipliers' partial
+// sums, the three adders' carries and what the bits seen so far say.
+reg [5:0]    ck_i_q, ck_i_d;
+reg [15:0]   acc1_q, acc1_d;             // (count-2)*add2
+reg [15:0]   acc2_q, acc2_d;             // (count-1)*(add + last increment)
+reg          c1_q, c1_d;                 // last increment = add + (count-2)*add2
+reg          li_sign_q, li_sign_d;       // its bit of the last clock
+reg          b_q, b_d;                   // bit i-1 of add + last increment (pass 2's input)
+reg          c2_q, c2_d;                 // add + last increment
+reg          c3_q, c3_d;                 // last delay = interval + product/2
+reg          li_nz_q, li_nz_d;           // the last increment is not 0
+reg          dl_nz_q, dl_nz_d;           // the last delay has a bit set below 32
+reg          dl_hi_q, dl_hi_d;           // ... at or above 32 (too long, or negative)
+reg          sum_ne_q, sum_ne_d;         // the count sum differs from U*2^k in a bit seen
 reg [31:0]   rsp_data_q, rsp_data_d;
 reg [7:0]    rsp_addr_q, rsp_addr_d;
 
@@ -124,24 +137,39 @@ wire        take      = cmd_valid_i && cmd_ready_o;
 wire [15:0] c1_count  = cmd_data_i[15:0];
 wire [15:0] c1_add    = cmd_data_i[31:16];
 wire [15:0] c2_add2   = cmd_data_i[15:0];
-wire [33:0] seg_moves = {10'd0, seg_u_q} << hdr_k_q;
 wire        keep      = !discard_q && !fault_i;   // the segment being read is still good
-// Pass 2 of a chunk's check: prod = (count-1)*(add + last increment), even, so the
-// last delay is interval + prod/2.
-wire [MW:0]   last_delay = {{(MW-31){1'b0}}, interval_q} + {{2{prod_q[MW-1]}}, prod_q[MW-1:1]};
-wire [MW-1:0] add_sx   = {{(MW-16){add_q[15]}}, add_q};
-// Pass 1: prod = (count-2)*add2; the last increment add + prod.
-wire [MW-1:0] last_inc = add_sx + prod_q;
-// MUL_DSP: the whole product at once. Every multiplicand fits 34 signed bits
-// (2·add, add2, add + last increment: |.| < 2^32 + 2^16), the multiplier 16
-// unsigned; the product is taken mod 2^MW like the bit-serial one.
-wire signed [16:0] mul_sa   = {1'b0, mul_a0_q};
-wire signed [33:0] mul_sb   = mul_b_q[33:0];
-wire signed [50:0] mul_full = mul_sa * mul_sb;
-wire [MW-1:0]      mul_prod = mul_full[MW-1:0];
-wire unused_mul = &{1'b0, mul_full[50:MW]};
-wire          inc_flip = (!add_q[15] && add_q != 16'd0 && last_inc[MW-1]) ||
-                         (add_q[15] && !last_inc[MW-1] && last_inc != {MW{1'b0}});
+// ---------------------------------------------------------------- the serial check
+// Pass 1 takes bit i of add2 and add (sign-extended) in clock i; pass 2 runs one
+// clock behind it (its input bit is registered, so no clock holds both adders),
+// and the last delay one more: bit i-2 of interval in clock i.
+wire [3:0]  ck_b16   = (ck_i_q > 6'd15) ? 4'd15 : ck_i_q[3:0];
+wire        ck_add2  = add2_q[ck_b16];
+wire        ck_add   = add_q[ck_b16];
+wire [5:0]  ck_j     = ck_i_q - 6'd2;
+wire        ck_jv    = ck_i_q >= 6'd2;            // a delay bit (j = i-2) this clock
+wire        ck_iv    = ck_jv && ck_j < 6'd32 && interval_q[ck_j[4:0]];
+// The multipliers, unsigned: count-2 (0 when count < 2) and count-1.
+wire [15:0] ck_m1    = (count_q < 16'd2) ? 16'd0 : count_q - 16'd2;
+wire [15:0] ck_m2    = count_q - 1'b1;
+// Pass 1: bit i of (count-2)*add2, then of the last increment and of add + it.
+wire [16:0] ck_s1    = {1'b0, acc1_q} + (ck_add2 ? {1'b0, ck_m1} : 17'd0);
+wire        ck_li    = ck_s1[0] ^ ck_add ^ c1_q;
+wire        ck_b     = ck_add ^ ck_li ^ c2_q;
+// Pass 2: bit i-1 of (count-1)*(add + last increment), from bit i-1 of add + it
+// (b_q); that is bit i-2 of product/2, which interval's bit i-2 meets. (Bit 0 of the
+// product is 0: it is even.)
+wire [16:0] ck_s2    = {1'b0, acc2_q} + (b_q ? {1'b0, ck_m2} : 17'd0);
+wire        ck_dl    = ck_iv ^ ck_s2[0] ^ c3_q;
+// At the last clock (i = 50) the verdicts, from the flags alone: the values are exact
+// in 48 bits (|last delay| < 2^47, |last increment| < 2^32), so the last increment's
+// bit 49 (li_sign_q) and the last delay's bits up to 47 are all it takes.
+wire        inc_flip = (!add_q[15] && add_q != 16'd0 && li_sign_q) || (add_q[15] && !li_sign_q && li_nz_q);
+wire        dl_bad   = dl_hi_q || !dl_nz_q;
+// The count sum against the segment's moves U*2^k, one bit a clock (i = 0 .. 33),
+// during every chunk's check; after the last chunk's, the verdict.
+wire [5:0]  ck_uk    = ck_i_q - {2'd0, hdr_k_q};
+wire        ck_moves = ck_i_q < 6'd34 && ck_i_q >= {2'd0, hdr_k_q} && ck_uk < 6'd24 && seg_u_q[ck_uk[4:0]];
+wire        ck_sum   = ck_i_q < 6'd34 && sum_q[ck_i_q];
 
 // The chunk queue word: last chunk of its segment, add2, count, add, interval.
 assign ch_wdata_o = {nchunks_q == 16'd1, add2_d, count_d, add_d, interval_q};
@@ -160,7 +188,23 @@ always @* begin
     nchunks_d = nchunks_q;  v_idx_d = v_idx_q;
     interval_d = interval_q;  count_d = count_q;  add_d = add_q;  add2_d = add2_q;  sum_d = sum_q;
     seg_add2_d = seg_add2_q;
-    prod_d = prod_q;  mul_a_d = mul_a_q;  mul_b_d = mul_b_q;  mul_a0_d = mul_a0_q;
+    // The serial check clocks its bits in P_CHK; each chunk word restarts it.
+    ck_i_d  = ck_i_q + 1'b1;
+    acc1_d  = ck_s1[16:1];  acc2_d = ck_s2[16:1];
+    c1_d    = (ck_s1[0] & ck_add) | (ck_s1[0] & c1_q) | (ck_add & c1_q);
+    c2_d    = (ck_add & ck_li) | (ck_add & c2_q) | (ck_li & c2_q);
+    c3_d    = ck_jv && ((ck_iv & ck_s2[0]) | (ck_iv & c3_q) | (ck_s2[0] & c3_q));
+    b_d     = ck_b;
+    li_sign_d = ck_li;
+    li_nz_d = li_nz_q || ck_li;
+    dl_nz_d = dl_nz_q || (ck_jv && ck_j < 6'd32 && ck_dl);
+    dl_hi_d = dl_hi_q || (ck_i_q > 6'd33 && ck_dl);
+    sum_ne_d = sum_ne_q || ck_sum != ck_moves;
+    if (p_state_q != P_CHK) begin
+        ck_i_d = 6'd0;  acc1_d = 16'd0;  acc2_d = 16'd0;
+        c1_d = 1'b0;  c2_d = 1'b0;  c3_d = 1'b0;  b_d = 1'b0;  li_sign_d = 1'b0;
+        li_nz_d = 1'b0;  dl_nz_d = 1'b0;  dl_hi_d = 1'b0;  sum_ne_d = 1'b0;
+    end
 
     seg_wr_o = 1'b0;  seg_wdata_o = {SWW{1'b0}};  seg_commit_o = 1'b0;  seg_rollback_o = 1'b0;
     ch_wr_o = 1'b0;  ch_commit_o = 1'b0;  ch_rollback_o = 1'b0;
@@ -253,53 +297,30 @@ always @* begin
         if (keep && (interval_q == 32'd0 || c1_count == 16'd0)) begin
             refuse = 1'b1;  refuse_code = E_SEG_CHUNK_ZERO;  discard_d = 1'b1;
         end
-        prod_d  = {MW{1'b0}};
         if (seg_add2_q) begin
             p_state_d = P_C2;
         end else begin
-            // The chunk's last word: add2 = 0, straight to pass 2 with 2*add.
+            // The chunk's last word: add2 = 0.
             add2_d  = 16'd0;
             ch_wr_o = keep;
-            mul_a_d = c1_count - 1'b1;
-            mul_b_d = {{(MW-17){c1_add[15]}}, c1_add, 1'b0};
-            p_state_d = P_MUL;
+            p_state_d = P_CHK;
         end
     end
 
     P_C2: if (take) begin
         add2_d  = c2_add2;
         ch_wr_o = keep;
-        prod_d  = {MW{1'b0}};
-        if (c2_add2 == 16'd0) begin
-            mul_a_d = count_q - 1'b1;
-            mul_b_d = {add_sx[MW-2:0], 1'b0};
-            p_state_d = P_MUL;
-        end else begin
-            // Pass 1: (count-2)*add2, no multiplier bit when count < 2.
-            mul_a_d = (count_q < 16'd2) ? 16'd0 : count_q - 16'd2;
-            mul_b_d = {{(MW-16){c2_add2[15]}}, c2_add2};
-            p_state_d = P_INC;
-        end
+        p_state_d = P_CHK;
     end
 
-    P_INC: begin
-        // (count-2) * add2 (the multiplier below); then the sign rule and pass 2.
-        if (mul_a_q == 16'd0) begin
+    P_CHK: begin
+        // The last clock of the check: the last increment must not have the
+        // opposite sign of add; the last delay must be 1 .. 2^32-1. Then, after the
+        // segment's last chunk, the count sum and the commit.
+        if (ck_i_q == CHECK_LAST) begin
             if (keep && inc_flip) begin
                 refuse = 1'b1;  refuse_code = E_SEG_ADD2;  discard_d = 1'b1;
-            end
-            prod_d  = {MW{1'b0}};
-            mul_a_d = count_q - 1'b1;
-            mul_b_d = add_sx + last_inc;
-            p_state_d = P_MUL;
-        end
-    end
-
-    P_MUL: begin
-        // (count-1) * (add + last increment) (the multiplier below); then the last delay.
-        if (mul_a_q == 16'd0) begin
-            if (keep && (last_delay[MW] || last_delay[MW-1:32] != {(MW-32){1'b0}} ||
-                         last_delay == {(MW+1){1'b0}})) begin
+            end else if (keep && dl_bad) begin
                 refuse = 1'b1;  refuse_code = E_SEG_DELAY;  discard_d = 1'b1;
             end
             nchunks_d = nchunks_q - 1'b1;
@@ -309,7 +330,7 @@ always @* begin
                 ch_rollback_o  = 1'b1;
                 seg_rollback_o = 1'b1;
                 p_state_d      = P_CMD;
-            end else if (sum_q != seg_moves) begin
+            end else if (sum_ne_q) begin
                 refuse = 1'b1;  refuse_code = E_SEG_COUNT_SUM;
                 ch_rollback_o  = 1'b1;
                 seg_rollback_o = 1'b1;
@@ -327,22 +348,6 @@ always @* begin
 
     default: p_state_d = P_CMD;
     endcase
-
-    // The chunk check's multiplier: one bit of mul_a a cycle while any is left.
-    // Bit-serial, the product grows by the shifted multiplicand; MUL_DSP, it is
-    // the whole product of the operands, which hold still (a multiplier of 0
-    // takes no cycle and leaves the product 0, as bit-serial).
-    if ((p_state_q == P_INC || p_state_q == P_MUL) && mul_a_q != 16'd0) begin
-        if (MUL_DSP != 0) begin
-            prod_d = mul_prod;
-        end else begin
-            if (mul_a_q[0]) prod_d = prod_q + mul_b_q;
-            mul_b_d = mul_b_q << 1;
-        end
-        mul_a_d = mul_a_q >> 1;
-    end else begin
-        mul_a0_d = mul_a_d;
-    end
 
     fault_o      = refuse;
     fault_code_o = refuse_code;
@@ -363,7 +368,9 @@ always @(posedge clk) begin
     nchunks_q <= nchunks_d;  v_idx_q <= v_idx_d;
     interval_q <= interval_d;  count_q <= count_d;  add_q <= add_d;  add2_q <= add2_d;
     sum_q <= sum_d;  seg_add2_q <= seg_add2_d;
-    prod_q <= prod_d;  mul_a_q <= mul_a_d;  mul_b_q <= mul_b_d;  mul_a0_q <= mul_a0_d;
+    ck_i_q <= ck_i_d;  acc1_q <= acc1_d;  acc2_q <= acc2_d;
+    c1_q <= c1_d;  c2_q <= c2_d;  c3_q <= c3_d;  b_q <= b_d;  li_sign_q <= li_sign_d;
+    li_nz_q <= li_nz_d;  dl_nz_q <= dl_nz_d;  dl_hi_q <= dl_hi_d;  sum_ne_q <= sum_ne_d;
     rsp_data_q <= rsp_data_d;  rsp_addr_q <= rsp_addr_d;
 end
 

@@ -31,9 +31,6 @@ module cp_core #(
     parameter integer TW = 16,
     // Width of the position counters.
     parameter integer PW = 32,
-    // The chunk check's multiplier: 0 bit-serial in logic (one adder), 1 a hard
-    // multiplier (`*`: the iCE40 UP5K's SB_MAC16 DSP blocks). Same cycles either way.
-    parameter integer MUL_DSP = 0,
     // Pulse timing after reset, in clock cycles (the host configures the real ones).
     parameter integer STEP_HIGH_RESET = 1,
     parameter integer STEP_LOW_RESET = 1,
@@ -124,9 +121,6 @@ generate
     if (CLK_HZ < 1) begin : g_check_clk_hz
         cp_core_parameter_CLK_HZ_must_be_positive u_bad ();
     end
-    if (MUL_DSP < 0 || MUL_DSP > 1) begin : g_check_mul_dsp
-        cp_core_parameter_MUL_DSP_must_be_0_or_1 u_bad ();
-    end
 endgenerate
 
 // ---------------------------------------------------------------- the seams
@@ -134,6 +128,7 @@ endgenerate
 wire          fault, flush;
 wire [N*TW-1:0] cfg_high, cfg_low, cfg_setup, cfg_hold;
 wire [N-1:0]  cfg_step_pol, cfg_dir_pol;
+wire          cfg_new;
 wire [31:0]   read_cmd_data;
 // Parser requests.
 wire          start_req, abort_req, clear_req, drivers_on_req, drivers_off_req, cfg_write;
@@ -162,7 +157,7 @@ wire [PW-1:0] pulse_pos [0:N-1];
 wire unused = &{1'b0, seg_used, seg_level, ch_used, run_used, run_full};
 
 // ---------------------------------------------------------------- parts
-cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW), .MUL_DSP(MUL_DSP)) u_cmd (
+cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW)) u_cmd (
     .clk(clk), .rst(rst),
     .cmd_valid_i(cmd_valid_i), .cmd_ready_o(cmd_ready_o), .cmd_data_i(cmd_data_i),
     .rsp_valid_o(rsp_valid_o), .rsp_ready_i(rsp_ready_i), .rsp_data_o(rsp_data_o),
@@ -236,7 +231,7 @@ cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW
     .enable_o(enable_o), .status_o(status_o), .stretch_cnt_o(stretch_cnt_o),
     .moves_done_o(moves_done_o), .segs_done_o(segs_done_o),
     .cfg_high_o(cfg_high), .cfg_low_o(cfg_low), .cfg_setup_o(cfg_setup), .cfg_hold_o(cfg_hold),
-    .cfg_step_pol_o(cfg_step_pol), .cfg_dir_pol_o(cfg_dir_pol));
+    .cfg_step_pol_o(cfg_step_pol), .cfg_dir_pol_o(cfg_dir_pol), .cfg_new_o(cfg_new));
 
 // pulse_busy[a]: axis a's STEP pin is at its active level (CONFIG is refused then).
 genvar ga;
@@ -248,6 +243,7 @@ generate
             .cfg_step_high_i(cfg_high[TW*ga +: TW]), .cfg_step_low_i(cfg_low[TW*ga +: TW]),
             .cfg_dir_setup_i(cfg_setup[TW*ga +: TW]), .cfg_dir_hold_i(cfg_hold[TW*ga +: TW]),
             .cfg_step_pol_i(cfg_step_pol[ga]), .cfg_dir_pol_i(cfg_dir_pol[ga]),
+            .cfg_new_i(cfg_new),
             .dir_i(run_dir[ga]), .step_i(pulse_step[ga]),
             .ready_o(pulse_ready[ga]), .step_o(step_o[ga]), .dir_o(dir_o[ga]),
             .position_o(pulse_pos[ga]), .busy_o(pulse_busy[ga]));

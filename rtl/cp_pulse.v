@@ -14,6 +14,12 @@
 // last moved. A new STEP polarity moves the STEP pin (to the new inactive level)
 // only when a pulse could start instead, and the step-low time restarts there.
 //
+// The readiness is registered for speed (it decides the motion core's fire): the
+// step-low and DIR-setup thresholds are compared a cycle ahead, against the
+// configuration of that cycle. In the cycle after a CONFIG write (cfg_new_i) no
+// edge may start (ready_o and the STEP polarity edge wait one cycle): the core
+// never fires then, since CONFIG is taken only while not running.
+//
 // Contract, cycle by cycle: docs/PULSE.md.
 `resetall
 `timescale 1ns / 1ps
@@ -39,6 +45,7 @@ module cp_pulse #(
     input  wire [TW-1:0] cfg_dir_hold_i,
     input  wire          cfg_step_pol_i,
     input  wire          cfg_dir_pol_i,
+    input  wire          cfg_new_i,         // the configuration was written at the last edge
 
     // Requests from the core.
     input  wire          dir_i,             // 1 = positive
@@ -73,6 +80,9 @@ reg          step_pol_q, step_pol_d;    // STEP polarity on the pin
 reg          dir_pin_q, dir_pin_d;      // DIR pin level
 reg [TW-1:0] setup_cnt_q, setup_cnt_d;  // cycles since the DIR pin changed
 reg [PW-1:0] position_q, position_d;
+// low_cnt >= step_low and setup_cnt >= dir_setup, compared a cycle ahead with the
+// configuration of that cycle (exact while cfg_new_i is low).
+reg          low_ok_q, setup_ok_q;
 
 // Datapath (loaded when a pulse starts, no reset).
 reg [TW-1:0] high_cnt_q, high_cnt_d;    // cycles of the pulse left, this one included
@@ -85,8 +95,8 @@ endfunction
 // The DIR pin level dir_i asks for, in the DIR polarity in force.
 wire want_dir = cfg_dir_pol_i ? dir_i : !dir_i;
 // A STEP edge may happen now: inactive for step_low, DIR settled for dir_setup.
-wire quiet = !active_q && low_cnt_q >= cfg_step_low_i
-             && dir_pin_q == want_dir && setup_cnt_q >= cfg_dir_setup_i;
+// Not in the cycle after a configuration write.
+wire quiet = !cfg_new_i && !active_q && low_ok_q && dir_pin_q == want_dir && setup_ok_q;
 wire ready = !rst && quiet && step_pol_q == cfg_step_pol_i;
 wire start = step_i && ready;
 // A new STEP polarity takes the pin to its inactive level where a pulse could start.
@@ -127,6 +137,8 @@ always @(posedge clk) begin
         dir_pin_q   <= !DIR_POL_RESET;
         setup_cnt_q <= SAT;
         position_q  <= {PW{1'b0}};
+        low_ok_q    <= 1'b1;  // SAT >= any threshold
+        setup_ok_q  <= 1'b1;
     end else begin
         active_q    <= active_d;
         low_cnt_q   <= low_cnt_d;
@@ -134,6 +146,8 @@ always @(posedge clk) begin
         dir_pin_q   <= dir_pin_d;
         setup_cnt_q <= setup_cnt_d;
         position_q  <= position_d;
+        low_ok_q    <= low_cnt_d >= cfg_step_low_i;
+        setup_ok_q  <= setup_cnt_d >= cfg_dir_setup_i;
     end
     high_cnt_q <= high_cnt_d;
 end
@@ -180,9 +194,12 @@ always @(posedge clk) begin
     f_dpol_p  <= cfg_dir_pol_i;
     f_cfg_may_change <= rst || (!busy_o && !step_i);
 end
-always @* if (f_past_valid && !f_cfg_may_change)
-    assume (cfg_step_high_i == f_high_p && cfg_step_low_i == f_low_p && cfg_dir_setup_i == f_setup_p
-            && cfg_dir_hold_i == f_hold_p && cfg_step_pol_i == f_spol_p && cfg_dir_pol_i == f_dpol_p);
+wire f_cfg_same = cfg_step_high_i == f_high_p && cfg_step_low_i == f_low_p && cfg_dir_setup_i == f_setup_p
+                  && cfg_dir_hold_i == f_hold_p && cfg_step_pol_i == f_spol_p && cfg_dir_pol_i == f_dpol_p;
+always @* if (f_past_valid && !f_cfg_may_change) assume (f_cfg_same);
+// cp_core raises cfg_new_i in the cycle after every CONFIG write (it may also raise
+// it without one).
+always @* if (f_past_valid && !f_cfg_same) assume (cfg_new_i);
 
 // ---- the pin monitor (reads only pins, rst and the configuration)
 reg          f_step_q, f_dir_q;           // the pins in the previous cycle
@@ -241,14 +258,18 @@ always @* begin
         // ready_o is exact: 1 precisely when a leading edge at the next clock edge
         // keeps every rule above (and would be one: the STEP pin sits at the inactive
         // level of the polarity in force, DIR shows dir_i in the polarity in force).
-        assert (ready_o == (!f_pulse && f_step_len >= cfg_step_low_i && f_dir_len >= cfg_dir_setup_i
-                            && step_o == !cfg_step_pol_i && dir_o == (cfg_dir_pol_i ? dir_i : !dir_i)));
+        // (No edge starts in the cycle after a configuration write.)
+        assert (ready_o == (!cfg_new_i && !f_pulse && f_step_len >= cfg_step_low_i
+                            && f_dir_len >= cfg_dir_setup_i && step_o == !cfg_step_pol_i
+                            && dir_o == (cfg_dir_pol_i ? dir_i : !dir_i)));
         // busy_o is "a pulse is on the pin"; position_o counts the leading edges.
         assert (busy_o == f_pulse);
         assert (position_o == f_pos);
         // Invariants tying the state to the monitor (they make k-induction go through).
         assert (active_q == f_pulse);
         assert (setup_cnt_q == f_dir_len);
+        // The registered thresholds, compared with the previous cycle's configuration.
+        assert (low_ok_q == (low_cnt_q >= f_low_p) && setup_ok_q == (setup_cnt_q >= f_setup_p));
         if (active_q) begin
             assert (low_cnt_q == {TW{1'b0}} && high_cnt_q != {TW{1'b0}});
             assert ({1'b0, f_step_len} + {1'b0, high_cnt_q} == {1'b0, f_want} + 1'b1);

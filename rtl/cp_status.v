@@ -90,7 +90,8 @@ module cp_status #(
     output wire [N*TW-1:0] cfg_setup_o,
     output wire [N*TW-1:0] cfg_hold_o,
     output wire [N-1:0]  cfg_step_pol_o,
-    output wire [N-1:0]  cfg_dir_pol_o
+    output wire [N-1:0]  cfg_dir_pol_o,
+    output wire          cfg_new_o         // CONFIG was written at the last edge (cp_pulse)
 );
 
 localparam integer SQW = SAW + $clog2(N + 1);
@@ -113,6 +114,7 @@ reg [TW-1:0] cfg_low_q [0:N-1];
 reg [TW-1:0] cfg_setup_q [0:N-1];
 reg [TW-1:0] cfg_hold_q [0:N-1];
 reg [N-1:0]  cfg_step_pol_q, cfg_dir_pol_q;
+reg          cfg_new_q;
 
 // ---------------------------------------------------------------- fault priority
 // The one place that decides which fault a cycle raises.
@@ -171,6 +173,7 @@ always @(posedge clk) begin
         segs_done_q   <= 32'd0;
         cfg_step_pol_q <= {N{STEP_POL_RESET}};
         cfg_dir_pol_q  <= {N{DIR_POL_RESET}};
+        cfg_new_q      <= 1'b0;
         for (a = 0; a < N; a = a + 1) begin
             cfg_high_q[a]  <= STEP_HIGH_RESET[TW-1:0];
             cfg_low_q[a]   <= STEP_LOW_RESET[TW-1:0];
@@ -185,6 +188,7 @@ always @(posedge clk) begin
         stretch_cnt_q <= stretch_cnt_d;
         moves_done_q  <= moves_done_d;
         segs_done_q   <= segs_done_d;
+        cfg_new_q     <= cfg_write_i;
         if (cfg_write_i) begin
             for (a = 0; a < N; a = a + 1) begin
                 if (cfg_word_i[27:24] == a[3:0]) begin
@@ -264,6 +268,7 @@ generate
 endgenerate
 assign cfg_step_pol_o = cfg_step_pol_q;
 assign cfg_dir_pol_o  = cfg_dir_pol_q;
+assign cfg_new_o      = cfg_new_q;
 assign rd_data0_o     = read_value[0];
 assign rd_data1_o     = read_value[1];
 assign fault_o        = fault_q;

@@ -33,6 +33,7 @@ struct PulsePort {
     r.cfg_dir_hold_i = i.cfg_dir_hold & m;
     r.cfg_step_pol_i = i.cfg_step_pol;
     r.cfg_dir_pol_i = i.cfg_dir_pol;
+    r.cfg_new_i = i.cfg_new;
     r.dir_i = i.dir;
     r.step_i = i.step;
   }

@@ -24,7 +24,6 @@ module cp_board #(
     parameter integer CAW = 6,
     parameter integer SAW = 2,
     parameter integer TW = 16,
-    parameter integer MUL_DSP = 0,
     // ENABLE pins: 1 = high enables the drivers (TMC2209, A4988 and most others
     // want low: their EN/ENABLE input is active low).
     // Command buffer address width (docs/PROTOCOL.md).
@@ -102,7 +101,7 @@ wire enable, running, fault, stretched;
 wire [7:0] err_code;
 wire [N*32-1:0] position;
 cp_card #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
-          .MUL_DSP(MUL_DSP), .CBUF_AW(CBUF_AW), .STEP_POL_RESET(STEP_POL_RESET),
+          .CBUF_AW(CBUF_AW), .STEP_POL_RESET(STEP_POL_RESET),
           .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID)) u_card (
     .clk(clk), .rst(rst),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),

@@ -10,7 +10,6 @@
 
 #include "Vcp_part_build.h"
 #include "Vcp_part_cmd.h"
-#include "Vcp_part_cmd_dsp.h"
 #include "Vcp_part_run.h"
 #include "Vcp_part_status.h"
 #include "core/core_bench.h"
@@ -87,7 +86,6 @@ struct CmdPortT {
   }
 };
 using CmdPort = CmdPortT<Vcp_part_cmd>;
-using CmdDspPort = CmdPortT<Vcp_part_cmd_dsp>;
 
 struct BuildPort {
   using Rtl = AfterOneResetEdge<Vcp_part_build>;
@@ -271,6 +269,7 @@ struct StatusPort {
       c.step_pol = (r.cfg_step_pol_o >> a & 1) != 0;
       c.dir_pol = (r.cfg_dir_pol_o >> a & 1) != 0;
     }
+    o.cfg_new = r.cfg_new_o;
     return o;
   }
   // Axis a's configuration packed: high, low, setup, hold (8 bits each), polarities.
@@ -286,7 +285,7 @@ struct StatusPort {
         CPSTEP_FIELD("flush_o", o.flush),             CPSTEP_FIELD("stretched_o", o.stretched),
         CPSTEP_FIELD("enable_o", o.enable),           CPSTEP_FIELD("status_o", o.status),
         CPSTEP_FIELD("stretch_cnt_o", o.stretch_count), CPSTEP_FIELD("moves_done_o", o.moves_done),
-        CPSTEP_FIELD("segs_done_o", o.segments_done),
+        CPSTEP_FIELD("segs_done_o", o.segments_done), CPSTEP_FIELD("cfg_new_o", o.cfg_new),
         CPSTEP_FIELD("cfg axis 0 {pols, hold, setup, low, high}", cfg_bits(o, 0)),
         CPSTEP_FIELD("cfg axis 1 {pols, hold, setup, low, high}", cfg_bits(o, 1)),
         CPSTEP_FIELD("cfg axis 2 {pols, hold, setup, low, high}", cfg_bits(o, 2)),

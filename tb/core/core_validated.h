@@ -1,23 +1,15 @@
 // SPDX-License-Identifier: MIT
 // The core the validation benches (test_core_reject.cpp, test_core_add2.cpp) run
-// against: the HX8K's build (bit-serial multiplier), or with CPSTEP_TB_CORE_DSP
-// (test_core_dsp in CMakeLists.txt) the test build "dsp" of rtl/builds.json: the
-// same parameters with the chunk check multiplying in DSP blocks, as the
-// iCEBreaker's does (whose own core runs the random lockstep jobs and, as a
-// synthesized netlist, tb/netlist); with CPSTEP_TB_CORE_SKIP (test_core_skip) the
+// against: the HX8K's build (the iCEBreaker's own core runs the random lockstep
+// jobs and, as a synthesized netlist, tb/netlist); with CPSTEP_TB_CORE_SKIP (test_core_skip) the
 // HX8K's build against the model with event skipping (sim::Skipping), as the
 // fast engine runs it (docs/SIM.md). test_core_faults.cpp runs against it too.
 #pragma once
 
 #include "sim/core_configs.h"
-#ifdef CPSTEP_TB_CORE_DSP
-#include "Vcp_core_dsp.h"
-#endif
 
 namespace cpstep::tb {
-#ifdef CPSTEP_TB_CORE_DSP
-using ValidatedCore = sim::CoreOf<builds::dsp, Vcp_core_dsp>;
-#elif defined(CPSTEP_TB_CORE_SKIP)
+#if defined(CPSTEP_TB_CORE_SKIP)
 using ValidatedCore = sim::Skipping<sim::CoreDefault>;
 #else
 using ValidatedCore = sim::CoreDefault;

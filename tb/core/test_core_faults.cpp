@@ -226,7 +226,7 @@ TEST(CoreFaults, Underrun) {
 // The underrun race, cycle by cycle: the next segment arrives just before or just
 // after the last move of one without the end flag. docs/CORE.md: it is an underrun
 // exactly when the next segment is committed in the cycle of that last move or later
-// (a segment's commit is b + 1 cycles after its last word, b = bit length of count-1),
+// (a segment's commit is the chunk check's 51 cycles after its last word),
 // whether or not it has been built yet.
 TEST(CoreFaults, UnderrunDecidedByTheCommitCycle) {
   for (int offset = -8; offset <= 3; ++offset) {
@@ -239,7 +239,7 @@ TEST(CoreFaults, UnderrunDecidedByTheCommitCycle) {
     const uint64_t last_fire = start + 19 * 10 + 300;  // leading edge one cycle later
     const card::WireSegment next = seg_of({5, 0, -2, 0}, {{10, 5, 0}}, true);
     const uint64_t commit = last_fire + offset;
-    const uint64_t words = 2 + 4 + 2, check = std::bit_width(5u - 1) + 1;
+    const uint64_t words = 2 + 4 + 2, check = 51;
     h.idle(commit - check - (words - 1) - h.ls.cycle());
     const bool underrun = commit >= last_fire;
     uint64_t first_end = 0;

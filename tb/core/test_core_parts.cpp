@@ -125,7 +125,6 @@ void cmd_traffic(uint64_t seed, int cycles) {
 }
 
 TEST(CorePartCmd, RandomWordsMatchTheModel) { cmd_traffic<CmdPort>(11, 300000); }
-TEST(CorePartCmd, HardMultiplierMatchesTheBitSerialModel) { cmd_traffic<CmdDspPort>(12, 300000); }
 
 // ---------------------------------------------------------------- cp_build
 // Segment queue words as the parser commits them (N = 3): header {end, k, dir, U},

@@ -1,11 +1,10 @@
 // SPDX-License-Identifier: MIT
 // cp_core after synthesis: yosys's gate-level netlist of the iCEBreaker build
-// (synth_ice40 -abc9 -dsp: SB_LUT4, SB_CARRY, SB_DFF*, SB_RAM40_4K, the chunk check's
-// multiplier in SB_MAC16), simulated with yosys's iCE40 cell models
+// (synth_ice40 -abc9: SB_LUT4, SB_CARRY, SB_DFF*, SB_RAM40_4K), simulated with yosys's iCE40 cell models
 // (tb/netlist/CMakeLists.txt), in lockstep with the golden model: every output on
 // every cycle, the read port sweeping the READ registers every cycle (CoreDriver),
 // the pin checker on. Random host-like jobs, the identification registers, bad
-// segments the card refuses (many of them decided by the DSP multiplier's products)
+// segments the card refuses (many of them decided by the serial chunk check)
 // and an E-stop. docs/BUILDS.md, "Post-synthesis simulation".
 #include <gtest/gtest.h>
 
@@ -102,7 +101,7 @@ TEST(CoreNetlist, IdentificationRegisters) {
 
 // The bad commands of tb/core/core_reject_cases.h (test_core_reject.cpp runs them all
 // on the RTL) that reach the synthesized logic's distinct paths: the delay checks
-// (codes 6 and 15) are the DSP multiplier's products.
+// (codes 6 and 15) are the serial chunk check's verdicts.
 std::vector<BadInput> bad_segments() {
   static const char* const kNames[] = {
       "v_above_U", "k_above_KMAX", "more_chunks_than_the_queue", "count_zero", "delay_negative",

@@ -31,8 +31,13 @@ class PulseBench {
   In in;
 
   // One clock with `in`. Returns the outputs of the cycle (before the edge).
+  // cfg_new is the bench's, not the test's: high when the configuration differs
+  // from the previous cycle's, as cp_core raises it after a CONFIG write.
   Out cycle() {
     const uint64_t c = ls_.cycle();
+    in.cfg_new = config_changed();
+    prev_cfg_ = in;
+    have_cfg_ = true;
     const Out o = ls_.step(in);
     checker_.check(c, in, o);
     if (!in.rst) {
@@ -88,6 +93,7 @@ class PulseBench {
 
   // The model's outputs for the current inputs (without a clock edge).
   Out peek_outputs() {
+    in.cfg_new = config_changed();
     ls_.model().in = in;
     return ls_.model().outputs();
   }
@@ -104,7 +110,16 @@ class PulseBench {
   std::vector<uint64_t> leading, trailing, step_pol_edges, dir_edges;
 
  private:
+  bool config_changed() const {
+    const In& p = prev_cfg_;
+    return have_cfg_ && (in.cfg_step_high != p.cfg_step_high || in.cfg_step_low != p.cfg_step_low ||
+                         in.cfg_dir_setup != p.cfg_dir_setup || in.cfg_dir_hold != p.cfg_dir_hold ||
+                         in.cfg_step_pol != p.cfg_step_pol || in.cfg_dir_pol != p.cfg_dir_pol);
+  }
+
   Lockstep<P> ls_{"pulse"};
+  In prev_cfg_;
+  bool have_cfg_ = false;
   PinChecker checker_;
   bool have_prev_ = false, prev_active_ = false, prev_step_ = false, prev_dir_ = false;
 };

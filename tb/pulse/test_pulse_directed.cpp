@@ -367,6 +367,7 @@ TEST(PulseDirected, DirAndDirPolarityFlippedTogetherMoveNoPin) {
 // STEP polarity flipped while the pin is inactive: the pin moves to the new inactive
 // level only once it has been inactive for step_low (so the old level is no runt), and
 // the next pulse waits step_low after that edge (so the new level is no runt either).
+// No STEP edge starts in the flip's first cycle (cfg_new): the edge is at max(f+2, c+L).
 template <class P>
 void step_polarity_flip(Timing t, bool right_after) {
   SCOPED_TRACE("H=" + std::to_string(t.high) + " L=" + std::to_string(t.low) + " S=" +
@@ -388,7 +389,7 @@ void step_polarity_flip(Timing t, bool right_after) {
       return b.expect_pins_clean();
     }
     const uint64_t p = b.step_pol_edges[e], lead = b.leading[n];
-    EXPECT_EQ(p, std::max(at + 1, c + t.low)) << "polarity edge: trailing edge " << c << ", flip " << at;
+    EXPECT_EQ(p, std::max(at + 2, c + t.low)) << "polarity edge: trailing edge " << c << ", flip " << at;
     EXPECT_EQ(lead - p, t.low) << "polarity edge to leading edge: step_low";
     EXPECT_EQ(b.last.step, b.in.cfg_step_pol) << "the pulses come in the new polarity";
   }

@@ -251,8 +251,9 @@ TYPED_TEST(SpiCard, EstopInputStopsTheCardAndShowsInTheReply) {
   CardHarness<TypeParam> h;
   const VisibleJob job = visible_job(N);
   h.commands(job.words);
-  h.spi().idle(100);
-  EXPECT_TRUE(h.pins().running);
+  // The parser takes the words and checks the two chunks (51 clocks each), then START.
+  for (int i = 0; i < 100 && !h.pins().running; ++i) h.spi().idle(10);
+  EXPECT_TRUE(h.pins().running) << "fault " << h.pins().fault << ", code " << unsigned(h.pins().err_code);
   EXPECT_TRUE(h.pins().enable);
   h.spi().set_estop(true);
   h.spi().idle(4);  // two synchronizer flops, then the core's next edge

@@ -19,8 +19,6 @@ module cp_hx8k #(
     parameter integer CAW = 6,
     parameter integer SAW = 2,
     parameter integer TW = 16,
-    // The HX8K has no DSP blocks: the chunk check multiplies bit-serially.
-    parameter integer MUL_DSP = 0,
     // Command buffer address width (docs/PROTOCOL.md).
     parameter integer CBUF_AW = 9,
     // Pin polarity after reset (docs/CORE.md).
@@ -48,7 +46,7 @@ module cp_hx8k #(
 wire led_run_n, led_fault_n;
 cp_board #(.PLL_PAD(1'b0), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(PLL_DIVQ),
            .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
-           .SAW(SAW), .TW(TW), .MUL_DSP(MUL_DSP), .CBUF_AW(CBUF_AW),
+           .SAW(SAW), .TW(TW), .CBUF_AW(CBUF_AW),
            .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ),
            .BUILD_ID(BUILD_ID), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
     .osc_i(CLK), .btn_n(1'b1),

@@ -24,8 +24,6 @@ module cp_icebreaker #(
     parameter integer CAW = 6,
     parameter integer SAW = 2,
     parameter integer TW = 16,
-    // The chunk check multiplies in the UP5K's DSP blocks.
-    parameter integer MUL_DSP = 1,
     // ENABLE pins: 1 = high enables the drivers (docs/BOARDS.md).
     // Command buffer address width (docs/PROTOCOL.md).
     parameter integer CBUF_AW = 9,
@@ -59,7 +57,7 @@ module cp_icebreaker #(
 
 cp_board #(.PLL_PAD(1'b1), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(PLL_DIVQ),
            .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
-           .SAW(SAW), .TW(TW), .MUL_DSP(MUL_DSP), .CBUF_AW(CBUF_AW),
+           .SAW(SAW), .TW(TW), .CBUF_AW(CBUF_AW),
            .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ),
            .BUILD_ID(BUILD_ID), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
     .osc_i(CLK), .btn_n(BTN_N),
