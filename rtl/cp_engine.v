@@ -221,6 +221,16 @@ end
 // Build: the iteration's target is M2 when x > y (M2 = M1 + reverse(M2)),
 // else M1 (M1 = M2 + reverse(M1)). The target is already reversed.
 wire          to2      = x_q > y_q;
+// The next iteration's decisions, compared beside the subtraction rather than after
+// it (x - y against y is x against 2y; y - x against x is 2x against y); the same
+// for the first one at acceptance (u - v against v).
+wire [UW:0]   x2       = {x_q, 1'b0};
+wire [UW:0]   y2       = {y_q, 1'b0};
+wire [UW:0]   v2       = {in_v_i, 1'b0};
+wire          nx_eq    = to2 ? {1'b0, x_q} == y2 : {1'b0, y_q} == x2;
+wire          nx_gt    = to2 ? {1'b0, x_q} > y2 : x2 > {1'b0, y_q};
+wire          in_eq    = {1'b0, in_u_i} == v2;
+wire          in_gt    = {1'b0, in_u_i} > v2;
 wire          src_rev  = to2 ? m1_rev_q : m2_rev_q;
 wire          tgt_rev  = to2 ? m2_rev_q : m1_rev_q;
 wire [AW-1:0] tgt_lo   = to2 ? m2_lo_q : m1_lo_q;
@@ -285,7 +295,7 @@ always @* begin
                     we2 = 1'b1;  waddr2 = {AW{1'b0}};  wbit2 = 1'b1;
                     m1_lo_d = {AW{1'b0}};  m1_len_d = 1;  m1_rev_d = 1'b0;
                     m2_lo_d = {AW{1'b0}};  m2_len_d = 1;  m2_rev_d = 1'b0;
-                    if (x_d == y_d) begin
+                    if (in_eq) begin  // x_d == y_d
                         ph_d     = 1'b0;
                         rp_cnt_d = 1;
                         rp_ptr_d = {AW{1'b0}};
@@ -293,7 +303,7 @@ always @* begin
                         state_d  = S_REPLAY;
                     end else begin
                         // First target reversed; the source is one bit at 0.
-                        if (x_d > y_d) m2_rev_d = 1'b1;
+                        if (in_gt) m2_rev_d = 1'b1;  // x_d > y_d
                         else           m1_rev_d = 1'b1;
                         rd_cnt_d = 1;
                         rd_ptr_d = {AW{1'b0}};
@@ -335,13 +345,13 @@ always @* begin
             dbg_x_d      = x_d;          dbg_y_d      = y_d;
             dbg_m1_lo_d  = m1_lo_d;      dbg_m1_len_d = m1_len_d;  dbg_m1_rev_d = m1_rev_d;
             dbg_m2_lo_d  = m2_lo_d;      dbg_m2_len_d = m2_len_d;  dbg_m2_rev_d = m2_rev_d;
-            if (x_d == y_d) begin
+            if (nx_eq) begin  // x_d == y_d
                 ph_d     = 1'b0;
                 rp_cnt_d = m2_len_d;
                 rp_ptr_d = log_first(m2_lo_d, m2_len_d, m2_rev_d);
                 inner_d  = shifted(x_d, k_q);
                 state_d  = S_REPLAY;
-            end else if (x_d > y_d) begin
+            end else if (nx_gt) begin  // x_d > y_d
                 m2_rev_d = !m2_rev_d;
                 rd_cnt_d = m1_len_d;
                 rd_ptr_d = log_last(m1_lo_d, m1_len_d, m1_rev_d);
