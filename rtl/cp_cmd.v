@@ -213,7 +213,7 @@ always @* begin
     refuse = 1'b0;  refuse_code = E_NONE;
 
     case (p_state_q)
-    P_CMD: if (take) begin
+    P_CMD: if (cmd_valid_i) begin  // cmd_ready_o is 1 in P_CMD: taken
         case (op)
         OP_SEGMENT: begin
             hdr_end_d = cmd_data_i[27];
