@@ -7,8 +7,8 @@
 // committed together, or both rolled back when any check failed. Each chunk's
 // last increment and last delay are checked bit-serially, least significant bit
 // first, in 51 clocks: two serial-parallel multipliers and three serial
-// adders, a few dozen logic cells instead of 49-bit datapaths (the link brings a
-// chunk in hundreds of clocks). CONFIG, CONTROL and READ become one-cycle
+// adders instead of 49-bit datapaths (the link brings a chunk in hundreds of
+// clocks). CONFIG, CONTROL and READ become one-cycle
 // requests to cp_status and cp_run; a refusal is a fault request with its code
 // (cp_status decides).
 //
@@ -139,6 +139,12 @@ wire [15:0] c1_add    = cmd_data_i[31:16];
 wire [15:0] c2_add2   = cmd_data_i[15:0];
 wire        keep      = !discard_q && !fault_i;   // the segment being read is still good
 // ---------------------------------------------------------------- the serial check
+// A serial adder's next carry.
+function carry;
+    input a, b, c;
+    carry = (a & b) | (a & c) | (b & c);
+endfunction
+
 // Pass 1 takes bit i of add2 and add (sign-extended) in clock i; pass 2 runs one
 // clock behind it (its input bit is registered, so no clock holds both adders),
 // and the last delay one more: bit i-2 of interval in clock i.
@@ -191,9 +197,9 @@ always @* begin
     // The serial check clocks its bits in P_CHK; each chunk word restarts it.
     ck_i_d  = ck_i_q + 1'b1;
     acc1_d  = ck_s1[16:1];  acc2_d = ck_s2[16:1];
-    c1_d    = (ck_s1[0] & ck_add) | (ck_s1[0] & c1_q) | (ck_add & c1_q);
-    c2_d    = (ck_add & ck_li) | (ck_add & c2_q) | (ck_li & c2_q);
-    c3_d    = ck_jv && ((ck_iv & ck_s2[0]) | (ck_iv & c3_q) | (ck_s2[0] & c3_q));
+    c1_d    = carry(ck_s1[0], ck_add, c1_q);
+    c2_d    = carry(ck_add, ck_li, c2_q);
+    c3_d    = ck_jv && carry(ck_iv, ck_s2[0], c3_q);
     b_d     = ck_b;
     li_sign_d = ck_li;
     li_nz_d = li_nz_q || ck_li;

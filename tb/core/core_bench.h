@@ -204,9 +204,10 @@ class JobGen {
   }
 
   // Cycles the parser takes after a chunk's last word before it takes the next word
-  // (docs/CORE.md, "Cycle behaviour"): the bit-serial check's 51 clocks, whatever
-  // the chunk's values.
-  static uint64_t check_cycles(const card::WireChunk&) { return 51; }
+  // (docs/CORE.md, "Cycle behaviour"): the bit-serial check's clocks, whatever the
+  // chunk's values.
+  static constexpr uint64_t kCheckCycles = 51;
+  static uint64_t check_cycles(const card::WireChunk&) { return kCheckCycles; }
   // Cycles the parser needs for a segment.
   uint64_t parse_cycles(const card::WireSegment& s) const {
     bool three = false;

@@ -84,7 +84,7 @@ TEST(CoreAdd2, PortPauseAfterEachChunk) {
     card::WireChunk chunk;
     uint64_t check;
   };
-  constexpr uint64_t kCheck = 51;
+  constexpr uint64_t kCheck = JobGen::kCheckCycles;
   const std::vector<Case> three = {
       {{7, 1, 0, 0}, kCheck},       {{7, 1, 3, 5}, kCheck},        {{7, 2, 3, -7}, kCheck},
       {{7, 3, 1, 1}, kCheck},       {{7, 4, 2, 0}, kCheck},        {{5000, 100, 0, -1}, kCheck},

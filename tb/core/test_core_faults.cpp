@@ -4,7 +4,6 @@
 // from the pins and the registers alone.
 #include <gtest/gtest.h>
 
-#include <bit>
 #include <cstdio>
 
 #include "core/core_bench.h"
@@ -239,7 +238,7 @@ TEST(CoreFaults, UnderrunDecidedByTheCommitCycle) {
     const uint64_t last_fire = start + 19 * 10 + 300;  // leading edge one cycle later
     const card::WireSegment next = seg_of({5, 0, -2, 0}, {{10, 5, 0}}, true);
     const uint64_t commit = last_fire + offset;
-    const uint64_t words = 2 + 4 + 2, check = 51;
+    const uint64_t words = 2 + 4 + 2, check = JobGen::kCheckCycles;
     h.idle(commit - check - (words - 1) - h.ls.cycle());
     const bool underrun = commit >= last_fire;
     uint64_t first_end = 0;
