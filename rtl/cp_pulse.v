@@ -129,6 +129,13 @@ always @* begin
     low_cnt_d = active_d ? {TW{1'b0}} : pol_change ? ONE : sat_inc(low_cnt_q);
 end
 
+// low_cnt_d >= step_low, with the compares made beside the start decision (the
+// core's fire) rather than after it: low_cnt_d is 0, 1 or the incremented count.
+wire low_inc_ok  = sat_inc(low_cnt_q) >= cfg_step_low_i;
+wire low_one_ok  = cfg_step_low_i <= ONE;
+wire low_zero_ok = cfg_step_low_i == {TW{1'b0}};
+wire low_ok_d    = active_d ? low_zero_ok : pol_change ? low_one_ok : low_inc_ok;
+
 always @(posedge clk) begin
     if (rst) begin
         active_q    <= 1'b0;
@@ -146,7 +153,7 @@ always @(posedge clk) begin
         dir_pin_q   <= dir_pin_d;
         setup_cnt_q <= setup_cnt_d;
         position_q  <= position_d;
-        low_ok_q    <= low_cnt_d >= cfg_step_low_i;
+        low_ok_q    <= low_ok_d;
         setup_ok_q  <= setup_cnt_d >= cfg_dir_setup_i;
     end
     high_cnt_q <= high_cnt_d;

@@ -83,6 +83,7 @@ reg [31:0]   tinc_q, tinc_d;             // the running increment (signed)
 reg [15:0]   tadd2_q, tadd2_d;
 reg [31:0]   elapsed_q, elapsed_d;
 reg          tlast_q, tlast_d;           // the timer's chunk is its segment's last
+reg          due_q, due_d;               // reset: ch_loaded_q && elapsed_q >= delay_q
 
 genvar ga;
 
@@ -113,7 +114,9 @@ endgenerate
 // steps in it is ready; E-stop and abort stop it in the same cycle. A move is
 // counted late once: in the first cycle it is due and does not fire, or when it
 // fires after its time without having waited due (its chunk came late).
-wire due = ch_loaded_q && elapsed_q >= delay_q;
+// due is ch_loaded_q && elapsed_q >= delay_q, registered: its next value is compared
+// beside the fire decision (below), not after it.
+wire due = due_q;
 assign fire_o = running_q && cur_valid_q && !estop_i && !abort_i && due && rp_valid_q &&
                 &(pulse_ready_i | ~lane_move);
 assign stretch_o = running_q && due && !late_q && !estop_i && !abort_i &&
@@ -123,12 +126,24 @@ assign seg_done_o = fire_o && left_q == 16'd1 && tlast_q;
 // ---------------------------------------------------------------- next state
 integer i;
 
+// The timer's next values, whatever fires: the count one on (saturating), the next
+// interval of the running chunk, the head chunk's first.
+wire [31:0] elapsed_inc = (elapsed_q == 32'hFFFF_FFFF) ? elapsed_q : elapsed_q + 1'b1;
+wire [31:0] delay_sum   = delay_q + tinc_q;
+wire [31:0] head_delay  = ch_head_i[31:0];
+wire        start_now   = start_i && !fault_i && !running_q;  // exclusive with fire_o
+wire        ge_inc_delay = elapsed_inc >= delay_q;
+wire        ge_inc_head  = elapsed_inc >= head_delay;
+wire        le1_delay    = delay_q <= 32'd1;
+wire        le1_head     = head_delay <= 32'd1;
+wire        le1_sum      = delay_sum <= 32'd1;
+
 always @* begin
     running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
     ch_loaded_d = ch_loaded_q;  late_d = late_q;  rp_valid_d = rp_valid_q;  dir_d = dir_q;
     cur_end_d = cur_end_q;  delay_d = delay_q;  left_d = left_q;  tinc_d = tinc_q;
     tadd2_d = tadd2_q;  tlast_d = tlast_q;
-    elapsed_d = (elapsed_q == 32'hFFFF_FFFF) ? elapsed_q : elapsed_q + 1'b1;
+    elapsed_d = elapsed_inc;
     ch_pop_o = 1'b0;  run_pop_o = 1'b0;  step_o = {N{1'b0}};  fault_o = 1'b0;
     bank_re = 1'b0;  rp_lane = cur_lane_q;
     for (i = 0; i < N; i = i + 1) rp_next[i] = rp_ptr_q[i];
@@ -152,7 +167,7 @@ always @* begin
         elapsed_d = 32'd1;
         if (left_q != 16'd1) begin
             left_d  = left_q - 1'b1;
-            delay_d = delay_q + tinc_q;
+            delay_d = delay_sum;
             tinc_d  = tinc_q + {{16{tadd2_q[15]}}, tadd2_q};
         end else if (!ch_valid_i) begin
             ch_loaded_d = 1'b0;
@@ -188,7 +203,7 @@ always @* begin
         rp_valid_d = 1'b1;
         for (i = 0; i < N; i = i + 1) rp_next[i] = {AW{1'b0}};
     end
-    if (start_i && !fault_i && !running_q) begin
+    if (start_now) begin
         running_d = 1'b1;
         elapsed_d = 32'd1;
     end
@@ -200,6 +215,18 @@ always @* begin
         late_d      = 1'b0;
         rp_valid_d  = 1'b0;
     end
+    // due_d = ch_loaded_d && elapsed_d >= delay_d, case by case. A move that fires
+    // sets elapsed to 1 and either steps to its chunk's next interval or takes the
+    // head chunk (or none); otherwise elapsed counts on (or starts at 1) against the
+    // running interval or the head chunk taken now.
+    if (flush_i)
+        due_d = 1'b0;
+    else if (fire_o)
+        due_d = (left_q != 16'd1) ? le1_sum : (ch_valid_i && le1_head);
+    else if (ch_valid_i && !ch_loaded_q)
+        due_d = start_now ? le1_head : ge_inc_head;
+    else
+        due_d = ch_loaded_q && (start_now ? le1_delay : ge_inc_delay);
 end
 
 // ---------------------------------------------------------------- registers
@@ -213,6 +240,7 @@ always @(posedge clk) begin
         late_q      <= 1'b0;
         rp_valid_q  <= 1'b0;
         dir_q       <= {N{1'b0}};
+        due_q       <= 1'b0;
     end else begin
         running_q   <= running_d;
         cur_valid_q <= cur_valid_d;
@@ -221,6 +249,7 @@ always @(posedge clk) begin
         late_q      <= late_d;
         rp_valid_q  <= rp_valid_d;
         dir_q       <= dir_d;
+        due_q       <= due_d;
     end
     cur_end_q <= cur_end_d;  delay_q <= delay_d;  left_q <= left_d;  tinc_q <= tinc_d;
     tadd2_q <= tadd2_d;  tlast_q <= tlast_d;  elapsed_q <= elapsed_d;
