@@ -81,10 +81,33 @@ endgenerate
 // Every pin of the cells tied explicitly (an input the pad does not use reads 0).
 wire miso, miso_oe, estop, miso_in;
 SB_IO #(.PIN_TYPE(6'b1010_01)) u_miso (
-    .PACKAGE_PIN(spi_miso_io), .OUTPUT_ENABLE(miso_oe), .D_OUT_0(miso), .D_IN_0(miso_in));
+    .PACKAGE_PIN(spi_miso_io), .CLOCK_ENABLE(1'b0), .OUTPUT_CLK(1'b0),
+    .OUTPUT_ENABLE(miso_oe), .D_OUT_0(miso), .D_IN_0(miso_in));
 SB_IO #(.PIN_TYPE(6'b0000_01), .PULLUP(1'b1)) u_estop (
-    .PACKAGE_PIN(estop_loop_i), .OUTPUT_ENABLE(1'b0), .D_OUT_0(1'b0), .D_IN_0(estop));
-wire unused_pads = &{1'b0, miso_in};
+    .PACKAGE_PIN(estop_loop_i), .CLOCK_ENABLE(1'b0), .OUTPUT_CLK(1'b0),
+    .OUTPUT_ENABLE(1'b0), .D_OUT_0(1'b0), .D_IN_0(estop));
+
+// STEP and DIR leave through the IO cells' output registers: each pin changes at a
+// clock edge, a clock after cp_core's pin (docs/BOARDS.md "Pins"), with the IO cell's
+// fixed clock-to-out and no fabric logic after the flip-flop. The register powers up
+// 0; a pin whose idle level is high is registered inverted (PIN_TYPE 0111) so that it
+// idles high from configuration on, before the PLL runs.
+wire [N-1:0] core_step, core_dir;
+wire [2*N-1:0] pin_in;
+genvar gp;
+generate
+    for (gp = 0; gp < N; gp = gp + 1) begin : g_pins
+        SB_IO #(.PIN_TYPE(STEP_POL_RESET ? 6'b0101_01 : 6'b0111_01)) u_step (
+            .PACKAGE_PIN(step_o[gp]), .CLOCK_ENABLE(1'b1), .OUTPUT_CLK(clk),
+            .OUTPUT_ENABLE(1'b1), .D_OUT_0(core_step[gp] == STEP_POL_RESET),
+            .D_IN_0(pin_in[2*gp]));
+        SB_IO #(.PIN_TYPE(DIR_POL_RESET ? 6'b0101_01 : 6'b0111_01)) u_dir (
+            .PACKAGE_PIN(dir_o[gp]), .CLOCK_ENABLE(1'b1), .OUTPUT_CLK(clk),
+            .OUTPUT_ENABLE(1'b1), .D_OUT_0(core_dir[gp] == DIR_POL_RESET),
+            .D_IN_0(pin_in[2*gp+1]));
+    end
+endgenerate
+wire unused_pads = &{1'b0, miso_in, pin_in};
 
 // ---------------------------------------------------------------- reset
 // Reset for 2^8 clocks after the PLL locks and while the button is held.
@@ -107,7 +130,7 @@ cp_card #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
     .spi_miso_o(miso), .spi_miso_oe_o(miso_oe),
     .estop_i(estop),
-    .step_o(step_o), .dir_o(dir_o), .enable_o(enable),
+    .step_o(core_step), .dir_o(core_dir), .enable_o(enable),
     .running_o(running), .fault_o(fault),
     .err_code_o(err_code), .stretched_o(stretched), .position_o(position));
 wire unused = &{1'b0, err_code, stretched, position};

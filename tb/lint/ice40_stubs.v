@@ -62,16 +62,27 @@ module SB_IO #(
     parameter [0:0] PULLUP = 1'b0
 ) (
     inout  wire PACKAGE_PIN,
+    input  wire CLOCK_ENABLE,
+    input  wire OUTPUT_CLK,
     input  wire OUTPUT_ENABLE,
     input  wire D_OUT_0,
     output wire D_IN_0
 );
-// PIN_TYPE[5:4] = 00: the output driver is off (an input pad).
+// PIN_TYPE[5:4]: the output driver off (00), on (01), on with OUTPUT_ENABLE (10).
+// PIN_TYPE[3:2]: the output from D_OUT_0 (10), through the IO cell's register (01),
+// inverted after it (11). (DDR and registered enables are not used.)
+reg q = 1'b0;
+always @(posedge OUTPUT_CLK) if (CLOCK_ENABLE) q <= D_OUT_0;
+wire data = PIN_TYPE[3:2] == 2'b10 ? D_OUT_0 : PIN_TYPE[3:2] == 2'b11 ? !q : q;
 generate
-    if (PIN_TYPE[5:4] != 2'b00) begin : g_out
-        assign PACKAGE_PIN = OUTPUT_ENABLE ? D_OUT_0 : 1'bz;
+    if (PIN_TYPE[5:4] == 2'b01) begin : g_on
+        assign PACKAGE_PIN = data;
+        wire unused = &{1'b0, OUTPUT_ENABLE, PULLUP};
+    end else if (PIN_TYPE[5:4] == 2'b10) begin : g_oe
+        assign PACKAGE_PIN = OUTPUT_ENABLE ? data : 1'bz;
+        wire unused = &{1'b0, PULLUP};
     end else begin : g_in
-        wire unused = &{1'b0, OUTPUT_ENABLE, D_OUT_0, PULLUP};
+        wire unused = &{1'b0, OUTPUT_ENABLE, data, PULLUP};
     end
 endgenerate
 assign D_IN_0 = PACKAGE_PIN;
