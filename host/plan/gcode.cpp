@@ -35,9 +35,6 @@ constexpr double kRadiusTolerance = 0.00005 * 25.4;  // R arcs may fall this sho
 constexpr double kSpiralAbs = 0.005;                  // centre arcs: end radius may differ by this ...
 constexpr double kSpiralRel = 0.001;                  // ... or by this fraction of the radius
 constexpr double kPeckRetract = 0.010 * 25.4;         // G73 retract, G83 rapid-down clearance
-// One canned-cycle block expands into at most this many holes x pecks (L x depth/Q):
-// a line like G83 ... Q0.00001 L100000000 must be refused, not fill the memory.
-constexpr double kMaxCycleMoves = 100000;
 // T and H: tool numbers as the machine file's [gcode.tool_lengths] keys (1..99999), or 0.
 constexpr double kMaxTool = 99999;
 
@@ -928,15 +925,29 @@ public:
         const double q = st_.cycle_q.value_or(0.0) * st_.unit;
         const bool pecking = mode == g(73) || mode == g(83);
         const double pecks = pecking ? std::ceil((r - bottom) / q) : 1;  // per hole
-        if (!(repeats_l * std::max(pecks, 1.0) <= kMaxCycleMoves)) {
+        // A line like G83 ... Q0.00001 L100000000 is refused, not expanded until the
+        // memory is full; and so is the block that takes the program's cycles together
+        // past max_cycle_job (a few kilobytes of G81 ... L99999 lines), once.
+        const double holes_pecks = repeats_l * std::max(pecks, 1.0);
+        if (!(holes_pecks <= opt_.max_cycle_block)) {
             error(line_, at.col, fmt::format("{}: {:g} hole(s) of {:g} peck(s) each; a block expands into at most "
                                              "{:g} holes x pecks",
-                                             name, repeats_l, pecks, kMaxCycleMoves));
+                                             name, repeats_l, pecks, opt_.max_cycle_block));
             return mark_all_unknown();
         }
+        if (!(cycle_total_ + holes_pecks <= opt_.max_cycle_job)) {
+            if (!cycle_job_refused_) {
+                cycle_job_refused_ = true;
+                error(line_, at.col, fmt::format("{}: the program's canned cycles expand into more than {:g} holes x "
+                                                 "pecks ({:g} before this block, {:g} in it)",
+                                                 name, opt_.max_cycle_job, cycle_total_, holes_pecks));
+            }
+            return mark_all_unknown();
+        }
+        cycle_total_ += holes_pecks;
         const int repeats = static_cast<int>(repeats_l);
         // Pecks counted too: d -= q may stop moving d when q is below its rounding step.
-        const int max_pecks = static_cast<int>(kMaxCycleMoves);
+        const int max_pecks = static_cast<int>(std::min(opt_.max_cycle_block, 1e9));
         for (int rep = 0; rep < repeats; ++rep) {
             PerAxis<double> p = st_.pos;
             for (std::size_t a : {X, Y}) {
@@ -1288,6 +1299,8 @@ private:
     std::optional<OpenNurbs> nurbs_;
     std::optional<Eigen::Vector3d> g5_next_ij_;        // -P, -Q of the last G5 (mm) ...
     std::optional<std::size_t> g5_next_ij_block_;      // ... valid while no block followed it
+    double cycle_total_ = 0;        // holes x pecks of the cycle blocks so far
+    bool cycle_job_refused_ = false;
     int line_ = 0;
     SourceLoc loc_;
     std::vector<Diagnostic> errors_;

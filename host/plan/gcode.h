@@ -83,6 +83,12 @@ struct GcodeOptions {
     std::optional<PerAxis<double>> g30_position;
     std::map<int, double> tool_lengths;           // G43 H<n>, mm
     std::size_t max_errors = 20;                  // reported; the rest are counted
+    // Canned cycles (G73 ... G89) expand into blocks here: one cycle block into at
+    // most max_cycle_block holes x pecks (L x depth/Q), all of a program's cycle
+    // blocks together into at most max_cycle_job, so that a few kilobytes of text
+    // cannot make a job of gigabytes (docs/PLANNING.md).
+    double max_cycle_block = 1e5;
+    double max_cycle_job = 1e6;
 };
 
 // The options a machine file gives (its axes, [gcode] table), starting at `start`.

@@ -688,6 +688,19 @@ TEST(Gcode, FuzzFindingsRefused) {
     EXPECT_EQ(join(pecks.errors),
               "job.ngc:2:1: G83: 1 hole(s) of 1.001e+08 peck(s) each; a block expands into at most 100000 holes x pecks");
     EXPECT_TRUE(parse("G21 G90 G0 X0 Y0 Z5\nG83 X1 Y1 Z-10 R1 Q1 F100 L900\n").ok());  // 9,900 holes x pecks
+    // Finding 11: a few kilobytes of G81 ... L99999 lines, each within the block's
+    // limit, made a job of gigabytes (> 10 s under ASan). The program's cycles are
+    // limited together; the block that crosses the limit is refused, once.
+    GcodeOptions small;
+    small.max_cycle_job = 1000;
+    const std::string holes = "G21 G90 G0 X0 Y0 Z5\nG81 X1 Y1 Z-1 R1 F100 L600\nG81 X2 L400\n";
+    const Job fits = ok(parse_with(holes, small));  // 1,000 holes: the limit itself
+    // G0, then per line a rapid over the first hole and per hole (G98) a rapid to R,
+    // the feed to Z and a rapid back to Z5 (over the same hole again: no XY move).
+    EXPECT_EQ(fits.blocks.size(), 1u + (1u + 3u * 600) + (1u + 3u * 400));
+    auto over = parse_with(holes + "G81 X3 L1\nG81 X4 L5\n", small);
+    EXPECT_EQ(join(over.errors), "job.ngc:4:1: G81: the program's canned cycles expand into more than 1000 holes x "
+                                 "pecks (1000 before this block, 1 in it)");
     auto nested = parse("G21 G1 X" + std::string(3000, '[') + "1" + std::string(3000, ']') + " F1\n");
     EXPECT_EQ(join(nested.errors), "job.ngc:1:73: expression nested more than 64 deep");
     EXPECT_TRUE(parse("G21 G1 X" + std::string(63, '[') + "1" + std::string(63, ']') + " F1\n").ok());
