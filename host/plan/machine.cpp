@@ -333,7 +333,7 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
     if (const toml::table* pl = r.table(root, "planner", "planner", false)) {
         r.only_keys(*pl, "planner",
                     {"arc_tolerance_mm", "junction_deviation_mm", "chunk_tolerance_us",
-                     "on_limit", "chunk_add2", "split_epsilon_steps"});
+                     "on_limit", "chunk_add2", "split_epsilon_steps", "curvature_step_ms"});
         auto& p = m.planner;
         p.arc_tolerance_mm = r.number(*pl, "planner", "arc_tolerance_mm", false, positive, "> 0")
                                  .value_or(p.arc_tolerance_mm);
@@ -360,6 +360,8 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
                                     *s));
             }
         }
+        if (auto ms = r.number(*pl, "planner", "curvature_step_ms", false, positive, "> 0"))
+            p.curvature_step_s = *ms * 1e-3;
         p.chunk_add2 = r.boolean(*pl, "planner", "chunk_add2").value_or(p.chunk_add2);
         p.split_epsilon_steps =
             r.number(*pl, "planner", "split_epsilon_steps", false, split_eps_ok, "in [0, 0.5)")

@@ -100,6 +100,10 @@ struct PlannerConfig {
     OnLimit on_limit = OnLimit::refuse;
     bool chunk_add2 = true;                 // allow the add2 chunk term
     double split_epsilon_steps = 0.02;      // target extra deviation of GCD splits
+    // An acceleration step where the path's curvature jumps (a line into a
+    // tangent arc) counts as a ramp over this time: each axis's share of it at
+    // most its max_jerk times this (planner.cpp, docs/PLANNING.md).
+    double curvature_step_s = 0.02;
 };
 
 // What the G-code reader takes from the machine file: the optional [gcode]

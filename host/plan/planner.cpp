@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <set>
 
 #include <fmt/format.h>
@@ -302,6 +303,68 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
         const double bend = curvature_speed(b.radius_start_mm, kCurvatureShare * a_normal,
                                             kCurvatureShare * j_normal);
         junction[i] = std::min({jv, bend, out[i - 1].cruise, out[i].cruise});
+    }
+    // Curvature steps: where the path's curvature jumps at a junction (a line
+    // running into an arc tangentially, two arcs of different radii or turning
+    // opposite ways) the centripetal acceleration steps by v^2 |k_b - k_a|. No
+    // speed but zero makes that step a ramp; as a CNC's transition jerk limit
+    // does, it is counted as a ramp over planner.curvature_step_s, and each axis's
+    // share of it kept within that axis's jerk times that time (docs/PLANNING.md,
+    // "Curvature steps").
+    for (std::size_t i = 1; i < n; ++i) {
+        if (!(junction[i] > 0)) continue;
+        const double ka = 1 / out[i - 1].radius, kb = 1 / out[i].radius;  // 0 when straight
+        if (ka == 0 && kb == 0) continue;
+        // The inside of each side's turn: the polyline's turn inside that side's
+        // curve when there is one (the next smooth junction), else this junction's.
+        auto inward = [&](std::size_t from, std::size_t to, const PerAxis<double>& along) {
+            PerAxis<double> t{};
+            double tt = 0, ta = 0;
+            for (std::size_t k = 0; k < kAxes; ++k) ta += (dir[to][k] - dir[from][k]) * along[k];
+            for (std::size_t k = 0; k < kAxes; ++k) {
+                t[k] = dir[to][k] - dir[from][k] - ta * along[k];
+                tt += t[k] * t[k];
+            }
+            if (!(tt > 1e-24)) return std::optional<PerAxis<double>>{};
+            for (double& x : t) x /= std::sqrt(tt);
+            return std::optional<PerAxis<double>>{t};
+        };
+        auto usable = [&](std::size_t j) {  // junction j joins two moves smoothly
+            return j >= 1 && j < n && smooth[j] && segs[j - 1].kind != MotionKind::dwell &&
+                   segs[j].kind != MotionKind::dwell;
+        };
+        std::optional<PerAxis<double>> na, nb;
+        if (ka > 0) na = usable(i - 1) && 1 / out[i - 2].radius > 0 ? inward(i - 2, i - 1, dir[i - 1])
+                                                                    : inward(i - 1, i, dir[i - 1]);
+        if (kb > 0) nb = usable(i + 1) && 1 / out[i + 1].radius > 0 ? inward(i, i + 1, dir[i])
+                                                                    : inward(i - 1, i, dir[i]);
+        // The step's size: |k_b - k_a| turning the same way, k_a + k_b opposite
+        // ways (an unknown side counted as opposite); its direction the inward
+        // normal of the sharper side (either, per axis, when a side is unknown).
+        double side = 1;
+        if (ka > 0 && kb > 0) {
+            side = -1;
+            if (na && nb) {
+                double c = 0;
+                for (std::size_t k = 0; k < kAxes; ++k) c += (*na)[k] * (*nb)[k];
+                side = c >= 0 ? 1 : -1;
+            }
+        }
+        const double dk = side > 0 ? std::abs(kb - ka) : ka + kb;
+        if (!(dk > 0)) continue;
+        PerAxis<double> share;  // of the step, per axis
+        share.fill(1);
+        if (const auto& sharp = kb >= ka ? nb : na; side > 0 && sharp) {
+            for (std::size_t k = 0; k < kAxes; ++k) share[k] = std::abs((*sharp)[k]);
+        } else if (side < 0 && na && nb) {
+            for (std::size_t k = 0; k < kAxes; ++k) share[k] = std::max(std::abs((*na)[k]), std::abs((*nb)[k]));
+        }
+        double cap = kInf;
+        for (std::size_t k = 0; k < kAxes; ++k) {
+            if (m.axes[k].present && share[k] * dk > 0)
+                cap = std::min(cap, std::sqrt(m.axes[k].max_jerk * m.planner.curvature_step_s / (share[k] * dk)));
+        }
+        junction[i] = std::min(junction[i], cap);
     }
     // Axes that reverse where the path goes on (a zigzag's corners, or an axis
     // that last moved some segments back): DIR hold and setup at that speed.

@@ -136,7 +136,7 @@ TEST(Machine, PlannerSection) {
     auto r = parse(std::string(kGood) +
                    "[planner]\narc_tolerance_mm = 0.01\njunction_deviation_mm = 0.05\n"
                    "chunk_tolerance_us = 2.5\non_limit = \"slow\"\nchunk_add2 = false\n"
-                   "split_epsilon_steps = 0.1\n");
+                   "split_epsilon_steps = 0.1\ncurvature_step_ms = 8\n");
     ASSERT_TRUE(r.ok()) << join(r.errors);
     EXPECT_EQ(r->planner.arc_tolerance_mm, 0.01);
     EXPECT_EQ(r->planner.junction_deviation_mm, 0.05);
@@ -145,6 +145,7 @@ TEST(Machine, PlannerSection) {
     EXPECT_EQ(r->planner.on_limit, OnLimit::slow);
     EXPECT_FALSE(r->planner.chunk_add2);
     EXPECT_EQ(r->planner.split_epsilon_steps, 0.1);
+    EXPECT_DOUBLE_EQ(r->planner.curvature_step_s, 0.008);
 }
 
 struct BadCase {
@@ -245,6 +246,8 @@ TEST(Machine, ErrorsNameFileLineColumn) {
          "(0.02 us)"},
         {std::string(kGood) + "[planner]\nsplit_epsilon_steps = 0.5\n",
          "mach.toml:27:23: planner.split_epsilon_steps: must be in [0, 0.5)"},
+        {std::string(kGood) + "[planner]\ncurvature_step_ms = 0\n",
+         "mach.toml:27:21: planner.curvature_step_ms: must be > 0"},
         {std::string(kGood) + "[planner]\narc_tolerance_mm = 0\njunction_deviation_mm = -1\n",
          "mach.toml:27:20: planner.arc_tolerance_mm: must be > 0\nmach.toml:28:25: "
          "planner.junction_deviation_mm: must be >= 0"},

@@ -187,6 +187,34 @@ TEST(Planner, ArcsKeepCentripetalAndTangentialWithinTheAxes) {
     EXPECT_GT(p.back().profile.v_peak, 29.9);
 }
 
+// The same line into the tangent arc: at the tangent point the centripetal
+// acceleration steps from 0 to v^2/r, all of it on Y (the arc's centre is
+// straight below the point). Counted as a ramp over planner.curvature_step_s, the
+// step may be at most Y's jerk times that time: v^2 / r <= 1000 * 0.02 mm/s^2
+// (the planner's normal comes from the arc's chords, a chord's half-angle off:
+// 0.1 % allowed). With the time relaxed, the junction is faster: the cap was
+// binding, and it is the only thing that changed.
+TEST(Planner, CurvatureStepIntoATangentArcIsARampWithinTheJerk) {
+    const double r = 3.0, J_y = 1000;
+    const std::string g = "G1 F1800 X0 Y60\nG1 X60\nG2 X63 Y57 I0 J-3\nG1 Y0\n";
+    auto entry_speed = [&](const Machine& m) {
+        std::vector<StepSegment> segs;
+        auto res = plan(g, m, &segs);
+        EXPECT_TRUE(res.ok()) << join(res.errors);
+        for (size_t i = 0; i < segs.size(); ++i)
+            if (segs[i].kind == MotionKind::arc_cw) return (*res.value)[i].profile.v_entry;
+        ADD_FAILURE() << "no arc";
+        return 0.0;
+    };
+    Machine m = machine();
+    ASSERT_EQ(m.planner.curvature_step_s, 0.02);  // the default: 20 ms
+    const double v = entry_speed(m);
+    EXPECT_LE(v * v / r, J_y * 0.02 * 1.001);
+    EXPECT_GT(v * v / r, J_y * 0.02 * 0.5);  // not stopped for it either
+    m.planner.curvature_step_s = 0.2;
+    EXPECT_GT(entry_speed(m), 1.5 * v);
+}
+
 // A G1 polyline of 400 chords around a circle of radius 40 mm (a CAM post's
 // arc), from rest: the speed builds up across many chords, so the acceleration
 // is carried through the junctions and is continuous there; at the square's
