@@ -149,24 +149,33 @@ size_t CardClient::room() const {
   return last_.free_words > unaccounted_ ? last_.free_words - unaccounted_ : 0;
 }
 
-bool CardClient::pause(const KeepWaiting& keep) {
+bool CardClient::pause(const KeepWaiting& keep, double seconds) {
   if (keep && !keep(last_)) return false;
   ++stats_.waits;
-  link_.wait(o_.poll_interval_s);
+  link_.wait(std::max(seconds, o_.poll_interval_s));
   return true;
 }
 
 bool CardClient::wait_for_room(size_t n, const KeepWaiting& keep) {
+  double since = -1;  // when this wait began (the first time room was short)
   for (;;) {
     if (!have_reply_) {
       poll();
       continue;
     }
-    if (room() >= n) return true;
+    if (room() >= n) {
+      if (since >= 0) room_wait_avg_s_ = 0.7 * room_wait_avg_s_ + 0.3 * (link_.now_s() - since);
+      return true;
+    }
     if (!(last_.flags & reply_flag::busy) && unaccounted_ == 0)
       throw CardError(link_.name() + ": a frame of " + std::to_string(n) + " words does not fit the card's empty "
                       "command buffer of " + std::to_string(last_.free_words) + " words");
-    if (!pause(keep)) return false;
+    double delay = 0;
+    if (since < 0) {
+      since = link_.now_s();
+      delay = std::min(o_.first_wait_share * room_wait_avg_s_, o_.max_first_wait_s);
+    }
+    if (!pause(keep, delay)) return false;
     poll_once();
   }
 }

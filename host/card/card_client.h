@@ -47,6 +47,13 @@ struct ClientOptions {
   size_t max_frame_words = 0;     // at most this many words per frame (marker included); 0: no limit of
                                   // the host's (the card's free words always limit)
   double poll_interval_s = 1e-3;  // between POLLs while waiting for room, a lost result or the end
+  // Waiting for room, the first POLL comes after this share of the last waits for
+  // room (their moving average), at least poll_interval_s and at most
+  // max_first_wait_s; then every poll_interval_s. The card drains its buffer at
+  // the job's pace, so most waits are alike: fewer POLLs on the link. 0: every
+  // poll_interval_s from the start.
+  double first_wait_share = 0.8;
+  double max_first_wait_s = 0.05;
   bool confirm_each_frame = true; // see above
   unsigned max_retries = 16;      // a frame damaged this many times in a row, or this many bad replies
                                   // in a row: CardError
@@ -65,7 +72,7 @@ struct LinkStats {
   uint64_t no_room = 0;         // frames of ours refused with NO_ROOM
   uint64_t bad_replies = 0;     // replies with a CRC mismatch or without the magic byte
   uint64_t lost_results = 0;    // COMMANDS frames whose result reply was damaged (settled by the marker)
-  uint64_t waits = 0;           // waits of poll_interval_s
+  uint64_t waits = 0;           // waits between POLLs (poll_interval_s, or longer: first_wait_share)
 };
 
 class CardClient {
@@ -134,7 +141,7 @@ class CardClient {
   void resolve(const Reply& r, const Sent& sent);
   bool settle_lost(const KeepWaiting& keep);
   bool wait_for_room(size_t n, const KeepWaiting& keep);
-  bool pause(const KeepWaiting& keep);
+  bool pause(const KeepWaiting& keep, double seconds = 0);
   [[nodiscard]] size_t room() const;
   [[nodiscard]] size_t marker_words() const { return o_.confirm_each_frame ? 1 : 0; }
 
@@ -150,6 +157,7 @@ class CardClient {
   uint16_t reads_expected_ = 0;   // the card's READ count once every accepted READ has run
   uint8_t next_seq_ = 1;
   unsigned bad_in_a_row_ = 0, damaged_in_a_row_ = 0;
+  double room_wait_avg_s_ = 0;    // moving average of the waits for room (first_wait_share)
 };
 
 // Reads the capability registers (card/caps.h) at connect.

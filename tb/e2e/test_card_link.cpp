@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -548,6 +549,35 @@ TEST_F(SmallCard, ALargeJobWaitsForRoomInASmallBuffer) {
     EXPECT_LE(nwords, before.free_words) << "transfer " << i;
     EXPECT_LE(nwords, kSmallBuffer);
   }
+}
+
+// The first wait for room sized from the last ones (ClientOptions::
+// first_wait_share): the same job on two fresh cards, once polling every
+// poll_interval_s from the start of each wait and once with the default; both
+// run to the same end without a fault (no underrun), and the second sends
+// fewer POLLs.
+TEST_F(SmallCard, TheFirstWaitForRoomFollowsTheLastOnesWithFewerPolls) {
+  const SmallJob j = small_job(24);
+  auto run = [&](double share) {
+    SmallDut dut;
+    sim::SpiMaster<SmallDut> spi(dut);
+    sim::SimLink<SmallDut> link(spi, 48e6);
+    spi.reset();
+    card::ClientOptions o = options();
+    o.first_wait_share = share;
+    card::CardClient c(link, o);
+    EXPECT_EQ(c.send(j.words), j.words.size());
+    EXPECT_TRUE(c.wait_until_stopped());
+    const card::Reply& r = c.poll();
+    EXPECT_EQ(r.status & 0xFF02, 0u) << "no fault, share " << share;
+    EXPECT_EQ(r.moves, j.moves);
+    EXPECT_EQ(r.positions, (std::vector<int32_t>{j.x, j.y}));
+    return c.stats().polls;
+  };
+  const uint64_t every = run(0), sized = run(card::ClientOptions{}.first_wait_share);
+  std::printf("POLLs: %llu with the first wait sized, %llu every poll_interval_s\n", (unsigned long long)sized,
+              (unsigned long long)every);
+  EXPECT_LT(sized, every);
 }
 
 TEST_F(SmallCard, NoRoomAfterAnotherMasterFilledTheBufferIsWaitedOutAndResent) {
