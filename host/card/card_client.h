@@ -53,7 +53,10 @@ struct ClientOptions {
   // the job's pace, so most waits are alike: fewer POLLs on the link. 0: every
   // poll_interval_s from the start.
   double first_wait_share = 0.8;
-  double max_first_wait_s = 0.05;
+  // The ceiling keeps a frame from being held back longer than the card's buffer
+  // and queues can run on their own after a slow stretch (a long segment, then
+  // short ones); a job whose buffered motion is shorter than this starves on it.
+  double max_first_wait_s = 0.01;
   bool confirm_each_frame = true; // see above
   unsigned max_retries = 16;      // a frame damaged this many times in a row, or this many bad replies
                                   // in a row: CardError
