@@ -311,28 +311,27 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
     // does, it is counted as a ramp over planner.curvature_step_s, and each axis's
     // share of it kept within that axis's jerk times that time (docs/PLANNING.md,
     // "Curvature steps").
+    // The inside of a turn: the polyline's turn from `from` to `to`, square to `along`.
+    auto inward = [&](std::size_t from, std::size_t to, const PerAxis<double>& along) {
+        PerAxis<double> t{};
+        double tt = 0, ta = 0;
+        for (std::size_t k = 0; k < kAxes; ++k) ta += (dir[to][k] - dir[from][k]) * along[k];
+        for (std::size_t k = 0; k < kAxes; ++k) {
+            t[k] = dir[to][k] - dir[from][k] - ta * along[k];
+            tt += t[k] * t[k];
+        }
+        if (!(tt > 1e-24)) return std::optional<PerAxis<double>>{};
+        for (double& x : t) x /= std::sqrt(tt);
+        return std::optional<PerAxis<double>>{t};
+    };
+    // Junction j joins two moves smoothly (smooth[] is never set next to a dwell).
+    auto usable = [&](std::size_t j) { return j >= 1 && j < n && smooth[j]; };
     for (std::size_t i = 1; i < n; ++i) {
         if (!(junction[i] > 0)) continue;
         const double ka = 1 / out[i - 1].radius, kb = 1 / out[i].radius;  // 0 when straight
         if (ka == 0 && kb == 0) continue;
-        // The inside of each side's turn: the polyline's turn inside that side's
+        // Each side's inward normal: from the polyline's turn inside that side's
         // curve when there is one (the next smooth junction), else this junction's.
-        auto inward = [&](std::size_t from, std::size_t to, const PerAxis<double>& along) {
-            PerAxis<double> t{};
-            double tt = 0, ta = 0;
-            for (std::size_t k = 0; k < kAxes; ++k) ta += (dir[to][k] - dir[from][k]) * along[k];
-            for (std::size_t k = 0; k < kAxes; ++k) {
-                t[k] = dir[to][k] - dir[from][k] - ta * along[k];
-                tt += t[k] * t[k];
-            }
-            if (!(tt > 1e-24)) return std::optional<PerAxis<double>>{};
-            for (double& x : t) x /= std::sqrt(tt);
-            return std::optional<PerAxis<double>>{t};
-        };
-        auto usable = [&](std::size_t j) {  // junction j joins two moves smoothly
-            return j >= 1 && j < n && smooth[j] && segs[j - 1].kind != MotionKind::dwell &&
-                   segs[j].kind != MotionKind::dwell;
-        };
         std::optional<PerAxis<double>> na, nb;
         if (ka > 0) na = usable(i - 1) && 1 / out[i - 2].radius > 0 ? inward(i - 2, i - 1, dir[i - 1])
                                                                     : inward(i - 1, i, dir[i - 1]);
