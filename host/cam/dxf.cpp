@@ -342,6 +342,19 @@ class Reader : public DL_CreationAdapter {
     out_.drawing.unit_mm = mm;
     if (mm != 1)
       for (Seg& s : model_) s = s.transformed(Affine::scale(mm, mm));
+    // Finite inputs can still give points that are not: a spline's control
+    // points times its weights, an insert's scale, the drawing's unit
+    // (fuzz finding 13: a spline's control point of 2e26044 read as finite
+    // but huge). The entity is named once and the drawing refused.
+    std::set<int> named;
+    for (const Seg& s : model_) {
+      const bool ok = std::isfinite(s.a.x) && std::isfinite(s.a.y) && std::isfinite(s.b.x) && std::isfinite(s.b.y) &&
+                      std::isfinite(s.c.x) && std::isfinite(s.c.y) && std::isfinite(s.u.x) && std::isfinite(s.u.y) &&
+                      std::isfinite(s.v.x) && std::isfinite(s.v.y);
+      if (!ok && named.insert(s.src).second)
+        error(s.src, "a point of its geometry is not a finite number (coordinates, weights, insert scales or "
+                     "the drawing's unit too large)");
+    }
     out_.drawing.segs = std::move(model_);
   }
 

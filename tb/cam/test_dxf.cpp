@@ -384,6 +384,41 @@ TEST(Dxf, NestedBlocksAndUnevenScaleMakeAnEllipse) {
   }
 }
 
+// Finite numbers whose geometry is not: an insert scaled 1e300 of a line 1e10
+// long, a line to 1e308 in metres (times 1000 for millimetres), and a spline in
+// inches with a control point at 1e308 (fuzz finding 13: a drawing in inches
+// whose spline's control point was read as a huge finite number, its first
+// chords at infinity after the unit). Each entity is named once and the
+// drawing refused; the same lines 1e300 long load.
+TEST(Dxf, GeometryThatOverflowsIsRefusedNamingTheEntity) {
+  DxfText ins;
+  ins.begin_block("B", 0, 0);
+  const std::string in_block = ins.line(0, 0, 1e10, 0, true);
+  ins.insert("B", 0, 0, 1e300, 1e300);
+  const DxfResult ri = load(ins, "ins_inf.dxf");
+  ASSERT_EQ(ri.errors.size(), 1u);
+  EXPECT_NE(ri.errors[0].find("LINE handle " + in_block), std::string::npos) << ri.errors[0];
+  EXPECT_NE(ri.errors[0].find("not a finite number"), std::string::npos) << ri.errors[0];
+
+  DxfText metres(6);
+  metres.line(0, 0, 1, 0);
+  const std::string far = metres.line(0, 0, 1e308, 0);
+  const DxfResult rm = load(metres, "m_inf.dxf");
+  ASSERT_EQ(rm.errors.size(), 1u);
+  EXPECT_NE(rm.errors[0].find("LINE handle " + far), std::string::npos) << rm.errors[0];
+
+  DxfText sp(1);
+  const std::string spline = sp.spline(2, {0, 0, 0, 1, 1, 1}, {{1e308, 0}, {10, 10}, {0, 20}});
+  const DxfResult rs = load(sp, "spline_inf.dxf");
+  ASSERT_EQ(rs.errors.size(), 1u);
+  EXPECT_NE(rs.errors[0].find("SPLINE handle " + spline), std::string::npos) << rs.errors[0];
+
+  DxfText fine(6);
+  fine.line(0, 0, 1, 0);
+  fine.line(0, 0, 1e300, 0);
+  ASSERT_TRUE(load(fine, "m_fine.dxf").ok());
+}
+
 TEST(Dxf, InsunitsInchesAndMetres) {
   DxfText in(1);
   in.line(0, 0, 2, 0);
