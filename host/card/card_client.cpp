@@ -2,6 +2,8 @@
 #include "card/card_client.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <string>
 
 #include "card/protocol.h"
@@ -156,23 +158,46 @@ bool CardClient::pause(const KeepWaiting& keep, double seconds) {
   return true;
 }
 
-bool CardClient::wait_for_room(size_t n, const KeepWaiting& keep) {
+double CardClient::buffered_s() const {
+  return buffered_time_ && have_reply_ ? buffered_time_(last_, handed_) : std::numeric_limits<double>::infinity();
+}
+
+size_t CardClient::batch_words(size_t remaining) const {
+  if (!buffered_time_ || o_.buffer_words == 0 || o_.batch_share <= 0) return 0;
+  if (buffered_s() < o_.urgent_s) return 0;  // the card is short of motion: whatever fits goes
+  return std::min(remaining, size_t(o_.batch_share * double(o_.buffer_words)));
+}
+
+bool CardClient::wait_for_room(size_t least, const KeepWaiting& keep, size_t batch) {
   double since = -1;  // when this wait began (the first time room was short)
+  const size_t n = std::max(least, batch);
   for (;;) {
     if (!have_reply_) {
       poll();
       continue;
     }
-    if (room() >= n) {
+    // A batch's room, unless the card runs short of motion meanwhile.
+    if (room() >= least && (room() >= n || buffered_s() < o_.urgent_s)) {
       if (since >= 0) room_wait_avg_s_ = 0.7 * room_wait_avg_s_ + 0.3 * (link_.now_s() - since);
       return true;
     }
-    if (!(last_.flags & reply_flag::busy) && unaccounted_ == 0)
+    if (!(last_.flags & reply_flag::busy) && unaccounted_ == 0) {
+      if (room() >= least) return true;  // an empty buffer holds no batch: what fits goes
       throw CardError(link_.name() + ": a frame of " + std::to_string(n) + " words does not fit the card's empty "
                       "command buffer of " + std::to_string(last_.free_words) + " words");
+    }
     double delay = 0;
-    if (since < 0) {
-      since = link_.now_s();
+    const double now = link_.now_s();
+    if (since < 0) since = now;
+    const double left = room_wait_avg_s_ - (now - since);  // of a wait like the last ones
+    if (buffered_time_) {
+      // The plan says how long the card can run on what it holds: a quarter to
+      // a half of that, and within it a share of what is left of a wait like
+      // the last ones (a few POLLs a wait, each closer than the one before).
+      const double held = buffered_s();
+      delay = std::max(o_.first_wait_share * left, 0.0);
+      if (std::isfinite(held)) delay = std::clamp(delay, 0.25 * held, 0.5 * held);
+    } else if (now == since) {
       delay = std::min(o_.first_wait_share * room_wait_avg_s_, o_.max_first_wait_s);
     }
     if (!pause(keep, delay)) return false;
@@ -261,6 +286,11 @@ size_t CardClient::send(std::span<const uint32_t> words, const KeepWaiting& keep
       throw std::invalid_argument("a command of " + std::to_string(first_len) + " words (and " +
                                   std::to_string(marker) + " marker) does not fit frames of at most " +
                                   std::to_string(o_.max_frame_words) + " words");
+    // Batching: mid-stream, a frame waits for a share of the buffer while the
+    // card holds enough motion.
+    if (const size_t want = batch_words(words.size() - pos + marker); want > room()) {
+      if (!wait_for_room(first_len + marker, keep, want)) return pos;
+    }
     size_t limit = room();
     if (o_.max_frame_words) limit = std::min(limit, o_.max_frame_words);
     size_t take = 0;
@@ -277,6 +307,7 @@ size_t CardClient::send(std::span<const uint32_t> words, const KeepWaiting& keep
     if (marker) encode_read(Register::id, 0, frame);
     send_frame(std::move(frame), take);
     pos += take;
+    handed_ += take;
   }
 }
 
@@ -308,7 +339,9 @@ bool CardClient::wait_until_stopped(const KeepWaiting& keep) {
     poll();
     if (pending_) continue;
     if (!(last_.status & 1) && !(last_.flags & reply_flag::busy)) return true;
-    if (!pause(keep)) return false;
+    // The card cannot be done before the motion it holds is (the plan's bound).
+    const double left = buffered_s();
+    if (!pause(keep, std::isfinite(left) ? left : 0)) return false;
   }
 }
 

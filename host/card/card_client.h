@@ -57,6 +57,16 @@ struct ClientOptions {
   // and queues can run on their own after a slow stretch (a long segment, then
   // short ones); a job whose buffered motion is shorter than this starves on it.
   double max_first_wait_s = 0.01;
+  // Batching, with a BufferedTime (CardClient::set_buffered_time): a frame in the
+  // middle of a stream waits until this share of the card's command buffer
+  // (buffer_words, its CBUF_WORDS) is free, so that few large frames go instead
+  // of one small one per segment and a POLL or two for each; every wait is at
+  // most half the motion the card still holds, and while that is below urgent_s
+  // whatever fits goes at once. 0 (or no BufferedTime, or buffer_words 0): a
+  // frame goes as soon as the next command fits.
+  size_t buffer_words = 0;
+  double batch_share = 0.25;
+  double urgent_s = 0.02;
   bool confirm_each_frame = true; // see above
   unsigned max_retries = 16;      // a frame damaged this many times in a row, or this many bad replies
                                   // in a row: CardError
@@ -83,8 +93,18 @@ class CardClient {
   // Called with the latest good reply before each wait; false gives up the wait
   // (send and wait_until_stopped then return early).
   using KeepWaiting = std::function<bool(const Reply&)>;
+  // The seconds of motion the card still holds, at least (a lower bound: the
+  // planned time from the end of the segment it runs to the end of the last
+  // one whose words are handed to frames), given its latest reply and how many
+  // words send() has handed to frames since the client began; infinity when
+  // the card is not consuming (not started). The caller knows the plan.
+  using BufferedTime = std::function<double(const Reply&, uint64_t words_handed)>;
 
   explicit CardClient(Link& link, ClientOptions options = {});
+
+  // Sizes waits and batches frames by the motion buffered in the card (see
+  // ClientOptions::batch_share).
+  void set_buffered_time(BufferedTime f) { buffered_time_ = std::move(f); }
 
   // POLLs until a good reply comes (at most max_retries bad ones) and returns it.
   const Reply& poll();
@@ -110,7 +130,8 @@ class CardClient {
   uint32_t read_register(Register r, unsigned axis = 0, const KeepWaiting& keep_waiting = nullptr);
 
   // Settles, then POLLs every poll_interval_s until the card is not running and
-  // its command buffer is empty. false: keep_waiting gave up.
+  // its command buffer is empty (with a BufferedTime: not before the motion the
+  // card holds is done). false: keep_waiting gave up.
   bool wait_until_stopped(const KeepWaiting& keep_waiting = nullptr);
 
   // The latest good reply (after at least one poll or frame), and the first.
@@ -143,7 +164,8 @@ class CardClient {
   bool on_reply(std::span<const uint8_t> miso, const Sent& sent);
   void resolve(const Reply& r, const Sent& sent);
   bool settle_lost(const KeepWaiting& keep);
-  bool wait_for_room(size_t n, const KeepWaiting& keep);
+  // Until `least` words fit, and `batch` unless the card runs short of motion.
+  bool wait_for_room(size_t least, const KeepWaiting& keep, size_t batch = 0);
   bool pause(const KeepWaiting& keep, double seconds = 0);
   [[nodiscard]] size_t room() const;
   [[nodiscard]] size_t marker_words() const { return o_.confirm_each_frame ? 1 : 0; }
@@ -161,6 +183,10 @@ class CardClient {
   uint8_t next_seq_ = 1;
   unsigned bad_in_a_row_ = 0, damaged_in_a_row_ = 0;
   double room_wait_avg_s_ = 0;    // moving average of the waits for room (first_wait_share)
+  BufferedTime buffered_time_;
+  uint64_t handed_ = 0;           // caller words handed to frames by send()
+  [[nodiscard]] double buffered_s() const;
+  [[nodiscard]] size_t batch_words(size_t remaining) const;
 };
 
 // Reads the capability registers (card/caps.h) at connect.

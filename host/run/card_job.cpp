@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: MIT
 #include "run/card_job.h"
 
+#include <algorithm>
 #include <fstream>
 
 #include <fmt/format.h>
+
+#include "card/protocol.h"
 
 namespace cpstep::run {
 
@@ -86,8 +89,49 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
     for (int a = 0; a < plan::kAxes; ++a) pos[a] += c.segment.delta[a];
     cj.checkpoints.push_back({moves, pos, c.segment.loc});
   }
+  // Where each SEGMENT command ends in the stream, and when it ends.
+  uint64_t end_cycle = 0, end_moves = 0;
+  size_t seg = 0;
+  for (size_t w = 0; w < cj.words.size();) {
+    const size_t len = card::command_words(cj.words[w], plan::kAxes);
+    w += len;
+    if (len == 1) continue;
+    const card::WireSegment& s = cj.wire.segments.at(seg++);
+    end_cycle += chunk_cycles_until(s.chunks, UINT64_MAX);
+    end_moves += uint64_t(s.u) << s.k;
+    cj.segment_end_word.push_back(w);
+    cj.segment_end_cycle.push_back(end_cycle);
+    cj.segment_end_moves.push_back(end_moves);
+  }
   cj.warnings = r.warnings;
   return r;
+}
+
+uint64_t chunk_cycles_until(const std::vector<card::WireChunk>& chunks, uint64_t moves) {
+  // Move j of a chunk (0-based) comes interval + j add + add2 j (j - 1) / 2
+  // cycles after the one before: n moves take n interval + add n(n-1)/2 +
+  // add2 n(n-1)(n-2)/6.
+  int64_t t = 0;
+  for (const card::WireChunk& c : chunks) {
+    if (moves == 0) break;
+    const auto n = int64_t(std::min<uint64_t>(moves, c.count));
+    t += n * int64_t(c.interval) + int64_t(c.add) * (n * (n - 1) / 2) + int64_t(c.add2) * (n * (n - 1) * (n - 2) / 6);
+    moves -= uint64_t(n);
+  }
+  return uint64_t(t);
+}
+
+double buffered_seconds(const CardJob& job, uint64_t segments_done, uint64_t moves_done, uint64_t words_handed) {
+  const auto& ends = job.segment_end_word;
+  const auto sent = uint64_t(std::upper_bound(ends.begin(), ends.end(), words_handed) - ends.begin());
+  if (sent <= segments_done) return 0;
+  // The card's next move: the first not made of the segment it runs.
+  const uint64_t start = segments_done ? job.segment_end_cycle[segments_done - 1] : 0;
+  const uint64_t before = segments_done ? job.segment_end_moves[segments_done - 1] : 0;
+  const uint64_t into = moves_done > before ? moves_done - before : 0;
+  const uint64_t next = start + chunk_cycles_until(job.wire.segments[segments_done].chunks, into + 1);
+  const uint64_t end = job.segment_end_cycle[sent - 1];
+  return end > next ? double(end - next) / job.clock_hz() : 0;
 }
 
 bool write_words(const std::filesystem::path& path, const std::vector<uint32_t>& words) {

@@ -34,6 +34,12 @@ struct CardJob {
   std::vector<int64_t> chunk_cycles;     // per move: the time its chunks realize
   std::vector<Checkpoint> checkpoints;   // one per planned card segment
   plan::PerAxis<int64_t> start{};        // absolute steps the job was planned from (the card's position)
+  // Per wire segment (the SEGMENT commands of `words`, in order): the word
+  // index just past its last word, its end in cycles from START, and the card's
+  // moves from START to its end (pause moves included, as the card counts).
+  std::vector<uint64_t> segment_end_word;
+  std::vector<uint64_t> segment_end_cycle;
+  std::vector<uint64_t> segment_end_moves;
   std::vector<plan::Diagnostic> warnings;  // the planner's (also in the Result)
 
   [[nodiscard]] uint64_t moves() const { return planned.stats.moves; }
@@ -43,6 +49,17 @@ struct CardJob {
   card::CardCaps caps;                   // the card it is planned for
   [[nodiscard]] double clock_hz() const { return machine.card.clock_hz; }
 };
+
+// The seconds of motion the card still holds, at least, while it runs the job
+// (card::CardClient::BufferedTime): from its next move (`moves_done` of the
+// job's moves are made, `segments_done` of its segments) to the end of the last
+// segment whose words are among the first `words_handed` of `job.words`, in
+// planned time. A card that stretches moves only holds more.
+double buffered_seconds(const CardJob& job, uint64_t segments_done, uint64_t moves_done, uint64_t words_handed);
+
+// The cycles from a wire segment's start to its `moves`-th move (all of its
+// moves: its duration).
+uint64_t chunk_cycles_until(const std::vector<card::WireChunk>& chunks, uint64_t moves);
 
 // The planner's view of a card's capabilities.
 plan::CardFacts card_facts(const card::CardCaps& caps);

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "run/link_run.h"
 
+#include <limits>
+
 #include <fmt/format.h>
 
 namespace cpstep::run {
@@ -18,6 +20,7 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   run.pins_observed = false;
   card::ClientOptions co = o.client;
   co.axes = plan::kAxes;
+  co.buffer_words = job.caps.command_buffer_words();
   card::CardClient client(link, co);
   const double t0 = link.now_s();
   const auto finish = [&] {
@@ -65,7 +68,14 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   }
   std::vector<uint32_t> words;
   if (st0.fault) card::encode_control(false, false, true, words);  // CLEAR the fault left latched
+  const uint64_t before_job = words.size();
   words.insert(words.end(), job.words.begin(), job.words.end());
+  // The card's segment count goes on from the last job's.
+  client.set_buffered_time([&job, &first, before_job](const card::Reply& r, uint64_t handed) {
+    if (!card::decode_status(r.status).running) return std::numeric_limits<double>::infinity();
+    return buffered_seconds(job, uint32_t(r.segments - first.segments), uint32_t(r.moves - first.moves),
+                            handed > before_job ? handed - before_job : 0);
+  });
 
   const double timeout = o.timeout_s > 0 ? o.timeout_s : 2 * job.planned.stats.duration_s + 10;
   enum class GaveUp { no, out_of_time, stalled } gave_up = GaveUp::no;

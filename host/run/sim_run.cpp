@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "run/sim_run.h"
 
+#include <limits>
+
 #include <fmt/format.h>
 
 #include <fstream>
@@ -242,7 +244,13 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   const std::unique_ptr<card::Link> wrapped = o.wrap_link ? o.wrap_link(sim_link) : nullptr;
   card::ClientOptions co = o.client;
   co.axes = plan::kAxes;
+  co.buffer_words = job.caps.command_buffer_words();
   card::CardClient client(wrapped ? *wrapped : sim_link, co);
+  // A fresh card: its segment count starts at 0 with the job's first.
+  client.set_buffered_time([&job](const card::Reply& r, uint64_t handed) {
+    if (!card::decode_status(r.status).running) return std::numeric_limits<double>::infinity();
+    return buffered_seconds(job, r.segments, r.moves, handed);
+  });
 
   const double planned_cycles = job.planned.stats.duration_s * job.clock_hz();
   const uint64_t budget = o.max_cycles ? o.max_cycles : uint64_t(2 * planned_cycles) + 10'000'000;

@@ -10,6 +10,8 @@
 // by cycle from START), and from the card's replies decoded by the frame codec
 // (docs/PROTOCOL.md), never from the client's own account.
 #include <gtest/gtest.h>
+
+#include <limits>
 #include <unistd.h>
 
 #include <algorithm>
@@ -258,6 +260,46 @@ size_t CardLink::small_frames_ = 0;
 int64_t CardLink::victim_ = 0;
 Outcome* CardLink::clean_large_ = nullptr;
 Outcome* CardLink::clean_small_ = nullptr;
+
+// The job's segment ends (run::CardJob::segment_end_cycle, from each wire
+// segment's chunks in closed form) are the planner's move times
+// (chunk_cycles, its chunks expanded move by move): the end of each segment is
+// the time of its last move.
+TEST_F(CardLink, SegmentEndsAreTheLastMoveTimesAndBufferedTimeSpansThem) {
+  const run::CardJob& j = *job_;
+  ASSERT_EQ(j.segment_end_cycle.size(), j.wire.segments.size());
+  ASSERT_EQ(j.segment_end_word.size(), j.wire.segments.size());
+  uint64_t moves = 0;
+  for (size_t i = 0; i < j.wire.segments.size(); ++i) {
+    const card::WireSegment& w = j.wire.segments[i];
+    moves += uint64_t(w.u) << w.k;
+    ASSERT_LE(moves, j.chunk_cycles.size());
+    EXPECT_EQ(int64_t(j.segment_end_cycle[i]), j.chunk_cycles[moves - 1]) << "segment " << i;
+    // The word just past the segment starts the next command (or ends the stream).
+    EXPECT_LE(j.segment_end_word[i], j.words.size());
+  }
+  EXPECT_EQ(moves, j.chunk_cycles.size());
+  // buffered_seconds() from the card's next move (its moves done, as an index
+  // into the planner's move times: this job has no pause moves) to the end of
+  // the last segment handed over, for every segment the card may run and
+  // moves into it, and every segment handed over.
+  const double hz = j.clock_hz();
+  ASSERT_EQ(j.segment_end_moves.back(), j.chunk_cycles.size());
+  for (uint64_t done = 0; done < 8; ++done) {
+    const uint64_t first = done ? j.segment_end_moves[done - 1] : 0;
+    for (const uint64_t made : {first, first + 1, (first + j.segment_end_moves[done]) / 2, j.segment_end_moves[done] - 1})
+      for (uint64_t sent = 0; sent <= 8; ++sent) {
+        const uint64_t handed = sent ? j.segment_end_word[sent - 1] : 0;
+        const double expect = sent > done ? double(int64_t(j.segment_end_cycle[sent - 1]) - j.chunk_cycles[made]) / hz : 0;
+        EXPECT_DOUBLE_EQ(run::buffered_seconds(j, done, made, handed), std::max(expect, 0.0))
+            << "segments done " << done << ", moves made " << made << ", segments handed " << sent;
+        // A word short of the segment: it is not the card's yet.
+        if (sent > 0 && handed > 0)
+          EXPECT_LE(run::buffered_seconds(j, done, made, handed - 1), run::buffered_seconds(j, done, made, handed));
+      }
+  }
+  EXPECT_EQ(run::buffered_seconds(j, 0, 0, 0), 0.0);
+}
 
 TEST_F(CardLink, ManySmallFramesAndOneLargeEndInTheSamePins) {
   const Outcome& large = clean_large();
@@ -578,6 +620,55 @@ TEST_F(SmallCard, TheFirstWaitForRoomFollowsTheLastOnesWithFewerPolls) {
   std::printf("POLLs: %llu with the first wait sized, %llu every poll_interval_s\n", (unsigned long long)sized,
               (unsigned long long)every);
   EXPECT_LT(sized, every);
+}
+
+// Batching (ClientOptions::batch_share with a BufferedTime): frames wait for
+// 70 % of the buffer (22 words: two segments and the marker) while the card
+// holds enough motion, told here from the job's own segments (8 moves of
+// 2000 cycles each); the job runs to its end, without underrun, in fewer
+// COMMANDS frames and POLLs than one segment a frame. With the card always
+// short of motion (urgent_s above what it can hold) frames do not wait for a
+// batch: more of them.
+TEST_F(SmallCard, FramesWaitForABatchWhileTheCardHoldsMotion) {
+  const SmallJob j = small_job(24);
+  std::vector<uint64_t> seg_end;  // word index past each segment
+  for (size_t i = 0; i < j.words.size(); i += card::command_words(j.words[i], 2))
+    if (card::command_words(j.words[i], 2) > 1) seg_end.push_back(i + card::command_words(j.words[i], 2));
+  ASSERT_EQ(seg_end.size(), 24u);
+  const double seg_s = 8 * 2000 / 48e6;
+  auto run = [&](double urgent_s, bool batch) {
+    SmallDut dut;
+    sim::SpiMaster<SmallDut> spi(dut);
+    sim::SimLink<SmallDut> link(spi, 48e6);
+    spi.reset();
+    card::ClientOptions o = options();
+    if (batch) {
+      o.buffer_words = kSmallBuffer;
+      o.batch_share = 0.7;
+      o.urgent_s = urgent_s;
+    }
+    card::CardClient c(link, o);
+    if (batch)
+      c.set_buffered_time([&](const card::Reply& r, uint64_t handed) {
+        if (!(r.status & 1)) return std::numeric_limits<double>::infinity();
+        const auto sent = uint64_t(std::upper_bound(seg_end.begin(), seg_end.end(), handed) - seg_end.begin());
+        return sent > r.segments + 1 ? double(sent - r.segments - 1) * seg_s : 0.0;
+      });
+    EXPECT_EQ(c.send(j.words), j.words.size());
+    EXPECT_TRUE(c.wait_until_stopped());
+    const card::Reply& r = c.poll();
+    EXPECT_EQ(r.status & 0xFF02, 0u) << "no fault, urgent_s " << urgent_s << (batch ? " batched" : "");
+    EXPECT_EQ(r.moves, j.moves);
+    EXPECT_EQ(r.positions, (std::vector<int32_t>{j.x, j.y}));
+    return c.stats();
+  };
+  const card::LinkStats plain = run(0, false), batched = run(0.5 * seg_s, true), urgent = run(1.0, true);
+  std::printf("COMMANDS frames / POLLs: %llu / %llu one segment a frame, %llu / %llu batched\n",
+              (unsigned long long)plain.command_frames, (unsigned long long)plain.polls,
+              (unsigned long long)batched.command_frames, (unsigned long long)batched.polls);
+  EXPECT_LT(batched.command_frames, plain.command_frames);
+  EXPECT_LE(batched.command_frames, 24u / 2 + 2);
+  EXPECT_GT(urgent.command_frames, batched.command_frames);
 }
 
 TEST_F(SmallCard, NoRoomAfterAnotherMasterFilledTheBufferIsWaitedOutAndResent) {
