@@ -226,6 +226,15 @@ bool CpCmd::still(const In& i) const {
          !o.cfg_write && !o.fault;
 }
 
+uint64_t CpCmd::counting_for(const In& i) const {
+  if (i.rst || r_.parse != Parse::chunk_check || r_.rsp_valid) return 0;
+  return kCheckClocks - 1 - r_.check_clock;
+}
+
+void CpCmd::skip(uint64_t cycles) {
+  if (r_.parse == Parse::chunk_check) r_.check_clock += uint32_t(cycles);
+}
+
 void CpCmd::tick() {
   Regs d = r_;
   eval(in, d);

@@ -59,6 +59,12 @@ class CpCmd {
   // True when a clock with inputs `i` takes no word and changes no register or
   // queue (the event-skipping core's test; see CpCore::quiet_for).
   bool still(const In& i) const;
+  // Clocks from now in which, with inputs `i`, the parser only counts its chunk
+  // check's clocks (kCheckClocks - 1 of them change nothing but the count; the
+  // last gives the verdict); 0 otherwise. skip(n) counts n of them at once
+  // (nothing where the parser is not checking a chunk: it is still).
+  uint64_t counting_for(const In& i) const;
+  void skip(uint64_t cycles);
 
  private:
   enum class Parse {

@@ -158,6 +158,7 @@ bool CpCore::lazy_holds() const {
 
 void CpCore::catch_up() {
   if (lazy_pending_) {
+    cmd_.skip(lazy_pending_);
     run_.skip(lazy_pending_);
     for (CpPulse& p : pulses_) p.skip(lazy_pending_);
     wires_valid_ = false;
@@ -248,11 +249,17 @@ uint64_t CpCore::quiet_for(uint64_t limit) const {
 uint64_t CpCore::quiet_for(const Wires& w, uint64_t limit) const {
   if (in.rst || limit == 0) return 0;
   // Every part without a counter must be still: it takes no word, writes no
-  // queue or bank, latches nothing.
-  if (!cmd_.still(w.cmd_in) || !build_.still(w.b_in) || !status_.still(w.st_in)) return 0;
+  // queue or bank, latches nothing. The parser may be counting its chunk
+  // check's clocks (a counter, as the timers).
+  uint64_t h = limit;
+  if (!cmd_.still(w.cmd_in)) {
+    h = std::min(h, cmd_.counting_for(w.cmd_in));
+    if (h == 0) return 0;
+  }
+  if (!build_.still(w.b_in) || !status_.still(w.st_in)) return 0;
   if (!seg_fifo_.still(seg_in(w)) || !chunk_fifo_.still(chunk_in(w)) || !run_fifo_.still(run_in(w))) return 0;
   // The counters: the move timer and each pulse timer say how far they stay quiet.
-  uint64_t h = std::min<uint64_t>(limit, run_.quiet_for(w.r_in));
+  h = std::min<uint64_t>(h, run_.quiet_for(w.r_in));
   for (unsigned a = 0; a < p_.n && h > 0; ++a)
     h = std::min(h, pulses_[a].quiet_for(pulse_in(a, (w.r.step >> a & 1) != 0)));
   return h;
@@ -266,6 +273,7 @@ void CpCore::skip(uint64_t cycles) {
     return;
   }
   catch_up();
+  cmd_.skip(cycles);
   run_.skip(cycles);
   for (CpPulse& p : pulses_) p.skip(cycles);
   wires_valid_ = false;
