@@ -162,9 +162,16 @@ double CardClient::buffered_s() const {
   return buffered_time_ && have_reply_ ? buffered_time_(last_, handed_) : std::numeric_limits<double>::infinity();
 }
 
+bool CardClient::may_batch() const {
+  if (!buffered_time_ || o_.buffer_words == 0 || o_.batch_share <= 0) return false;
+  // Only while the card runs (before START nothing drains: what fits goes, as
+  // without a plan) and holds enough motion (short of it: whatever fits goes).
+  const double held = buffered_s();
+  return std::isfinite(held) && held >= o_.urgent_s;
+}
+
 size_t CardClient::batch_words(size_t remaining) const {
-  if (!buffered_time_ || o_.buffer_words == 0 || o_.batch_share <= 0) return 0;
-  if (buffered_s() < o_.urgent_s) return 0;  // the card is short of motion: whatever fits goes
+  if (!may_batch()) return 0;
   return std::min(remaining, size_t(o_.batch_share * double(o_.buffer_words)));
 }
 
@@ -176,8 +183,8 @@ bool CardClient::wait_for_room(size_t least, const KeepWaiting& keep, size_t bat
       poll();
       continue;
     }
-    // A batch's room, unless the card runs short of motion meanwhile.
-    if (room() >= least && (room() >= n || buffered_s() < o_.urgent_s)) {
+    // A batch's room, unless the card stopped or runs short of motion meanwhile.
+    if (room() >= least && (room() >= n || !may_batch())) {
       if (since >= 0) room_wait_avg_s_ = 0.7 * room_wait_avg_s_ + 0.3 * (link_.now_s() - since);
       return true;
     }

@@ -61,9 +61,10 @@ struct ClientOptions {
   // middle of a stream waits until this share of the card's command buffer
   // (buffer_words, its CBUF_WORDS) is free, so that few large frames go instead
   // of one small one per segment and a POLL or two for each; every wait is at
-  // most half the motion the card still holds, and while that is below urgent_s
-  // whatever fits goes at once. 0 (or no BufferedTime, or buffer_words 0): a
-  // frame goes as soon as the next command fits.
+  // most half the motion the card still holds, and while that is below urgent_s,
+  // or the card is not running (before START), whatever fits goes at once. 0 (or
+  // no BufferedTime, or buffer_words 0): a frame goes as soon as the next command
+  // fits.
   size_t buffer_words = 0;
   double batch_share = 0.25;
   double urgent_s = 0.02;
@@ -186,6 +187,7 @@ class CardClient {
   BufferedTime buffered_time_;
   uint64_t handed_ = 0;           // caller words handed to frames by send()
   [[nodiscard]] double buffered_s() const;
+  [[nodiscard]] bool may_batch() const;
   [[nodiscard]] size_t batch_words(size_t remaining) const;
 };
 
