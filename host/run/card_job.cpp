@@ -10,6 +10,26 @@
 
 namespace cpstep::run {
 
+namespace {
+
+// The cycles from a wire segment's start to its `moves`-th move (all of its
+// moves: its duration).
+uint64_t chunk_cycles_until(const std::vector<card::WireChunk>& chunks, uint64_t moves) {
+  // Move j of a chunk (0-based) comes interval + j add + add2 j (j - 1) / 2
+  // cycles after the one before: n moves take n interval + add n(n-1)/2 +
+  // add2 n(n-1)(n-2)/6.
+  int64_t t = 0;
+  for (const card::WireChunk& c : chunks) {
+    if (moves == 0) break;
+    const auto n = int64_t(std::min<uint64_t>(moves, c.count));
+    t += n * int64_t(c.interval) + int64_t(c.add) * (n * (n - 1) / 2) + int64_t(c.add2) * (n * (n - 1) * (n - 2) / 6);
+    moves -= uint64_t(n);
+  }
+  return uint64_t(t);
+}
+
+}  // namespace
+
 uint64_t CardJob::wire_chunks() const {
   uint64_t n = 0;
   for (const card::WireSegment& s : wire.segments) n += s.chunks.size();
@@ -105,20 +125,6 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
   }
   cj.warnings = r.warnings;
   return r;
-}
-
-uint64_t chunk_cycles_until(const std::vector<card::WireChunk>& chunks, uint64_t moves) {
-  // Move j of a chunk (0-based) comes interval + j add + add2 j (j - 1) / 2
-  // cycles after the one before: n moves take n interval + add n(n-1)/2 +
-  // add2 n(n-1)(n-2)/6.
-  int64_t t = 0;
-  for (const card::WireChunk& c : chunks) {
-    if (moves == 0) break;
-    const auto n = int64_t(std::min<uint64_t>(moves, c.count));
-    t += n * int64_t(c.interval) + int64_t(c.add) * (n * (n - 1) / 2) + int64_t(c.add2) * (n * (n - 1) * (n - 2) / 6);
-    moves -= uint64_t(n);
-  }
-  return uint64_t(t);
 }
 
 double buffered_seconds(const CardJob& job, uint64_t segments_done, uint64_t moves_done, uint64_t words_handed) {

@@ -57,10 +57,6 @@ struct CardJob {
 // planned time. A card that stretches moves only holds more.
 double buffered_seconds(const CardJob& job, uint64_t segments_done, uint64_t moves_done, uint64_t words_handed);
 
-// The cycles from a wire segment's start to its `moves`-th move (all of its
-// moves: its duration).
-uint64_t chunk_cycles_until(const std::vector<card::WireChunk>& chunks, uint64_t moves);
-
 // The planner's view of a card's capabilities.
 plan::CardFacts card_facts(const card::CardCaps& caps);
 
