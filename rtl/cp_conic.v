@@ -203,7 +203,6 @@ reg          cw_q, cw_d;
 reg [BW-1:0] bit_q, bit_d;
 reg signed [IW-1:0] q_q, q_d, ux_q, ux_d, uy_q, uy_d, l_q, l_d;
 reg signed [XW-1:0] x_q, x_d, y_q, y_d;
-reg signed [IW-1:0] g_q, g_d, gx_q, gx_d, gy_q, gy_d;
 reg [NW-1:0] count_q, count_d;
 reg [1:0]    out_dx_q, out_dx_d, out_dy_q, out_dy_d;
 reg [XW-1:0] out_x_q, out_x_d, out_y_q, out_y_d;
@@ -235,39 +234,36 @@ wire signed [IW-1:0] end_gx = ux_q + d_q;
 wire signed [IW-1:0] end_gy = uy_q + e_q;
 
 // ---------------------------------------------------------------- the rule
-// Direction of travel T: clockwise (Gy, -Gx), counter-clockwise (-Gy, Gx). A zero
-// component is a quadrant change: the curve turns to its concave side.
-wire signed [IW-1:0] tx = cw_q ? gy_q : -gy_q;
-wire signed [IW-1:0] ty = cw_q ? -gx_q : gx_q;
-wire tx_zero = tx == {IW{1'b0}};
-wire ty_zero = ty == {IW{1'b0}};
-wire c_pos  = !c_q[IW-1] && c_q != {IW{1'b0}};
-wire a_pos  = !a_q[IW-1] && a_q != {IW{1'b0}};
-wire gx_pos = !gx_q[IW-1] && gx_q != {IW{1'b0}};
-wire gy_pos = !gy_q[IW-1] && gy_q != {IW{1'b0}};
-wire [1:0] sx = tx_zero ? ((c_pos == gx_pos) ? M1 : P1) : (tx[IW-1] ? M1 : P1);
-wire [1:0] sy = ty_zero ? ((a_pos == gy_pos) ? M1 : P1) : (ty[IW-1] ? M1 : P1);
-wire       same = sx == sy;
-wire [1:0] sxy = same ? P1 : M1;
-// 4G at L = P + (sx/2, sy) and at M = P + (sx, sy/2).
-wire signed [IW-1:0] e_l = (g_q <<< 2) + (sel(gx_q, sx) <<< 1) + (sel(gy_q, sy) <<< 2)
-                         + a_q + (sel(b_q, sxy) <<< 1) + (c_q <<< 2);
-wire signed [IW-1:0] e_m = (g_q <<< 2) + (sel(gx_q, sx) <<< 2) + (sel(gy_q, sy) <<< 1)
-                         + (a_q <<< 2) + (sel(b_q, sxy) <<< 1) + c_q;
-wire left_l = cw_q ? (!e_l[IW-1] && e_l != {IW{1'b0}}) : e_l[IW-1];
-wire left_m = cw_q ? (!e_m[IW-1] && e_m != {IW{1'b0}}) : e_m[IW-1];
-// The far boundary from its left end: Y, L, corner, M, X when sx sy > 0; X, M,
-// corner, L, Y otherwise.
-wire first  = same ? left_l : left_m;
-wire second = same ? left_m : left_l;
-wire [1:0] mv_dx = !first ? (same ? Z0 : sx) : !second ? sx : (same ? sx : Z0);
-wire [1:0] mv_dy = !first ? (same ? sy : Z0) : !second ? sy : (same ? Z0 : sy);
-// The node after the move.
-wire signed [IW-1:0] nx_g  = g_q + sel(gx_q, mv_dx) + sel(gy_q, mv_dy)
-                           + ((mv_dx != Z0) ? a_q : {IW{1'b0}}) + sel(b_q, sprod(mv_dx, mv_dy))
-                           + ((mv_dy != Z0) ? c_q : {IW{1'b0}});
-wire signed [IW-1:0] nx_gx = gx_q + (sel(a_q, mv_dx) <<< 1) + sel(b_q, mv_dy);
-wire signed [IW-1:0] nx_gy = gy_q + sel(b_q, mv_dx) + (sel(c_q, mv_dy) <<< 1);
+// The walk's G and gradient, the move from the current node and the node after it
+// (rtl/cp_conic_walk.v): loaded with the start node's values when S_EVAL0 ends.
+wire          walk_load = state_q == S_EVAL0 && bit_q == {BW{1'b0}};
+wire [1:0]    mv_dx, mv_dy;
+wire signed [IW-1:0] g_q, gx_q, gy_q;
+
+cp_conic_walk #(.QW(QW), .IW(IW)) u_walk (
+    .clk     (clk),
+    .load_i  (walk_load),
+    .a_i     (a_q[QW-1:0]),
+    .b_i     (b_q[QW-1:0]),
+    .c_i     (c_q[QW-1:0]),
+    .g_i     (ev_q + ev_l + f_q),
+    .gx_i    (ev_ux + d_q),
+    .gy_i    (ev_uy + e_q),
+    .cw_i    (cw_q),
+    .adv_i   (issue),
+    .mv_dx_o (mv_dx),
+    .mv_dy_o (mv_dy),
+    .g_o     (g_q),
+    .gx_o    (gx_q),
+    .gy_o    (gy_q),
+    /* verilator lint_off PINCONNECTEMPTY */
+    .a_o     (),
+    .b_o     (),
+    .c_o     (),
+    .cw_o    ()
+    /* verilator lint_on PINCONNECTEMPTY */
+);
+
 wire signed [XW-1:0] nx_x  = x_q + {{(XW-2){mv_dx[1]}}, mv_dx};
 wire signed [XW-1:0] nx_y  = y_q + {{(XW-2){mv_dy[1]}}, mv_dy};
 wire [NW-1:0]        nx_count = count_q + 1'b1;
@@ -287,7 +283,7 @@ always @* begin
     x0_d = x0_q;  y0_d = y0_q;  x1_d = x1_q;  y1_d = y1_q;  cw_d = cw_q;
     bit_d = bit_q;
     q_d = q_q;  ux_d = ux_q;  uy_d = uy_q;  l_d = l_q;
-    x_d = x_q;  y_d = y_q;  g_d = g_q;  gx_d = gx_q;  gy_d = gy_q;
+    x_d = x_q;  y_d = y_q;
     count_d = count_q;
     out_dx_d = out_dx_q;  out_dy_d = out_dy_q;  out_x_d = out_x_q;  out_y_d = out_y_q;
     out_last_d = out_last_q;  out_miss_d = out_miss_q;
@@ -328,9 +324,6 @@ always @* begin
         if (bit_q == {BW{1'b0}}) begin
             x_d  = {{(XW-PW){x0_q[PW-1]}}, x0_q};
             y_d  = {{(XW-PW){y0_q[PW-1]}}, y0_q};
-            g_d  = ev_q + ev_l + f_q;
-            gx_d = ev_ux + d_q;
-            gy_d = ev_uy + e_q;
             bit_d = TOP_BIT;
             q_d = {IW{1'b0}};  ux_d = {IW{1'b0}};  uy_d = {IW{1'b0}};  l_d = {IW{1'b0}};
             state_d = S_EVAL1;
@@ -357,7 +350,6 @@ always @* begin
     end
 
     S_WALK: if (issue) begin
-        g_d = nx_g;  gx_d = nx_gx;  gy_d = nx_gy;
         x_d = nx_x;  y_d = nx_y;
         count_d = nx_count;
         out_valid_d = 1'b1;
@@ -387,7 +379,7 @@ always @(posedge clk) begin
     x0_q <= x0_d;  y0_q <= y0_d;  x1_q <= x1_d;  y1_q <= y1_d;  cw_q <= cw_d;
     bit_q <= bit_d;
     q_q <= q_d;  ux_q <= ux_d;  uy_q <= uy_d;  l_q <= l_d;
-    x_q <= x_d;  y_q <= y_d;  g_q <= g_d;  gx_q <= gx_d;  gy_q <= gy_d;
+    x_q <= x_d;  y_q <= y_d;
     count_q <= count_d;
     out_dx_q <= out_dx_d;  out_dy_q <= out_dy_d;  out_x_q <= out_x_d;  out_y_q <= out_y_d;
     out_last_q <= out_last_d;  out_miss_q <= out_miss_d;

@@ -1,0 +1,83 @@
+// SPDX-License-Identifier: MIT
+// cp_conic_serial — cycle-accurate, bit-exact model of rtl/cp_conic_serial.v: the
+// motion core's bit-serial conic walker (docs/CONIC.md "The walk, bit-serial").
+//
+// Written from docs/CONIC.md, not from the RTL. The RTL turns G and its gradient
+// through shift registers one bit a clock; nothing of a pass is visible at the
+// ports until its last bit, so this model keeps the values whole and does a pass's
+// arithmetic at its last bit, modulo 2^IW as the serial adders do.
+#pragma once
+
+#include <cstdint>
+
+#include "model/cp_conic.h"
+
+namespace cpstep::model {
+
+struct CpConicSerialParams {
+  unsigned qw = 16;  // signed width of A, B, C
+  unsigned iw = 40;  // width of G, its gradient and the evaluations (modulo 2^IW)
+  unsigned xw = 24;  // signed width of the end node's offset from the start node
+};
+
+struct CpConicSerialIn {
+  bool rst = false;
+  bool clear = false;
+  bool load = false;
+  int64_t a = 0, b = 0, c = 0;   // taken modulo 2^QW, signed
+  i128 g = 0, gx = 0, gy = 0;    // taken modulo 2^IW, signed
+  int64_t du = 0, dv = 0;        // taken modulo 2^XW, signed
+  bool cw = false;
+  bool move_ready = false;
+};
+
+struct CpConicSerialOut {
+  bool busy = false;
+  bool move_valid = false;
+  int move_dx = 0, move_dy = 0;  // in {-1, 0, 1}; 0 while not valid
+  bool move_end = false;
+};
+
+class CpConicSerial {
+ public:
+  using Params = CpConicSerialParams;
+  using In = CpConicSerialIn;
+  using Out = CpConicSerialOut;
+
+  explicit CpConicSerial(CpConicSerialParams params = {});
+
+  CpConicSerialIn in;
+
+  CpConicSerialOut outputs() const;
+  void tick();
+
+  const CpConicSerialParams& params() const { return p_; }
+
+  // The move from a node, docs/CONIC.md "The rule", with every value taken modulo
+  // 2^iw as the walker's adders take them: CpConic::rule for any walk whose values
+  // fit (the host checks that they do: `fits`).
+  static void rule(const CpConic::Coeffs& k, const CpConic::Node& n, bool cw, unsigned iw, int& dx,
+                   int& dy);
+  // Do a node's G, gradient and both evaluations of every quadrant fit iw bits?
+  static bool fits(const CpConic::Coeffs& k, const CpConic::Node& n, unsigned iw);
+
+ private:
+  struct Regs {
+    // Control (reset).
+    bool pass = false, pend = false, ov = false;
+    // Datapath.
+    unsigned i = 0;
+    CpConic::Coeffs k;       // a, b, c used
+    CpConic::Node n;         // the current node (at a pass's end: the new one)
+    bool cw = false;
+    int64_t du = 0, dv = 0;  // the end node minus the current node (modulo 2^XW)
+    int mdx = 0, mdy = 0;    // the move the next pass applies
+    int odx = 0, ody = 0;
+    bool oend = false;
+  };
+
+  CpConicSerialParams p_;
+  Regs r_;
+};
+
+}  // namespace cpstep::model

@@ -1,0 +1,73 @@
+// SPDX-License-Identifier: MIT
+// Port adaptor between a Verilated cp_conic_serial configuration and
+// model::CpConicSerial (see sim/dut.h for what an adaptor provides), and the two
+// configurations of rtl/CMakeLists.txt: the defaults and a narrow one.
+#pragma once
+
+#include <vector>
+
+#include "Vcp_conic_serial.h"
+#include "Vcp_conic_serial_small.h"
+#include "model/cp_conic_serial.h"
+#include "sim/dut.h"
+
+namespace cpstep::tb {
+
+template <class V, unsigned QW, unsigned IW, unsigned XW>
+struct ConicSerialPort {
+  static_assert(IW <= 64, "the adaptor passes G and its gradient as 64-bit words");
+  using Rtl = V;
+  using Model = model::CpConicSerial;
+  using In = model::CpConicSerialIn;
+  using Out = model::CpConicSerialOut;
+
+  static Model::Params model_params() { return {QW, IW, XW}; }
+
+  // Verilator wants the bits above a port's width clear.
+  static uint64_t bits(int64_t v, unsigned w) { return w >= 64 ? uint64_t(v) : uint64_t(v) & ((uint64_t(1) << w) - 1); }
+
+  static void drive(V& r, const In& i) {
+    r.rst = i.rst;
+    r.clear_i = i.clear;
+    r.load_i = i.load;
+    r.a_i = bits(i.a, QW);
+    r.b_i = bits(i.b, QW);
+    r.c_i = bits(i.c, QW);
+    r.g_i = bits(int64_t(i.g), IW);
+    r.gx_i = bits(int64_t(i.gx), IW);
+    r.gy_i = bits(int64_t(i.gy), IW);
+    r.du_i = bits(i.du, XW);
+    r.dv_i = bits(i.dv, XW);
+    r.cw_i = i.cw;
+    r.move_ready_i = i.move_ready;
+  }
+
+  static int step_of(unsigned v) { return (v & 2) ? -1 : int(v & 1); }
+
+  static Out sample(const V& r) {
+    Out o;
+    o.busy = r.busy_o;
+    o.move_valid = r.move_valid_o;
+    o.move_dx = step_of(r.move_dx_o);
+    o.move_dy = step_of(r.move_dy_o);
+    o.move_end = r.move_end_o;
+    return o;
+  }
+
+  static const std::vector<sim::Field<Out>>& fields() {
+#define CPSTEP_FIELD(port, member) \
+  sim::Field<Out> { port, [](const Out& o) { return uint64_t(o.member); } }
+    static const std::vector<sim::Field<Out>> f = {
+        CPSTEP_FIELD("busy_o", busy),           CPSTEP_FIELD("move_valid_o", move_valid),
+        CPSTEP_FIELD("move_dx_o", move_dx),     CPSTEP_FIELD("move_dy_o", move_dy),
+        CPSTEP_FIELD("move_end_o", move_end),
+    };
+#undef CPSTEP_FIELD
+    return f;
+  }
+};
+
+using ConicSerialDefault = ConicSerialPort<Vcp_conic_serial, 16, 40, 24>;
+using ConicSerialSmall = ConicSerialPort<Vcp_conic_serial_small, 6, 12, 8>;
+
+}  // namespace cpstep::tb

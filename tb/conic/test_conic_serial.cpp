@@ -1,0 +1,271 @@
+// SPDX-License-Identifier: MIT
+// The motion core's bit-serial conic walker (rtl/cp_conic_serial.v, docs/CONIC.md
+// "The walk, bit-serial") in lockstep with its model, every output every cycle, and
+// its moves against the rule's walk (model::CpConic::rule, itself held to the
+// one-move-a-clock engine by test_conic): circles over every octant, other conics,
+// large circles, the pass timing, clear and load mid-walk, and a random soak of the
+// narrow build, whose values wrap.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "conic_random.h"
+#include "conic_serial_port.h"
+
+namespace cpstep::tb {
+namespace {
+
+using Serial = model::CpConicSerial;
+
+struct SerialRun {
+  std::vector<std::pair<int, int>> moves;
+  std::vector<uint64_t> valid_at;  // the first cycle each move was valid
+  uint64_t load_cycle = 0;
+  bool ended = false;              // the last move taken carried move_end
+  bool end_early = false;          // some earlier move carried it
+  bool busy_after = true;          // busy the cycle after the end move was taken
+};
+
+// Loads the walk of `rq` (its start node's G and gradient, the end's offset) and
+// takes moves, each cycle with probability ready_pct %, until the one marked as
+// arriving at the end, or max_moves.
+template <class Stepper>
+SerialRun run_serial(Stepper& dut, const ConicRequest& rq, unsigned ready_pct, std::mt19937_64& rng,
+                     size_t max_moves) {
+  const unsigned iw = dut.model().params().iw;
+  const auto k = rq.coeffs();
+  const auto n = model::CpConic::at(k, rq.start.x, rq.start.y);
+  model::CpConicSerialIn in;
+  in.load = true;
+  in.a = rq.a;
+  in.b = rq.b;
+  in.c = rq.c;
+  in.g = n.g;
+  in.gx = n.gx;
+  in.gy = n.gy;
+  in.du = rq.end.x - rq.start.x;
+  in.dv = rq.end.y - rq.start.y;
+  in.cw = rq.cw;
+  SerialRun run;
+  run.load_cycle = dut.cycle();
+  dut.step(in);
+  in.load = false;
+  StreamContract contract("move stream");
+  std::uniform_int_distribution<unsigned> pct(0, 99);
+  bool fresh = true;
+  const uint64_t limit = (max_moves + 2) * (iw + 2) * (ready_pct >= 100 ? 1 : 20) + 100;
+  for (uint64_t c = 0; c < limit; ++c) {
+    in.move_ready = ready_pct >= 100 || pct(rng) < ready_pct;
+    const uint64_t cycle = dut.cycle();
+    const model::CpConicSerialOut o = dut.step(in);
+    contract.check(cycle, o.move_valid, in.move_ready,
+                   uint64_t(o.move_dx & 3) << 2 | uint64_t(o.move_dy & 3) | uint64_t(o.move_end) << 4);
+    if (!o.move_valid && (o.move_dx || o.move_dy || o.move_end))
+      ADD_FAILURE() << "move outputs not zero while not valid at cycle " << cycle;
+    if (o.move_valid && fresh) {
+      run.valid_at.push_back(cycle);
+      fresh = false;
+    }
+    if (o.move_valid && in.move_ready) {
+      fresh = true;
+      run.moves.push_back({o.move_dx, o.move_dy});
+      if (o.move_end) {
+        run.ended = true;
+        in.move_ready = false;
+        run.busy_after = dut.step(in).busy;
+        break;
+      }
+      if (run.moves.size() >= max_moves) break;
+    }
+  }
+  return run;
+}
+
+// The rule's walk from rq.start to the first arrival at rq.end, as moves; every node
+// checked to fit the walker's width.
+std::vector<std::pair<int, int>> expected_moves(const ConicRequest& rq, size_t max_moves, unsigned iw) {
+  const std::vector<Node> nodes = walk(rq, rq.end, max_moves);
+  std::vector<std::pair<int, int>> moves;
+  Node p = rq.start;
+  const auto k = rq.coeffs();
+  for (const Node& q : nodes) {
+    EXPECT_TRUE(Serial::fits(k, model::CpConic::at(k, p.x, p.y), iw)) << "node (" << p.x << ", " << p.y << ")";
+    moves.push_back({int(q.x - p.x), int(q.y - p.y)});
+    p = q;
+  }
+  return moves;
+}
+
+// One walk in lockstep, judged: the rule's moves, the end marked on the last only,
+// the walker idle after it. A walk the rule never brings to its end (the open loops
+// of radius about 1, docs/CONIC.md "Below one step") is judged on its first
+// max_moves moves, none marked.
+template <class P>
+void expect_walk(Lockstep<P>& ls, const ConicRequest& rq, unsigned ready_pct, std::mt19937_64& rng,
+                 size_t max_moves, const std::string& what) {
+  const auto want = expected_moves(rq, max_moves, ls.model().params().iw);
+  ASSERT_FALSE(want.empty()) << what;
+  Node p = rq.start;
+  for (const auto& m : want) p = {p.x + m.first, p.y + m.second};
+  const bool reached = p == rq.end;
+  const SerialRun run = run_serial(ls, rq, ready_pct, rng, want.size());
+  EXPECT_EQ(run.moves, want) << what;
+  EXPECT_EQ(run.ended, reached) << what << (reached ? ": the last move does not carry move_end" : ": an end marked");
+  if (reached) {
+    EXPECT_FALSE(run.busy_after) << what << ": still busy after the end";
+  }
+  if (!reached) ls.step({.clear = true});
+}
+
+// Quarter-grid circle (centre (p/4, q/4), radius s/4) scaled by 16, as conic_bench's.
+ConicRequest circle_from(int p, int q, int s, bool cw, long double angle, size_t moves_on) {
+  ConicRequest rq = circle(p, q, s, cw);
+  const long double r = s / 4.0L;
+  rq.start = nearest_node(rq.conic(), p / 4.0L + r * std::cos(angle), q / 4.0L + r * std::sin(angle));
+  const std::vector<Node> nodes = walk(rq, {INT64_MAX, INT64_MAX}, moves_on);
+  rq.end = nodes.back();
+  return rq;
+}
+
+TEST(ConicSerial, CirclesEveryOctantMatchTheRuleInLockstep) {
+  Lockstep<ConicSerialDefault> ls;
+  ls.reset();
+  std::mt19937_64 rng(seed_from_env());
+  size_t walks = 0, moves = 0;
+  for (int s : {4, 5, 7, 9, 13, 23, 40, 101, 257})
+    for (int p : {0, 1, 2})
+      for (int q : {0, 3})
+        for (int oct = 0; oct < 8; ++oct)
+          for (bool cw : {false, true}) {
+            const long double angle = (oct + 0.5L) * M_PI / 4;
+            // Most of a turn, or a whole one (end = start).
+            const size_t full = size_t(std::ceil(s / 4.0 * 4 * std::sqrt(2.0))) + 8;
+            const size_t on = (oct % 3 == 0) ? full * 4 : 1 + rng() % full;
+            ConicRequest rq = circle_from(p, q, s, cw, angle, on);
+            if (oct % 3 == 0) rq.end = rq.start;
+            // Always ready, ready now and then, or a consumer slower than a pass
+            // (the next move is decided and waits behind the one presented).
+            const unsigned ready = (oct % 4 == 1) ? 100 : (oct % 4 == 3) ? 2 : 55;
+            expect_walk(ls, rq, ready, rng, 8 * full,
+                        "circle s=" + std::to_string(s) + " centre (" + std::to_string(p) + "/4, " +
+                            std::to_string(q) + "/4) octant " + std::to_string(oct) + (cw ? " cw" : " ccw"));
+            ++walks;
+            moves += expected_moves(rq, 8 * full, 40).size();
+            if (HasFailure()) return;
+          }
+  std::printf("circles: %zu walks, %zu moves, RTL = model = the rule\n", walks, moves);
+}
+
+TEST(ConicSerial, OtherConicsMatchTheRuleInLockstep) {
+  Lockstep<ConicSerialDefault> ls;
+  ls.reset();
+  std::mt19937_64 rng(seed_from_env() + 1);
+  for (Family f : {Family::ellipse, Family::rotated_ellipse, Family::parabola, Family::hyperbola})
+    for (int i = 0; i < 6; ++i) {
+      const ConicRequest rq = random_conic(f, rng, 300);
+      expect_walk(ls, rq, 80, rng, 400, std::string(family_name(f)) + " #" + std::to_string(i));
+      if (HasFailure()) return;
+    }
+}
+
+// Circles of up to 20,000 steps at the host's scale (A = C = 256: centres on the
+// 1/16-step grid), an arc of 1,500 moves from each of four starts.
+TEST(ConicSerial, LargeCirclesAtTheHostsScale) {
+  Lockstep<ConicSerialDefault> ls;
+  ls.reset();
+  std::mt19937_64 rng(seed_from_env() + 2);
+  for (int64_t r : {300, 4000, 20000})
+    for (int quarter = 0; quarter < 4; ++quarter) {
+      ConicRequest rq;
+      const int64_t cx16 = 5, cy16 = -11;  // centre (5/16, -11/16)
+      rq.a = 256;
+      rq.c = 256;
+      rq.d = -32 * cx16;
+      rq.e = -32 * cy16;
+      rq.f = cx16 * cx16 + cy16 * cy16 - 256 * r * r;
+      rq.cw = quarter & 1;
+      const long double angle = quarter * M_PI / 2 + 0.3L;
+      rq.start = nearest_node(rq.conic(), cx16 / 16.0L + r * std::cos(angle), cy16 / 16.0L + r * std::sin(angle));
+      rq.end = walk(rq, {INT64_MAX, INT64_MAX}, 1500).back();
+      expect_walk(ls, rq, 100, rng, 1500, "radius " + std::to_string(r));
+      if (HasFailure()) return;
+    }
+}
+
+// docs/CONIC.md "The walk, bit-serial": the first move is valid IW + 2 cycles after
+// the load's cycle, and with the consumer always ready every IW + 1 cycles after.
+TEST(ConicSerial, AMoveEveryIwPlusOneCycles) {
+  Lockstep<ConicSerialDefault> ls;
+  ls.reset();
+  std::mt19937_64 rng(7);
+  ConicRequest rq = circle_from(0, 0, 80, false, 0.1L, 30);
+  const SerialRun run = run_serial(ls, rq, 100, rng, 100);
+  ASSERT_TRUE(run.ended);
+  ASSERT_GE(run.valid_at.size(), 20u);
+  EXPECT_EQ(run.valid_at[0] - run.load_cycle, 40u + 2);
+  for (size_t i = 1; i < run.valid_at.size(); ++i)
+    EXPECT_EQ(run.valid_at[i] - run.valid_at[i - 1], 40u + 1) << "move " << i;
+}
+
+// Clear drops a waiting move and stops the walk; a load mid-walk starts afresh.
+TEST(ConicSerial, ClearAndLoadMidWalk) {
+  Lockstep<ConicSerialDefault> ls;
+  ls.reset();
+  std::mt19937_64 rng(8);
+  const ConicRequest rq = circle_from(2, 1, 60, true, 1.0L, 40);
+  SerialRun run = run_serial(ls, rq, 100, rng, 5);
+  ASSERT_EQ(run.moves.size(), 5u);
+  model::CpConicSerialIn in;
+  for (int i = 0; i < 30; ++i) ls.step(in);  // a move waits (not ready)
+  in.clear = true;
+  ls.step(in);
+  in.clear = false;
+  const auto o = ls.step(in);
+  EXPECT_FALSE(o.move_valid);
+  EXPECT_FALSE(o.busy);
+  for (int i = 0; i < 100; ++i) EXPECT_FALSE(ls.step(in).move_valid);
+  // Five moves into the same walk again, then a load over it.
+  run = run_serial(ls, rq, 70, rng, 5);
+  ASSERT_EQ(run.moves.size(), 5u);
+  expect_walk(ls, rq, 70, rng, 100, "after a load mid-walk");
+}
+
+// The narrow build (QW 6, IW 12, XW 8) under random loads of any values, clears,
+// resets and back-pressure: its values wrap, and RTL and model agree every cycle.
+TEST(ConicSerial, NarrowBuildRandomSoakInLockstep) {
+  Lockstep<ConicSerialSmall> ls;
+  ls.reset();
+  std::mt19937_64 rng(seed_from_env() + 3);
+  std::uniform_int_distribution<unsigned> pct(0, 999);
+  std::uniform_int_distribution<int64_t> any(INT64_MIN, INT64_MAX);
+  model::CpConicSerialIn in;
+  uint64_t moves = 0, ends = 0;
+  bool slow = false;
+  for (int c = 0; c < 400000; ++c) {
+    const unsigned r = pct(rng);
+    in.rst = r < 1;
+    in.clear = r >= 1 && r < 4;
+    in.load = r >= 4 && r < 12;
+    if (in.load) {
+      in.a = any(rng); in.b = any(rng); in.c = any(rng);
+      in.g = any(rng); in.gx = any(rng); in.gy = any(rng);
+      in.du = any(rng) % 6; in.dv = any(rng) % 6;
+      in.cw = rng() & 1;
+    }
+    // Stretches of a consumer slower than a pass (IW = 12 clocks) between fast ones.
+    if (c % 64 == 0) slow = pct(rng) < 400;
+    in.move_ready = pct(rng) < (slow ? 30u : 700u);
+    const auto o = ls.step(in);
+    if (o.move_valid && in.move_ready) {
+      ++moves;
+      ends += o.move_end;
+    }
+  }
+  EXPECT_GT(moves, 10000u);
+  EXPECT_GT(ends, 50u);
+  std::printf("narrow build: %llu moves taken, %llu ends\n", (unsigned long long)moves, (unsigned long long)ends);
+}
+
+}  // namespace
+}  // namespace cpstep::tb
