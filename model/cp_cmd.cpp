@@ -6,7 +6,7 @@
 namespace cpstep::model {
 namespace {
 
-constexpr uint32_t kOpSegment = 0x1, kOpConfig = 0x2, kOpControl = 0x3, kOpRead = 0x4;
+constexpr uint32_t kOpSegment = 0x1, kOpConfig = 0x2, kOpControl = 0x3, kOpRead = 0x4, kOpConic = 0x5;
 constexpr uint64_t kMask34 = (uint64_t(1) << 34) - 1;  // the count sum's width
 
 // Chunk queue word (81 bits): interval, add, count, add2, and the flag of a
@@ -26,7 +26,8 @@ bool CpCmd::ready(const In& i) const {
     case Parse::command:
     case Parse::chunk_interval: return true;
     case Parse::seg_h1:
-    case Parse::seg_v: return !keep || !i.seg_full;
+    case Parse::seg_v:
+    case Parse::conic_words: return !keep || !i.seg_full;
     case Parse::chunk_count: return r_.seg_add2 || !keep || !i.ch_full;
     case Parse::chunk_add2: return !keep || !i.ch_full;
     default: return false;  // checking a chunk, or a reply waits
@@ -68,11 +69,22 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
     case Parse::command: {
       if (!take) break;
       switch (word >> 28) {
+        case kOpConic:
+          if (!p_.conic) {
+            refuse(CoreError::bad_opcode);
+            break;
+          }
+          [[fallthrough]];
         case kOpSegment:
+          // A CONIC header: [26] clockwise, [25:23] axis u, [21:19] axis v; no k.
+          d.hdr_conic = (word >> 28) == kOpConic;
           d.hdr_end = (word >> 27 & 1) != 0;
-          d.hdr_k = word >> 23 & 0xF;
+          d.hdr_k = d.hdr_conic ? 0 : word >> 23 & 0xF;
           d.chunks_left = word & 0xFFFF;
           d.seg_add2 = (word >> 22 & 1) != 0;
+          d.hdr_cw = (word >> 26 & 1) != 0;
+          d.hdr_au = word >> 23 & 7;
+          d.hdr_av = word >> 19 & 7;
           d.count_sum = 0;
           d.discard = i.fault;
           if (!i.fault) {
@@ -81,6 +93,9 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
               d.discard = true;
             } else if (d.chunks_left == 0 || d.chunks_left > (1u << p_.caw)) {
               refuse(CoreError::seg_chunks);
+              d.discard = true;
+            } else if (d.hdr_conic && (d.hdr_au == d.hdr_av || d.hdr_au >= p_.n || d.hdr_av >= p_.n)) {
+              refuse(CoreError::conic_axes);
               d.discard = true;
             }
           }
@@ -119,8 +134,8 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
       d.seg_u = word & 0xFFFFFF;
       // The header word {end, k, dir, U} into the segment queue, uncommitted.
       o.seg_wr = keep;
-      o.seg_data = uint64_t(q.hdr_end) << (28 + p_.n) | uint64_t(q.hdr_k) << (24 + p_.n) |
-                   uint64_t(word >> 24 & bits::mask(p_.n)) << 24 | d.seg_u;
+      o.seg_data = uint64_t(q.hdr_conic) << (29 + p_.n) | uint64_t(q.hdr_end) << (28 + p_.n) |
+                   uint64_t(q.hdr_k) << (24 + p_.n) | uint64_t(word >> 24 & bits::mask(p_.n)) << 24 | d.seg_u;
       if (keep && (d.seg_u == 0 || d.seg_u > p_.umax)) {
         refuse(CoreError::seg_u);
         d.discard = true;
@@ -132,13 +147,32 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
       if (!take) break;
       o.seg_wr = keep;
       o.seg_data = word & 0xFFFFFF;
-      if (keep && (word & 0xFFFFFF) > q.seg_u) {
+      // A conic's plane axes step by the conic engine: their v must be 0.
+      if (keep && q.hdr_conic && (q.v_index == q.hdr_au || q.v_index == q.hdr_av) && (word & 0xFFFFFF) != 0) {
+        refuse(CoreError::conic_axes);
+        d.discard = true;
+      } else if (keep && (word & 0xFFFFFF) > q.seg_u) {
         refuse(CoreError::seg_v_gt_u);
         d.discard = true;
       }
       d.v_index = (q.v_index + 1) & 7;
       // A segment announced with no chunk was refused at its header; it ends here.
-      if (q.v_index == p_.n - 1) d.parse = q.chunks_left == 0 ? Parse::command : Parse::chunk_interval;
+      if (q.v_index == p_.n - 1) {
+        d.v_index = 0;
+        d.parse = q.hdr_conic                  ? Parse::conic_words
+                  : q.chunks_left == 0 ? Parse::command
+                                       : Parse::chunk_interval;
+      }
+      break;
+    case Parse::conic_words:
+      // K0 .. K6 as they come but K1: the header's plane axes and direction go with C
+      // to the builder, {cw, u, v, 9 zeros, C}.
+      if (!take) break;
+      o.seg_wr = keep;
+      o.seg_data = q.v_index == 1 ? (uint32_t(q.hdr_cw) << 31 | q.hdr_au << 28 | q.hdr_av << 25 | (word & 0xFFFF))
+                                  : word;
+      d.v_index = (q.v_index + 1) & 7;
+      if (q.v_index == 6) d.parse = q.chunks_left == 0 ? Parse::command : Parse::chunk_interval;
       break;
     case Parse::chunk_interval:
       if (!take) break;

@@ -14,6 +14,7 @@ namespace cpstep::model {
 
 struct CpCmdParams {
   unsigned n = 4, umax = 1048575, kmax = 8, caw = 6, tw = 16;
+  bool conic = false;  // CONIC segments (opcode 0x5) taken; refused as BAD_OPCODE otherwise
 };
 
 struct CpCmdIn {
@@ -31,7 +32,7 @@ struct CpCmdOut {
   bool rsp_valid = false;
   uint32_t rsp_data = 0, rsp_addr = 0;
   bool seg_wr = false, seg_commit = false, seg_rollback = false;
-  uint64_t seg_data = 0;  // 29 + N bits
+  uint64_t seg_data = 0;  // 29 + N bits; with conic max(30 + N, 32)
   bool ch_wr = false, ch_commit = false, ch_rollback = false;
   FifoWord ch_data{};     // 81 bits: {last, add2, count, add, interval}
   bool start = false, abort = false, clear = false, drivers_on = false, drivers_off = false;
@@ -68,7 +69,7 @@ class CpCmd {
 
  private:
   enum class Parse {
-    command, seg_h1, seg_v, chunk_interval, chunk_count, chunk_add2, chunk_check, reply
+    command, seg_h1, seg_v, chunk_interval, chunk_count, chunk_add2, chunk_check, reply, conic_words
   };
   struct Regs {
     // Reset.
@@ -79,6 +80,9 @@ class CpCmd {
     bool hdr_end = false;  // the segment being read: end flag, k, U
     uint32_t hdr_k = 0, seg_u = 0;
     bool seg_add2 = false;  // its chunks carry add2 (three words)
+    bool hdr_conic = false;  // a CONIC segment: its plane axes and direction
+    uint32_t hdr_au = 0, hdr_av = 0;
+    bool hdr_cw = false;
     uint32_t chunks_left = 0, v_index = 0;
     uint32_t interval = 0, count = 0, add = 0, add2 = 0;
     uint64_t count_sum = 0;

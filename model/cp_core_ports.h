@@ -70,6 +70,7 @@ enum class CoreError : uint32_t {
   config_busy = 13,
   config_value = 14,
   seg_add2 = 15,
+  conic_axes = 16,  // a CONIC segment's plane axes: equal, not an axis, or a v_i of theirs not 0
 };
 
 }  // namespace cpstep::model

@@ -23,7 +23,9 @@ module cp_cmd #(
     parameter integer UMAX = 1048575,
     parameter integer KMAX = 8,
     parameter integer CAW = 6,
-    parameter integer TW = 16
+    parameter integer TW = 16,
+    // 1: CONIC segments (opcode 0x5, docs/CORE.md) are taken; 0: refused as BAD_OPCODE.
+    parameter integer CONIC = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -45,7 +47,7 @@ module cp_cmd #(
     // Segment queue (words of the segment being read) and chunk queue.
     input  wire          seg_full_i,
     output reg           seg_wr_o,
-    output reg  [28+N:0] seg_wdata_o,
+    output reg  [SWW-1:0] seg_wdata_o,
     output reg           seg_commit_o,
     output reg           seg_rollback_o,
     input  wire          ch_full_i,
@@ -65,11 +67,14 @@ module cp_cmd #(
     output reg  [7:0]    fault_code_o
 );
 
-localparam integer SWW = 29 + N;
+// Segment queue words: {end, k, dir[N], value[23:0]}, with CONIC the conic flag above
+// them, and a conic's seven words of 32 bits.
+localparam integer SWW = (CONIC == 0) ? 29 + N : ((30 + N > 32) ? 30 + N : 32);
 localparam [3:0] OP_SEGMENT = 4'h1;
 localparam [3:0] OP_CONFIG  = 4'h2;
 localparam [3:0] OP_CONTROL = 4'h3;
 localparam [3:0] OP_READ    = 4'h4;
+localparam [3:0] OP_CONIC   = 4'h5;
 
 localparam [7:0] E_NONE           = 8'd0;
 localparam [7:0] E_SEG_U          = 8'd1;
@@ -83,6 +88,7 @@ localparam [7:0] E_BAD_OPCODE     = 8'd12;
 localparam [7:0] E_CONFIG_BUSY    = 8'd13;
 localparam [7:0] E_CONFIG_VALUE   = 8'd14;
 localparam [7:0] E_SEG_ADD2       = 8'd15;
+localparam [7:0] E_CONIC_AXES     = 8'd16;
 // The bits of a 16-bit CONFIG value that a TW-bit timing field holds.
 localparam [15:0] TMASK = (TW >= 16) ? 16'hFFFF : ((16'd1 << TW) - 16'd1);
 
@@ -94,6 +100,7 @@ localparam [3:0] P_C1   = 4'd4;   // chunk: add and count
 localparam [3:0] P_CHK  = 4'd5;   // chunk: checking its last increment and last delay
 localparam [3:0] P_RSP  = 4'd6;   // a reply waits to be taken
 localparam [3:0] P_C2   = 4'd7;   // chunk: add2 (segments whose chunks carry it)
+localparam [3:0] P_K    = 4'd8;   // conic: its seven words
 // The check's clocks: bit i of every serial value in clock i = 0 .. 50. The values
 // are exact in 50-bit two's complement (|(count-1)*(add + last increment)| < 2^47),
 // and bits past that are the sign's copies.
@@ -107,6 +114,9 @@ reg          hdr_end_q, hdr_end_d;       // the segment being read: end flag, k,
 reg [3:0]    hdr_k_q, hdr_k_d;
 reg [23:0]   seg_u_q, seg_u_d;
 reg          seg_add2_q, seg_add2_d;     // its chunks carry add2 (three words)
+reg          hdr_conic_q, hdr_conic_d;   // a CONIC segment: its plane axes and direction
+reg [2:0]    hdr_au_q, hdr_au_d, hdr_av_q, hdr_av_d;
+reg          hdr_cw_q, hdr_cw_d;
 reg [15:0]   nchunks_q, nchunks_d;       // chunks still to read
 reg [2:0]    v_idx_q, v_idx_d;
 reg [31:0]   interval_q, interval_d;
@@ -183,6 +193,8 @@ assign ch_wdata_o = {nchunks_q == 16'd1, add2_d, count_d, add_d, interval_q};
 // ---------------------------------------------------------------- next state
 reg refuse;          // a refusal of the parser's own this cycle
 reg [7:0] refuse_code;
+reg [39:0] seg_wide; // a segment queue word before it is cut to SWW bits
+wire unused_wide = &{1'b0, seg_wide[39:SWW]};  // what a narrower queue does not keep
 
 always @* begin
     p_state_d   = p_state_q;
@@ -194,6 +206,7 @@ always @* begin
     nchunks_d = nchunks_q;  v_idx_d = v_idx_q;
     interval_d = interval_q;  count_d = count_q;  add_d = add_q;  add2_d = add2_q;  sum_d = sum_q;
     seg_add2_d = seg_add2_q;
+    hdr_conic_d = hdr_conic_q;  hdr_au_d = hdr_au_q;  hdr_av_d = hdr_av_q;  hdr_cw_d = hdr_cw_q;
     // The serial check clocks its bits in P_CHK; each chunk word restarts it.
     ck_i_d  = ck_i_q + 1'b1;
     acc1_d  = ck_s1[16:1];  acc2_d = ck_s2[16:1];
@@ -212,7 +225,7 @@ always @* begin
         li_nz_d = 1'b0;  dl_nz_d = 1'b0;  dl_hi_d = 1'b0;  sum_ne_d = 1'b0;
     end
 
-    seg_wr_o = 1'b0;  seg_wdata_o = {SWW{1'b0}};  seg_commit_o = 1'b0;  seg_rollback_o = 1'b0;
+    seg_wr_o = 1'b0;  seg_wdata_o = {SWW{1'b0}};  seg_wide = 40'd0;  seg_commit_o = 1'b0;  seg_rollback_o = 1'b0;
     ch_wr_o = 1'b0;  ch_commit_o = 1'b0;  ch_rollback_o = 1'b0;
     start_o = 1'b0;  abort_o = 1'b0;  clear_o = 1'b0;  drivers_on_o = 1'b0;  drivers_off_o = 1'b0;
     cfg_write_o = 1'b0;
@@ -221,21 +234,31 @@ always @* begin
     case (p_state_q)
     P_CMD: if (cmd_valid_i) begin  // cmd_ready_o is 1 in P_CMD: taken
         case (op)
-        OP_SEGMENT: begin
+        OP_SEGMENT, OP_CONIC: if (op == OP_SEGMENT || CONIC != 0) begin
+            // A CONIC header: [26] clockwise, [25:23] axis u, [21:19] axis v; no k.
+            hdr_conic_d = op == OP_CONIC;
             hdr_end_d = cmd_data_i[27];
-            hdr_k_d   = cmd_data_i[26:23];
+            hdr_k_d   = hdr_conic_d ? 4'd0 : cmd_data_i[26:23];
             nchunks_d = cmd_data_i[15:0];
             seg_add2_d = cmd_data_i[22];
+            hdr_cw_d  = cmd_data_i[26];
+            hdr_au_d  = cmd_data_i[25:23];
+            hdr_av_d  = cmd_data_i[21:19];
             sum_d     = 34'd0;
             discard_d = fault_i;
             if (!fault_i) begin
-                if ({28'd0, cmd_data_i[26:23]} > KMAX) begin
+                if ({28'd0, hdr_k_d} > KMAX) begin
                     refuse = 1'b1;  refuse_code = E_SEG_K;  discard_d = 1'b1;
                 end else if (cmd_data_i[15:0] == 16'd0 || {16'd0, cmd_data_i[15:0]} > (32'd1 << CAW)) begin
                     refuse = 1'b1;  refuse_code = E_SEG_CHUNKS;  discard_d = 1'b1;
+                end else if (hdr_conic_d && (hdr_au_d == hdr_av_d || {29'd0, hdr_au_d} >= N ||
+                                             {29'd0, hdr_av_d} >= N)) begin
+                    refuse = 1'b1;  refuse_code = E_CONIC_AXES;  discard_d = 1'b1;
                 end
             end
             p_state_d = P_H1;
+        end else begin
+            refuse = 1'b1;  refuse_code = E_BAD_OPCODE;
         end
         OP_CONFIG: begin
             // Refused while running, and while a STEP pulse is still high (after ABORT,
@@ -272,7 +295,9 @@ always @* begin
     P_H1: if (take) begin
         seg_u_d     = cmd_data_i[23:0];
         seg_wr_o    = keep;
-        seg_wdata_o = {hdr_end_q, hdr_k_q, cmd_data_i[24 +: N], cmd_data_i[23:0]};
+        seg_wide    = {{(40-29-N){1'b0}}, hdr_end_q, hdr_k_q, cmd_data_i[24 +: N], cmd_data_i[23:0]};
+        seg_wide[29+N] = hdr_conic_q;
+        seg_wdata_o = seg_wide[SWW-1:0];
         if (keep && (cmd_data_i[23:0] == 24'd0 || {8'd0, cmd_data_i[23:0]} > UMAX)) begin
             refuse = 1'b1;  refuse_code = E_SEG_U;  discard_d = 1'b1;
         end
@@ -283,12 +308,30 @@ always @* begin
     P_V: if (take) begin
         seg_wr_o    = keep;
         seg_wdata_o = {{(SWW-24){1'b0}}, cmd_data_i[23:0]};
-        if (keep && cmd_data_i[23:0] > seg_u_q) begin
+        // A conic's plane axes step by the conic engine: their v must be 0.
+        if (keep && hdr_conic_q && (v_idx_q == hdr_au_q || v_idx_q == hdr_av_q) &&
+            cmd_data_i[23:0] != 24'd0) begin
+            refuse = 1'b1;  refuse_code = E_CONIC_AXES;  discard_d = 1'b1;
+        end else if (keep && cmd_data_i[23:0] > seg_u_q) begin
             refuse = 1'b1;  refuse_code = E_SEG_V_GT_U;  discard_d = 1'b1;
         end
         v_idx_d = v_idx_q + 1'b1;
         // A segment announced with no chunk was refused at its header; it ends here.
-        if ({29'd0, v_idx_q} == N - 1) p_state_d = (nchunks_q == 16'd0) ? P_CMD : P_C0;
+        if ({29'd0, v_idx_q} == N - 1) begin
+            v_idx_d   = 3'd0;
+            p_state_d = hdr_conic_q ? P_K : (nchunks_q == 16'd0) ? P_CMD : P_C0;
+        end
+    end
+
+    // A conic's words K0 .. K6, as they come but K1: the header's plane axes and
+    // direction go with C to the builder, {cw, u, v, 9'b0, C}.
+    P_K: if (take) begin
+        seg_wr_o = keep;
+        seg_wide = {8'd0, cmd_data_i};
+        if (v_idx_q == 3'd1) seg_wide[31:16] = {hdr_cw_q, hdr_au_q, hdr_av_q, 9'd0};
+        seg_wdata_o = seg_wide[SWW-1:0];
+        v_idx_d = v_idx_q + 1'b1;
+        if (v_idx_q == 3'd6) p_state_d = (nchunks_q == 16'd0) ? P_CMD : P_C0;
     end
 
     P_C0: if (take) begin
@@ -374,6 +417,7 @@ always @(posedge clk) begin
     nchunks_q <= nchunks_d;  v_idx_q <= v_idx_d;
     interval_q <= interval_d;  count_q <= count_d;  add_q <= add_d;  add2_q <= add2_d;
     sum_q <= sum_d;  seg_add2_q <= seg_add2_d;
+    hdr_conic_q <= hdr_conic_d;  hdr_au_q <= hdr_au_d;  hdr_av_q <= hdr_av_d;  hdr_cw_q <= hdr_cw_d;
     ck_i_q <= ck_i_d;  acc1_q <= acc1_d;  acc2_q <= acc2_d;
     c1_q <= c1_d;  c2_q <= c2_d;  c3_q <= c3_d;  b_q <= b_d;  li_sign_q <= li_sign_d;
     li_nz_q <= li_nz_d;  dl_nz_q <= dl_nz_d;  dl_hi_q <= dl_hi_d;  sum_ne_q <= sum_ne_d;
@@ -382,7 +426,7 @@ end
 
 // ---------------------------------------------------------------- outputs
 assign cmd_ready_o = (p_state_q == P_CMD) ||
-                     ((p_state_q == P_H1 || p_state_q == P_V) && (!keep || !seg_full_i)) ||
+                     ((p_state_q == P_H1 || p_state_q == P_V || p_state_q == P_K) && (!keep || !seg_full_i)) ||
                      (p_state_q == P_C0) ||
                      (p_state_q == P_C1 && (seg_add2_q || !keep || !ch_full_i)) ||
                      (p_state_q == P_C2 && (!keep || !ch_full_i));

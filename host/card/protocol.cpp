@@ -66,6 +66,7 @@ ErrorName error_name(uint32_t code) {
       {"CONFIG_BUSY", "CONFIG while running or while a STEP pulse is on a pin"},
       {"CONFIG_VALUE", "a step high or step low time of 0"},
       {"SEG_ADD2", "a chunk whose increment add + j*add2 changes sign"},
+      {"CONIC_AXES", "a conic segment's plane axes equal or not axes, or a v of theirs not 0"},
   };
   if (code < std::size(names)) return names[code];
   return {"UNKNOWN", "an error code this program does not know"};

@@ -10,6 +10,7 @@
 
 #include "Vcp_part_build.h"
 #include "Vcp_part_cmd.h"
+#include "Vcp_part_cmd_conic.h"
 #include "Vcp_part_run.h"
 #include "Vcp_part_status.h"
 #include "core/core_bench.h"
@@ -25,13 +26,13 @@ namespace cpstep::tb {
 
 #define CPSTEP_FIELD(name, expr) {name, [](const Out& o) { return uint64_t(expr); }}
 
-template <class V>
+template <class V, bool Conic = false>
 struct CmdPortT {
   using Rtl = AfterOneResetEdge<V>;
   using Model = model::CpCmd;
   using In = model::CpCmdIn;
   using Out = model::CpCmdOut;
-  static Model::Params model_params() { return {3, 4095, 3, 3, 8}; }
+  static Model::Params model_params() { return {3, 4095, 3, 3, 8, Conic}; }
   static void drive(Rtl& r, const In& i) {
     r.rst = i.rst;
     r.cmd_valid_i = i.cmd_valid;
@@ -86,6 +87,7 @@ struct CmdPortT {
   }
 };
 using CmdPort = CmdPortT<Vcp_part_cmd>;
+using CmdConicPort = CmdPortT<Vcp_part_cmd_conic, true>;
 
 struct BuildPort {
   using Rtl = AfterOneResetEdge<Vcp_part_build>;

@@ -27,13 +27,9 @@ uint32_t pick(Rng& rng, uint32_t lo, uint32_t hi) {
 bool chance(Rng& rng, unsigned pct) { return pick(rng, 0, 99) < pct; }
 
 // ---------------------------------------------------------------- cp_cmd
-// The words of one segment that passes every check (N = 3, UMAX 4095, KMAX 3,
-// 2^CAW = 8 chunks), sometimes with add2; or with one field broken.
-std::vector<uint32_t> segment_words(Rng& rng, bool legal) {
-  const uint32_t k = pick(rng, 0, 3), u = pick(rng, 1, 4095), nch = pick(rng, 1, 4);
-  const bool with_add2 = chance(rng, 40);
-  const uint32_t moves = u << k;
-  // Counts summing to u << k, each in 1..65535 (moves < 2^15, so any split fits).
+// At most nch chunk counts summing to moves, each in 1..65535 (moves < 2^15, so any
+// split fits).
+std::vector<uint32_t> split_counts(Rng& rng, uint32_t moves, uint32_t nch) {
   std::vector<uint32_t> counts;
   uint32_t left = moves;
   for (uint32_t c = 0; c + 1 < nch && left > 1; ++c) {
@@ -42,6 +38,15 @@ std::vector<uint32_t> segment_words(Rng& rng, bool legal) {
     left -= take;
   }
   counts.push_back(left);
+  return counts;
+}
+
+// The words of one segment that passes every check (N = 3, UMAX 4095, KMAX 3,
+// 2^CAW = 8 chunks), sometimes with add2; or with one field broken.
+std::vector<uint32_t> segment_words(Rng& rng, bool legal) {
+  const uint32_t k = pick(rng, 0, 3), u = pick(rng, 1, 4095), nch = pick(rng, 1, 4);
+  const bool with_add2 = chance(rng, 40);
+  const std::vector<uint32_t> counts = split_counts(rng, u << k, nch);
   std::vector<uint32_t> w;
   w.push_back(0x1u << 28 | uint32_t(chance(rng, 20)) << 27 | k << 23 | uint32_t(with_add2) << 22 |
               uint32_t(counts.size()));
@@ -67,6 +72,37 @@ std::vector<uint32_t> segment_words(Rng& rng, bool legal) {
   return w;
 }
 
+// The words of one CONIC segment (docs/CORE.md "Command port": N = 3, UMAX 4095, 8
+// chunks), legal or with one field broken: the plane axes (equal, or not an axis),
+// a plane axis's v, T, the count sum.
+std::vector<uint32_t> conic_words(Rng& rng, bool legal) {
+  const uint32_t t = pick(rng, 1, 4095), nch = pick(rng, 1, 3);
+  const uint32_t au = pick(rng, 0, 2), av = (au + pick(rng, 1, 2)) % 3;
+  const bool with_add2 = chance(rng, 30);
+  const std::vector<uint32_t> counts = split_counts(rng, t, nch);
+  std::vector<uint32_t> w;
+  w.push_back(0x5u << 28 | uint32_t(chance(rng, 20)) << 27 | uint32_t(chance(rng, 50)) << 26 | au << 23 |
+              uint32_t(with_add2) << 22 | av << 19 | uint32_t(counts.size()));
+  w.push_back(pick(rng, 0, 7) << 24 | t);
+  for (uint32_t a = 0; a < 3; ++a) w.push_back(a == au || a == av ? 0 : chance(rng, 30) ? 0 : pick(rng, 0, t));
+  for (int k = 0; k < 7; ++k) w.push_back(uint32_t(rng()));  // A B, C, G, Gx, Gy, du, dv: any bits
+  for (uint32_t c : counts) {
+    w.push_back(pick(rng, 1, 5000));
+    w.push_back(pick(rng, 0, 2) << 16 | c);
+    if (with_add2) w.push_back(0);
+  }
+  if (!legal) {
+    switch (pick(rng, 0, 4)) {
+      case 0: w[0] = (w[0] & ~(7u << 19)) | au << 19; break;           // u = v
+      case 1: w[0] = (w[0] & ~(7u << 23)) | pick(rng, 3, 7) << 23; break;  // u not an axis
+      case 2: w[2 + au] = pick(rng, 1, t); break;                      // a plane axis's v
+      case 3: w[1] = (w[1] & 0xFF000000) | (chance(rng, 50) ? 0 : pick(rng, 4096, 0xFFFFFF)); break;
+      default: w[w.size() - (with_add2 ? 2 : 1)] ^= 1; break;          // the count sum
+    }
+  }
+  return w;
+}
+
 uint32_t other_word(Rng& rng) {
   switch (pick(rng, 0, 4)) {
     case 0: return 0x2u << 28 | pick(rng, 0, 4) << 24 | pick(rng, 0, 5) << 20 | pick(rng, 0, 300);  // CONFIG
@@ -78,18 +114,21 @@ uint32_t other_word(Rng& rng) {
 }
 
 template <class P>
-void cmd_traffic(uint64_t seed, int cycles) {
+void cmd_traffic(uint64_t seed, int cycles, bool conic = false) {
   Rng rng(seed);
   Lockstep<P> ls;
   ls.reset();
   std::deque<uint32_t> words;
   model::CpCmdIn in;
-  uint64_t commits = 0, rollbacks = 0, replies = 0, cfg_writes = 0;
+  uint64_t commits = 0, rollbacks = 0, replies = 0, cfg_writes = 0, conic_commits = 0;
+  bool in_conic = false;
   std::set<uint32_t> codes;
   for (int c = 0; c < cycles; ++c) {
     if (words.empty()) {
       const uint32_t kind = pick(rng, 0, 99);
-      if (kind < 55) {
+      if (conic && kind < 25) {
+        for (uint32_t w : conic_words(rng, kind < 18)) words.push_back(w);
+      } else if (kind < 55) {
         for (uint32_t w : segment_words(rng, true)) words.push_back(w);
       } else if (kind < 75) {
         for (uint32_t w : segment_words(rng, false)) words.push_back(w);
@@ -109,6 +148,11 @@ void cmd_traffic(uint64_t seed, int cycles) {
     in.ch_full = chance(rng, 10);
     const model::CpCmdOut o = ls.step(in);
     if (in.cmd_valid && o.cmd_ready) words.pop_front();
+    // A conic's header goes into the segment queue with the conic flag (bit 29 + N)
+    // above {end, k, dir, U}; its other words have 32 bits.
+    if (o.seg_wr && (o.seg_data >> 32 & 1)) in_conic = true;
+    conic_commits += o.seg_commit && in_conic;
+    if (o.seg_commit || o.seg_rollback) in_conic = false;
     commits += o.seg_commit;
     rollbacks += o.seg_rollback;
     replies += o.rsp_valid && in.rsp_ready;
@@ -122,9 +166,16 @@ void cmd_traffic(uint64_t seed, int cycles) {
   // Every refusal the parser makes: 1..7, 12..15.
   for (uint32_t code : {1u, 2u, 3u, 4u, 5u, 6u, 7u, 12u, 13u, 14u, 15u})
     EXPECT_TRUE(codes.count(code)) << "refusal code " << code << " never raised";
+  EXPECT_EQ(codes.count(16u), conic ? 1u : 0u) << "CONIC_AXES";
+  if (conic) {
+    EXPECT_GT(conic_commits, 50u) << "whole conic segments should pass";
+  }
 }
 
 TEST(CorePartCmd, RandomWordsMatchTheModel) { cmd_traffic<CmdPort>(11, 300000); }
+// With CONIC segments (docs/CORE.md): their words into the segment queue, K1 carrying
+// the header's plane axes and direction, CONIC_AXES among the refusals.
+TEST(CorePartCmd, ConicSegmentsMatchTheModel) { cmd_traffic<CmdConicPort>(12, 300000, true); }
 
 // ---------------------------------------------------------------- cp_build
 // Segment queue words as the parser commits them (N = 3): header {end, k, dir, U},
