@@ -18,6 +18,16 @@ i128 wrap(i128 v, unsigned w) {
 
 int64_t wrap64(int64_t v, unsigned w) { return int64_t(wrap(v, w)); }
 
+// A shift register j clocks into a pass: the new value's low j bits on top of the
+// old value's high IW - j (the RTL shifts right, new bits entering at the top).
+i128 mix(i128 old_v, i128 new_v, unsigned j, unsigned w) {
+  if (j == 0) return old_v;
+  if (j >= w) return new_v;
+  const u128 m = (u128(1) << w) - 1;
+  const u128 o = u128(old_v) & m, n = u128(new_v) & m;
+  return wrap(i128((o >> j) | ((n & ((u128(1) << j) - 1)) << (w - j))), w);
+}
+
 bool fits_w(i128 v, unsigned w) { return wrap(v, w) == v; }
 
 // 4G at L = P + (sx/2, sy) and at M = P + (sx, sy/2), exactly.
@@ -30,9 +40,9 @@ void evaluations(const CpConic::Coeffs& k, const CpConic::Node& n, int sx, int s
 }  // namespace
 
 CpConicSerial::CpConicSerial(CpConicSerialParams params) : p_(params) {
-  if (p_.qw < 2 || p_.qw > 32) throw std::invalid_argument("cp_conic_serial: QW must be 2 to 32");
+  if (p_.qw < 2 || p_.qw > 16) throw std::invalid_argument("cp_conic_serial: QW must be 2 to 16");
   if (p_.iw < p_.qw + 4 || p_.iw > 120) throw std::invalid_argument("cp_conic_serial: IW must be QW + 4 to 120");
-  if (p_.xw < 2 || p_.xw > 32) throw std::invalid_argument("cp_conic_serial: XW must be 2 to 32");
+  if (p_.xw < 2 || p_.xw > 24) throw std::invalid_argument("cp_conic_serial: XW must be 2 to 24");
 }
 
 // docs/CONIC.md "The rule"; the quadrant from the signs of the gradient, each
@@ -70,6 +80,14 @@ bool CpConicSerial::fits(const CpConic::Coeffs& k, const CpConic::Node& n, unsig
   return true;
 }
 
+std::array<uint32_t, 7> CpConicSerial::words(const CpConic::Coeffs& k, const CpConic::Node& start, bool cw,
+                                             int64_t du, int64_t dv) {
+  const auto lo16 = [](i128 v) { return uint32_t(uint64_t(v) & 0xFFFF); };
+  const auto lo32 = [](i128 v) { return uint32_t(uint64_t(v)); };
+  return {lo16(k.b) << 16 | lo16(k.a), uint32_t(cw) << 31 | lo16(k.c), lo32(start.g), lo32(start.gx),
+          lo32(start.gy), uint32_t(du) & 0xFFFFFF, uint32_t(dv) & 0xFFFFFF};
+}
+
 CpConicSerialOut CpConicSerial::outputs() const {
   const Regs& q = r_;
   CpConicSerialOut o;
@@ -91,24 +109,47 @@ void CpConicSerial::tick() {
   const int64_t du_n = wrap64(q.du - q.mdx, p_.xw), dv_n = wrap64(q.dv - q.mdy, p_.xw);
   const bool at_end = du_n == 0 && dv_n == 0;
 
-  // Datapath.
-  if (in.load) {
-    d.k = {wrap(in.a, p_.qw), wrap(in.b, p_.qw), wrap(in.c, p_.qw), 0, 0, 0};
-    d.n = {wrap(in.g, p_.iw), wrap(in.gx, p_.iw), wrap(in.gy, p_.iw)};
-    d.cw = in.cw;
-    d.du = wrap64(in.du, p_.xw);
-    d.dv = wrap64(in.dv, p_.xw);
+  // Datapath. A word is taken only while not busy (no pass running, no move decided).
+  if (in.wr && !q.pass && !q.pend) {
+    const int32_t w32 = int32_t(in.wr_data);
+    const int64_t lo16 = int16_t(in.wr_data & 0xFFFF), hi16 = int16_t(in.wr_data >> 16);
+    const int64_t w24 = int64_t(int32_t(in.wr_data << 8) >> 8);
+    switch (in.wr_sel) {
+      case 0: d.k.a = wrap(lo16, p_.qw); d.k.b = wrap(hi16, p_.qw); break;
+      case 1: d.k.c = wrap(lo16, p_.qw); d.cw = (in.wr_data >> 31) != 0; break;
+      case 2: d.n.g = wrap(w32, p_.iw); break;
+      case 3: d.n.gx = wrap(w32, p_.iw); break;
+      case 4: d.n.gy = wrap(w32, p_.iw); break;
+      case 5: d.du = wrap64(w24, p_.xw); break;
+      case 6: d.dv = wrap64(w24, p_.xw); break;
+      default: break;
+    }
+  }
+  // The node a running pass arrives at; a pass cut short (start, clear or reset)
+  // leaves its shift registers part turned: mix().
+  CpConic::Node after;
+  if (q.pass) {
+    const CpConic::Node m = CpConic::advance(q.k, q.n, q.mdx, q.mdy);
+    after = {wrap(m.g, p_.iw), wrap(m.gx, p_.iw), wrap(m.gy, p_.iw)};
+  }
+  const auto part_turned = [&](unsigned j) {
+    d.n = {mix(q.n.g, after.g, j, p_.iw), mix(q.n.gx, after.gx, j, p_.iw), mix(q.n.gy, after.gy, j, p_.iw)};
+  };
+  const bool cut = in.rst || (in.clear && !in.start);  // the control stops any pass
+  if (in.start) {
+    if (q.pass) part_turned(q.i);
     d.mdx = d.mdy = 0;
     d.i = 0;
   } else if (q.pass) {
     d.i = last_bit ? 0 : q.i + 1;
     if (last_bit) {  // the pass's arithmetic, seen whole at its last bit
-      const CpConic::Node m = CpConic::advance(q.k, q.n, q.mdx, q.mdy);
-      d.n = {wrap(m.g, p_.iw), wrap(m.gx, p_.iw), wrap(m.gy, p_.iw)};
+      d.n = after;
       rule(q.k, d.n, q.cw, p_.iw, d.mdx, d.mdy);
+    } else if (cut) {
+      part_turned(q.i + 1);
     }
   }
-  if (issue && !in.load) {
+  if (issue && !in.start) {
     d.odx = q.mdx;
     d.ody = q.mdy;
     d.oend = at_end;
@@ -117,9 +158,9 @@ void CpConicSerial::tick() {
   }
 
   // Control.
-  if (in.rst || (in.clear && !in.load)) {
+  if (in.rst || (in.clear && !in.start)) {
     d.pass = d.pend = d.ov = false;
-  } else if (in.load) {
+  } else if (in.start) {
     d.pass = true;
     d.pend = d.ov = false;
   } else {

@@ -8,6 +8,7 @@
 // arithmetic at its last bit, modulo 2^IW as the serial adders do.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "model/cp_conic.h"
@@ -15,19 +16,20 @@
 namespace cpstep::model {
 
 struct CpConicSerialParams {
-  unsigned qw = 16;  // signed width of A, B, C
+  unsigned qw = 16;  // signed width of A, B, C (at most 16: a word carries two)
   unsigned iw = 40;  // width of G, its gradient and the evaluations (modulo 2^IW)
-  unsigned xw = 24;  // signed width of the end node's offset from the start node
+  unsigned xw = 24;  // signed width of the end node's offset from the start node (at most 24)
 };
 
 struct CpConicSerialIn {
   bool rst = false;
   bool clear = false;
-  bool load = false;
-  int64_t a = 0, b = 0, c = 0;   // taken modulo 2^QW, signed
-  i128 g = 0, gx = 0, gy = 0;    // taken modulo 2^IW, signed
-  int64_t du = 0, dv = 0;        // taken modulo 2^XW, signed
-  bool cw = false;
+  // One word of the conic (rtl/cp_conic_serial.v, docs/CORE.md "CONIC"): 0: B, A;
+  // 1: clockwise [31], C; 2, 3, 4: G, Gx, Gy (32 bits); 5, 6: du, dv ([23:0]).
+  bool wr = false;
+  unsigned wr_sel = 0;
+  uint32_t wr_data = 0;
+  bool start = false;
   bool move_ready = false;
 };
 
@@ -60,6 +62,11 @@ class CpConicSerial {
                    int& dy);
   // Do a node's G, gradient and both evaluations of every quadrant fit iw bits?
   static bool fits(const CpConic::Coeffs& k, const CpConic::Node& n, unsigned iw);
+  // The seven words that load a walk (the wr_sel order above): the conic's A, B, C
+  // (16 bits each), the start node's G and gradient (32 bits each), the end minus the
+  // start (24 bits each). The caller checks that the values fit.
+  static std::array<uint32_t, 7> words(const CpConic::Coeffs& k, const CpConic::Node& start, bool cw,
+                                       int64_t du, int64_t dv);
 
  private:
   struct Regs {

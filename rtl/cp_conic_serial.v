@@ -40,20 +40,16 @@ module cp_conic_serial #(
 
     // Drop the walk and any move waiting; idle.
     input  wire          clear_i,
-    // Take a conic and its start node's values (G, gradient) and start walking
-    // (load wins over clear; a move waiting is dropped).
-    input  wire          load_i,
-    input  wire [QW-1:0] a_i,
-    input  wire [QW-1:0] b_i,
-    input  wire [QW-1:0] c_i,
-    input  wire [IW-1:0] g_i,
-    input  wire [IW-1:0] gx_i,
-    input  wire [IW-1:0] gy_i,
-    // The end node minus the start node.
-    input  wire [XW-1:0] du_i,
-    input  wire [XW-1:0] dv_i,
-    // 1: clockwise (G > 0 on the left of travel); 0: counter-clockwise.
-    input  wire          cw_i,
+    // The conic, one word a clock, as a CONIC segment carries it (docs/CORE.md):
+    // 0: B [31:16], A [15:0]; 1: clockwise [31], C [15:0]; 2, 3, 4: G, dG/dx, dG/dy at
+    // the start node (32 bits, sign-extended to IW); 5, 6: the end node minus the start
+    // node in x and in y ([23:0], sign-extended to XW). Taken only while not busy.
+    input  wire          wr_i,
+    input  wire [2:0]    wr_sel_i,
+    input  wire [31:0]   wr_data_i,
+    // Start walking from the words written (wins over clear; a move waiting is
+    // dropped). A write in the same clock is taken first.
+    input  wire          start_i,
 
     // Walking: a pass under way or a decided move not yet presented.
     output wire          busy_o,
@@ -72,14 +68,14 @@ localparam integer IW1 = IW - 1;
 localparam [BW-1:0] LAST = IW1[BW-1:0];
 
 generate
-    if (QW < 2 || QW > 32) begin : g_check_qw
-        cp_conic_serial_parameter_QW_must_be_2_to_32 u_bad ();
+    if (QW < 2 || QW > 16) begin : g_check_qw
+        cp_conic_serial_parameter_QW_must_be_2_to_16 u_bad ();
     end
     if (IW < QW + 4 || IW > 128) begin : g_check_iw
         cp_conic_serial_parameter_IW_must_be_QW_plus_4_to_128 u_bad ();
     end
-    if (XW < 2 || XW > 32) begin : g_check_xw
-        cp_conic_serial_parameter_XW_must_be_2_to_32 u_bad ();
+    if (XW < 2 || XW > 24) begin : g_check_xw
+        cp_conic_serial_parameter_XW_must_be_2_to_24 u_bad ();
     end
 endgenerate
 
@@ -209,12 +205,20 @@ wire [XW-1:0] dv_n = dv_q - {{(XW-2){dy[1]}}, dy};
 wire at_end = du_n == {XW{1'b0}} && dv_n == {XW{1'b0}};
 wire last_bit = pass_q && i_q == LAST;
 
+// A written word, sign-extended.
+wire [127:0] wr_s32 = {{96{wr_data_i[31]}}, wr_data_i};
+wire [31:0]  wr_s16 = {{16{wr_data_i[15]}}, wr_data_i[15:0]};
+wire [31:0]  wr_s16h = {{16{wr_data_i[31]}}, wr_data_i[31:16]};
+wire [31:0]  wr_s24 = {{8{wr_data_i[23]}}, wr_data_i[23:0]};
+wire         take_wr = wr_i && !busy_o;
+wire unused_wr = &{1'b0, wr_s32[127:IW], wr_s16[31:QW], wr_s16h[31:QW], wr_s24[31:XW]};
+
 always @(posedge clk) begin
-    if (rst || clear_i && !load_i) begin
+    if (rst || clear_i && !start_i) begin
         pass_q <= 1'b0;
         pend_q <= 1'b0;
         ov_q   <= 1'b0;
-    end else if (load_i) begin
+    end else if (start_i) begin
         pass_q <= 1'b1;
         pend_q <= 1'b0;
         ov_q   <= 1'b0;
@@ -231,10 +235,19 @@ always @(posedge clk) begin
         end
     end
 
-    if (load_i) begin
-        a_q <= a_i;  b_q <= b_i;  c_q <= c_i;  cw_q <= cw_i;
-        sg_q <= g_i;  sgx_q <= gx_i;  sgy_q <= gy_i;
-        du_q <= du_i;  dv_q <= dv_i;
+    if (take_wr) begin
+        case (wr_sel_i)
+        3'd0: begin a_q <= wr_s16[QW-1:0];  b_q <= wr_s16h[QW-1:0]; end
+        3'd1: begin c_q <= wr_s16[QW-1:0];  cw_q <= wr_data_i[31]; end
+        3'd2: sg_q  <= wr_s32[IW-1:0];
+        3'd3: sgx_q <= wr_s32[IW-1:0];
+        3'd4: sgy_q <= wr_s32[IW-1:0];
+        3'd5: du_q  <= wr_s24[XW-1:0];
+        3'd6: dv_q  <= wr_s24[XW-1:0];
+        default: ;
+        endcase
+    end
+    if (start_i) begin
         mx_q <= 1'b0;  my_q <= 1'b0;  qx_q <= 1'b0;  qy_q <= 1'b0;
         i_q  <= {BW{1'b0}};
     end else if (pass_q) begin
@@ -246,7 +259,7 @@ always @(posedge clk) begin
             mx_q <= step_x;  my_q <= step_y;  qx_q <= nsx;  qy_q <= nsy;
         end
     end
-    if (issue && !load_i) begin
+    if (issue && !start_i) begin
         odx_q  <= dx;
         ody_q  <= dy;
         oend_q <= at_end;

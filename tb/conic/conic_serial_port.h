@@ -15,7 +15,6 @@ namespace cpstep::tb {
 
 template <class V, unsigned QW, unsigned IW, unsigned XW>
 struct ConicSerialPort {
-  static_assert(IW <= 64, "the adaptor passes G and its gradient as 64-bit words");
   using Rtl = V;
   using Model = model::CpConicSerial;
   using In = model::CpConicSerialIn;
@@ -23,22 +22,13 @@ struct ConicSerialPort {
 
   static Model::Params model_params() { return {QW, IW, XW}; }
 
-  // Verilator wants the bits above a port's width clear.
-  static uint64_t bits(int64_t v, unsigned w) { return w >= 64 ? uint64_t(v) : uint64_t(v) & ((uint64_t(1) << w) - 1); }
-
   static void drive(V& r, const In& i) {
     r.rst = i.rst;
     r.clear_i = i.clear;
-    r.load_i = i.load;
-    r.a_i = bits(i.a, QW);
-    r.b_i = bits(i.b, QW);
-    r.c_i = bits(i.c, QW);
-    r.g_i = bits(int64_t(i.g), IW);
-    r.gx_i = bits(int64_t(i.gx), IW);
-    r.gy_i = bits(int64_t(i.gy), IW);
-    r.du_i = bits(i.du, XW);
-    r.dv_i = bits(i.dv, XW);
-    r.cw_i = i.cw;
+    r.wr_i = i.wr;
+    r.wr_sel_i = i.wr_sel & 7;
+    r.wr_data_i = i.wr_data;
+    r.start_i = i.start;
     r.move_ready_i = i.move_ready;
   }
 

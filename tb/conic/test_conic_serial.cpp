@@ -3,7 +3,7 @@
 // "The walk, bit-serial") in lockstep with its model, every output every cycle, and
 // its moves against the rule's walk (model::CpConic::rule, itself held to the
 // one-move-a-clock engine by test_conic): circles over every octant, other conics,
-// large circles, the pass timing, clear and load mid-walk, and a random soak of the
+// large circles, the pass timing, words while busy, clear, and a random soak of the
 // narrow build, whose values wrap.
 #include <gtest/gtest.h>
 
@@ -36,21 +36,19 @@ SerialRun run_serial(Stepper& dut, const ConicRequest& rq, unsigned ready_pct, s
   const unsigned iw = dut.model().params().iw;
   const auto k = rq.coeffs();
   const auto n = model::CpConic::at(k, rq.start.x, rq.start.y);
+  const auto words = Serial::words(k, n, rq.cw, rq.end.x - rq.start.x, rq.end.y - rq.start.y);
   model::CpConicSerialIn in;
-  in.load = true;
-  in.a = rq.a;
-  in.b = rq.b;
-  in.c = rq.c;
-  in.g = n.g;
-  in.gx = n.gx;
-  in.gy = n.gy;
-  in.du = rq.end.x - rq.start.x;
-  in.dv = rq.end.y - rq.start.y;
-  in.cw = rq.cw;
   SerialRun run;
-  run.load_cycle = dut.cycle();
-  dut.step(in);
-  in.load = false;
+  // The seven words, the last with the start.
+  for (unsigned w = 0; w < 7; ++w) {
+    in.wr = true;
+    in.wr_sel = w;
+    in.wr_data = words[w];
+    in.start = w == 6;
+    if (in.start) run.load_cycle = dut.cycle();
+    dut.step(in);
+  }
+  in.wr = in.start = false;
   StreamContract contract("move stream");
   std::uniform_int_distribution<unsigned> pct(0, 99);
   bool fresh = true;
@@ -194,7 +192,7 @@ TEST(ConicSerial, LargeCirclesAtTheHostsScale) {
 }
 
 // docs/CONIC.md "The walk, bit-serial": the first move is valid IW + 2 cycles after
-// the load's cycle, and with the consumer always ready every IW + 1 cycles after.
+// the start's cycle, and with the consumer always ready every IW + 1 cycles after.
 TEST(ConicSerial, AMoveEveryIwPlusOneCycles) {
   Lockstep<ConicSerialDefault> ls;
   ls.reset();
@@ -208,16 +206,35 @@ TEST(ConicSerial, AMoveEveryIwPlusOneCycles) {
     EXPECT_EQ(run.valid_at[i] - run.valid_at[i - 1], 40u + 1) << "move " << i;
 }
 
-// Clear drops a waiting move and stops the walk; a load mid-walk starts afresh.
-TEST(ConicSerial, ClearAndLoadMidWalk) {
+// Words written while the walker is busy are not taken: the walk goes on as it was.
+// Clear drops a waiting move and stops the walk; a fresh walk follows.
+TEST(ConicSerial, WordsWhileBusyAreIgnoredAndClearStops) {
   Lockstep<ConicSerialDefault> ls;
   ls.reset();
   std::mt19937_64 rng(8);
   const ConicRequest rq = circle_from(2, 1, 60, true, 1.0L, 40);
+  const auto want = expected_moves(rq, 100, 40);
   SerialRun run = run_serial(ls, rq, 100, rng, 5);
   ASSERT_EQ(run.moves.size(), 5u);
   model::CpConicSerialIn in;
-  for (int i = 0; i < 30; ++i) ls.step(in);  // a move waits (not ready)
+  for (unsigned w = 0; w < 7; ++w) {  // junk, while a pass runs or its move waits
+    in.wr = true;
+    in.wr_sel = w;
+    in.wr_data = uint32_t(rng());
+    ASSERT_TRUE(ls.step(in).busy);
+  }
+  in.wr = false;
+  in.move_ready = true;
+  for (int c = 0; c < 100 * 42 && run.moves.size() < want.size(); ++c) {
+    const auto o = ls.step(in);
+    if (o.move_valid) run.moves.push_back({o.move_dx, o.move_dy});
+  }
+  EXPECT_EQ(run.moves, want);
+  // A walk, five moves in, a move waiting; then clear.
+  run = run_serial(ls, rq, 100, rng, 5);
+  ASSERT_EQ(run.moves.size(), 5u);
+  in.move_ready = false;
+  for (int i = 0; i < 60; ++i) ls.step(in);
   in.clear = true;
   ls.step(in);
   in.clear = false;
@@ -225,13 +242,10 @@ TEST(ConicSerial, ClearAndLoadMidWalk) {
   EXPECT_FALSE(o.move_valid);
   EXPECT_FALSE(o.busy);
   for (int i = 0; i < 100; ++i) EXPECT_FALSE(ls.step(in).move_valid);
-  // Five moves into the same walk again, then a load over it.
-  run = run_serial(ls, rq, 70, rng, 5);
-  ASSERT_EQ(run.moves.size(), 5u);
-  expect_walk(ls, rq, 70, rng, 100, "after a load mid-walk");
+  expect_walk(ls, rq, 70, rng, 100, "after a clear");
 }
 
-// The narrow build (QW 6, IW 12, XW 8) under random loads of any values, clears,
+// The narrow build (QW 6, IW 12, XW 8) under random words of any bits, starts, clears,
 // resets and back-pressure: its values wrap, and RTL and model agree every cycle.
 TEST(ConicSerial, NarrowBuildRandomSoakInLockstep) {
   Lockstep<ConicSerialSmall> ls;
@@ -246,13 +260,13 @@ TEST(ConicSerial, NarrowBuildRandomSoakInLockstep) {
     const unsigned r = pct(rng);
     in.rst = r < 1;
     in.clear = r >= 1 && r < 4;
-    in.load = r >= 4 && r < 12;
-    if (in.load) {
-      in.a = any(rng); in.b = any(rng); in.c = any(rng);
-      in.g = any(rng); in.gx = any(rng); in.gy = any(rng);
-      in.du = any(rng) % 6; in.dv = any(rng) % 6;
-      in.cw = rng() & 1;
-    }
+    in.start = r >= 4 && r < 12;
+    // Words of any bits, often (most are refused while the walker is busy); the end
+    // offsets small, so that walks end.
+    in.wr = pct(rng) < 300;
+    in.wr_sel = unsigned(rng() % 8);
+    in.wr_data = uint32_t(any(rng));
+    if (in.wr_sel >= 5) in.wr_data = uint32_t(int32_t(any(rng) % 6));
     // Stretches of a consumer slower than a pass (IW = 12 clocks) between fast ones.
     if (c % 64 == 0) slow = pct(rng) < 400;
     in.move_ready = pct(rng) < (slow ? 30u : 700u);
