@@ -29,6 +29,7 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
         d.u = val_u;
         d.dir = uint32_t(i.seg_head >> 24) & bits::mask(p_.n);
         d.end = (i.seg_head >> (28 + p_.n) & 1) != 0;
+        d.conic = p_.conic && (i.seg_head >> (29 + p_.n) & 1) != 0;
         d.axis = 0;
         d.moving = 0;
         d.state = State::next_axis;
@@ -65,9 +66,37 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
         d.state = State::idle;
       }
       break;
+    case State::conic_words:
+      // Once the walker is free: K0 .. K6 into it, the last with its start and the
+      // segment into the run queue. K1 carries the plane axes: {cw, u, v, 9 zeros, C}.
+      if (i.seg_valid && i.walker_free) {
+        const uint32_t word = uint32_t(i.seg_head);
+        o.seg_pop = true;
+        o.cw_wr = true;
+        if (q.k_index == 1) {
+          d.au = word >> 28 & 7;
+          d.av = word >> 25 & 7;
+        }
+        d.k_index = (q.k_index + 1) & 7;
+        if (q.k_index == 6) {
+          o.cw_start = true;
+          o.run_wr = true;
+          o.run_data = uint64_t(1) << (2 * p_.n + 8) | uint64_t(q.au) << (2 * p_.n + 5) |
+                       uint64_t(q.av) << (2 * p_.n + 2) | uint64_t(q.build_lane) << (2 * p_.n + 1) |
+                       uint64_t(q.end) << (2 * p_.n) | uint64_t(q.moving) << p_.n | q.dir;
+          d.build_lane = !q.build_lane;
+          d.state = State::idle;
+        }
+      }
+      break;
   }
+  o.cw_sel = q.k_index;
+  o.cw_data = uint32_t(i.seg_head);
   if (cap_done) {
-    if (q.axis == p_.n - 1) {
+    if (q.axis == p_.n - 1 && q.conic) {
+      d.k_index = 0;
+      d.state = State::conic_words;
+    } else if (q.axis == p_.n - 1) {
       o.run_wr = true;
       o.run_data = uint64_t(q.build_lane) << (2 * p_.n + 1) | uint64_t(q.end) << (2 * p_.n) |
                    uint64_t(d.moving) << p_.n | q.dir;
@@ -105,7 +134,9 @@ bool CpBuild::still(const In& i) const {
   Regs d = r_;
   Engine e;
   const Out o = eval(i, d, e);
-  if (!(d == r_) || o.seg_pop || o.run_wr || o.bank_we || o.len_we || o.fault || e.in_valid) return false;
+  if (!(d == r_) || o.seg_pop || o.run_wr || o.bank_we || o.len_we || o.fault || e.in_valid || o.cw_wr ||
+      o.cw_start)
+    return false;
   CpEngineIn ei;
   ei.rst = e.rst;
   ei.in_u = r_.u;

@@ -12,27 +12,33 @@ namespace cpstep::model {
 
 struct CpBuildParams {
   unsigned n = 4, w = 1024, umax = 1048575, saw = 2;
+  bool conic = false;  // CONIC segments (docs/CORE.md): the walker's words, wider queue words
 };
 
 struct CpBuildIn {
   bool rst = false, flush = false, fault = false;
   bool seg_valid = false;
-  uint64_t seg_head = 0;  // 29 + N bits
+  uint64_t seg_head = 0;  // 29 + N bits; with conic max(30 + N, 32)
   bool seg_commit = false;
   uint32_t run_level = 0;  // 2 bits
   bool cur_valid = false;
+  bool walker_free = false;  // the conic walker (cp_run) is free for the next conic
 };
 
 struct CpBuildOut {
   bool seg_pop = false;
   bool run_wr = false;
-  uint64_t run_data = 0;  // {lane, end, moving[N], dir[N]}
+  uint64_t run_data = 0;  // {[conic, u, v,] lane, end, moving[N], dir[N]}
   bool bank_we = false;
   uint32_t bank_axis = 0, bank_waddr = 0;
   bool bank_wbit = false;
   bool build_lane = false;
   bool len_we = false;
   uint32_t len_m1 = 0;
+  // The conic walker's word port: a conic's words, the last with the start.
+  bool cw_wr = false;
+  uint32_t cw_sel = 0, cw_data = 0;
+  bool cw_start = false;
   bool fault = false;  // the engine refused a pattern
   bool busy = false;
   uint32_t segq = 0;   // committed segments in the segment queue
@@ -59,7 +65,7 @@ class CpBuild {
   uint32_t segq() const { return r_.segq; }
 
  private:
-  enum class State { idle, next_axis, capture };
+  enum class State { idle, next_axis, capture, conic_words };
   struct Regs {
     State state = State::idle;  // reset
     bool build_lane = false;    // reset
@@ -67,6 +73,8 @@ class CpBuild {
     unsigned axis = 0;
     uint32_t u = 0, dir = 0, moving = 0, cap_addr = 0;
     bool end = false;
+    bool conic = false;                 // the segment being built is a conic
+    uint32_t au = 0, av = 0, k_index = 0;
     bool operator==(const Regs&) const = default;
   };
   struct Engine {

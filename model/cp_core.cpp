@@ -10,15 +10,15 @@ namespace cpstep::model {
 
 CpCore::CpCore(Params p)
     : p_(p),
-      cmd_({p.n, p.umax, p.kmax, p.caw, p.tw}),
-      build_({p.n, p.w, p.umax, p.saw}),
-      run_({p.n, p.w}),
+      cmd_({p.n, p.umax, p.kmax, p.caw, p.tw, p.conic}),
+      build_({p.n, p.w, p.umax, p.saw, p.conic}),
+      run_({p.n, p.w, p.conic, p.ciw}),
       status_({p.n, p.w, p.umax, p.kmax, p.caw, p.saw, p.tw, p.pw, p.step_high_reset, p.step_low_reset,
                p.dir_setup_reset, p.dir_hold_reset, p.step_pol_reset, p.dir_pol_reset, p.cbuf_aw,
-               p.clock_hz, p.build_id}),
-      seg_fifo_({29 + p.n, p.saw + bits::clog2(p.n + 1)}),
+               p.clock_hz, p.build_id, p.conic, p.ciw}),
+      seg_fifo_({p.conic ? std::max(30 + p.n, 32u) : 29 + p.n, p.saw + bits::clog2(p.n + 1)}),
       chunk_fifo_({81, p.caw}),
-      run_fifo_({2 + 2 * p.n, 1}) {
+      run_fifo_({2 + 2 * p.n + (p.conic ? 7 : 0), 1}) {
   if (p_.n < 1 || p_.n > kCoreMaxAxes) throw std::invalid_argument("cp_core: N must be 1 to 8");
   if (p_.umax < p_.w || p_.umax > 16777214)
     throw std::invalid_argument("cp_core: UMAX must be W to 2^24-2");
@@ -97,6 +97,7 @@ CpCore::Wires CpCore::settle() const {
   b.seg_commit = w.cmd.seg_commit;
   b.run_level = w.run.level;
   b.cur_valid = run_.cur_valid();
+  b.walker_free = run_.walker_free();
   w.b = build_.eval_outputs(b);
 
   CpRunIn& r = w.r_in;
@@ -120,6 +121,10 @@ CpCore::Wires CpCore::settle() const {
   r.len_we = w.b.len_we;
   r.len_m1 = w.b.len_m1;
   r.pulse_ready = pulse_ready;
+  r.cw_wr = w.b.cw_wr;
+  r.cw_sel = w.b.cw_sel;
+  r.cw_data = w.b.cw_data;
+  r.cw_start = w.b.cw_start;
   w.r = run_.eval_outputs(r);
 
   s.abort = w.cmd.abort;
@@ -132,6 +137,7 @@ CpCore::Wires CpCore::settle() const {
   s.cmd_code = w.cmd.fault_code;
   s.build_fault = w.b.fault;
   s.run_fault = w.r.fault;
+  s.run_conic = w.r.fault_conic;
   s.stretch = w.r.stretch;
   s.fire = w.r.fire;
   s.seg_done = w.r.seg_done;

@@ -19,6 +19,10 @@ struct CpCoreParams {
   unsigned tw = 16;         // pulse timing field width
   unsigned pw = 32;         // position width
   unsigned step_high_reset = 1, step_low_reset = 1, dir_setup_reset = 1, dir_hold_reset = 1;
+  // CONIC segments (opcode 0x5) walked by a bit-serial walker of ciw bits (docs/CONIC.md
+  // section 8); refused as BAD_OPCODE without.
+  bool conic = false;
+  unsigned ciw = 40;
   bool step_pol_reset = true, dir_pol_reset = true;
   // Only reported (READ 0x23..0x25): the command buffer's address width in front
   // of the core (0: none), the clock in Hz, the build id.
@@ -71,6 +75,7 @@ enum class CoreError : uint32_t {
   config_value = 14,
   seg_add2 = 15,
   conic_axes = 16,  // a CONIC segment's plane axes: equal, not an axis, or a v_i of theirs not 0
+  conic_end = 17,   // a conic's walk arrives at its end before its last move, or not at it
 };
 
 }  // namespace cpstep::model

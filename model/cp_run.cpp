@@ -8,7 +8,7 @@
 
 namespace cpstep::model {
 
-CpRun::CpRun(Params p) : p_(p), aw_(CpEngineParams{p.w}.aw()) {
+CpRun::CpRun(Params p) : p_(p), aw_(CpEngineParams{p.w}.aw()), walker_(CpConicSerialParams{16, p.ciw, 24}) {
   banks_.assign(p_.n, std::vector<uint8_t>(std::size_t(2) << aw_, 0));
 }
 
@@ -23,13 +23,26 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   // fires after its time without having waited due (its chunk came late).
   const bool due = q.chunk_loaded && q.elapsed >= q.delay;
   const bool stopping = i.estop || i.abort;
-  o.fire = q.running && q.cur_valid && !stopping && due && q.rp_valid &&
-           (lane_move & ~i.pulse_ready & bits::mask(n)) == 0;
+  // In a conic, the plane axes step by the walker's presented move, in its directions;
+  // its end mark must agree with the segment's last move.
+  const CpConicSerialOut wo = p_.conic ? walker_.outputs() : CpConicSerialOut{};
+  const bool conic_on = p_.conic && q.cur_conic;
+  uint32_t plane_step = 0, plane_dir = 0;
+  plane(plane_step, plane_dir);
+  const uint32_t move_steps = lane_move | plane_step;
+  const bool seg_last = q.moves_left == 1 && q.timer_last;
+  const bool conic_ok = !conic_on || (wo.move_valid && wo.move_end == seg_last);
+  o.walker_free = !wo.busy && !wo.move_valid;
+  o.fire = q.running && q.cur_valid && !stopping && due && q.rp_valid && conic_ok &&
+           (move_steps & ~i.pulse_ready & bits::mask(n)) == 0;
+  o.fault_conic = q.running && q.cur_valid && !stopping && due && q.rp_valid && conic_on && wo.move_valid &&
+                  wo.move_end != seg_last;
+  o.fault = o.fault_conic;
   o.stretch = q.running && due && !q.late && !stopping && (!o.fire || q.elapsed != q.delay);
-  o.seg_done = o.fire && q.moves_left == 1 && q.timer_last;
+  o.seg_done = o.fire && seg_last;
   o.seg_active = q.running && q.cur_valid && !o.seg_done;
-  o.step = o.fire ? lane_move : 0;
-  o.dir = q.dir;
+  o.step = o.fire ? move_steps : 0;
+  o.dir = (q.dir & ~plane_step) | (plane_dir & plane_step);
   o.running = q.running;
   o.cur_valid = q.cur_valid;
   if (o.stretch) d.late = true;
@@ -53,6 +66,7 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   }
   if (o.fire) {
     d.elapsed = 1;
+    d.dir = (q.dir & ~plane_step) | (plane_dir & plane_step);  // a plane axis keeps its direction
     if (q.moves_left != 1) {
       d.moves_left = (q.moves_left - 1) & 0xFFFF;
       d.delay = q.delay + q.timer_inc;
@@ -87,7 +101,10 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
     d.cur_valid = true;
     d.cur_lane = unsigned(i.run_head >> (2 * n + 1) & 1);
     d.cur_end = (i.run_head >> (2 * n) & 1) != 0;
-    d.dir = (q.dir & ~moving) | (dir & moving);
+    d.cur_conic = p_.conic && (i.run_head >> (2 * n + 8) & 1) != 0;
+    d.cur_au = uint32_t(i.run_head >> (2 * n + 5)) & 7;
+    d.cur_av = uint32_t(i.run_head >> (2 * n + 2)) & 7;
+    d.dir = (d.dir & ~moving) | (dir & moving);
     // The replay registers fetch each pattern's first move.
     rp.re = true;
     rp.lane = d.cur_lane;
@@ -109,6 +126,30 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   return o;
 }
 
+// The plane axes' steps and directions in the walker's presented move (none outside
+// a conic or with no move presented).
+void CpRun::plane(uint32_t& step, uint32_t& dir) const {
+  step = dir = 0;
+  if (!p_.conic || !r_.cur_conic) return;
+  const CpConicSerialOut wo = walker_.outputs();
+  if (!wo.move_valid) return;
+  const uint32_t u_bit = (1u << r_.cur_au) & bits::mask(p_.n), v_bit = (1u << r_.cur_av) & bits::mask(p_.n);
+  step = (wo.move_dx != 0 ? u_bit : 0) | (wo.move_dy != 0 ? v_bit : 0);
+  dir = (wo.move_dx < 0 ? 0 : u_bit) | (wo.move_dy < 0 ? 0 : v_bit);
+}
+
+bool CpRun::walker_free() const {
+  if (!p_.conic) return true;
+  const CpConicSerialOut wo = walker_.outputs();
+  return !wo.busy && !wo.move_valid;
+}
+
+uint32_t CpRun::dir() const {
+  uint32_t step = 0, dir = 0;
+  plane(step, dir);
+  return (r_.dir & ~step) | (dir & step);
+}
+
 CpRun::Out CpRun::eval_outputs(const In& i) const {
   Regs d = r_;
   Replay rp;
@@ -117,6 +158,11 @@ CpRun::Out CpRun::eval_outputs(const In& i) const {
 
 uint64_t CpRun::quiet_for(const In& i) const {
   if (i.rst || i.bank_we || i.len_we) return 0;
+  // The conic walker turns its passes every clock: clocked, not skipped.
+  if (p_.conic) {
+    const CpConicSerialOut wo = walker_.outputs();
+    if (wo.busy || wo.move_valid || i.cw_wr || i.cw_start) return 0;
+  }
   Regs d = r_;
   Replay rp;
   const Out o = eval(i, d, rp);
@@ -136,7 +182,7 @@ void CpRun::skip(uint64_t cycles) {
 void CpRun::tick() {
   Regs d = r_;
   Replay rp;
-  eval(in, d, rp);
+  const Out o = eval(in, d, rp);
   // The banks: the replay reads the storage as it was before this edge's write.
   const uint32_t half = 1u << aw_;
   if (rp.re) {
@@ -149,11 +195,22 @@ void CpRun::tick() {
     banks_[in.bank_axis][unsigned(in.bank_lane) * half + (in.bank_waddr & (half - 1))] = in.bank_wbit;
   if (in.len_we && in.bank_axis < p_.n)
     d.lm1[in.bank_lane ? 1 : 0][in.bank_axis] = in.len_m1 & bits::mask(aw_);
+  if (p_.conic) {
+    walker_.in.rst = in.rst;
+    walker_.in.clear = in.flush;
+    walker_.in.wr = in.cw_wr;
+    walker_.in.wr_sel = in.cw_sel & 7;
+    walker_.in.wr_data = in.cw_data;
+    walker_.in.start = in.cw_start;
+    walker_.in.move_ready = r_.cur_conic && o.fire;
+    walker_.tick();
+  }
   if (in.rst) {
     d.running = d.cur_valid = false;
     d.cur_lane = 0;
     d.chunk_loaded = d.late = d.rp_valid = false;
     d.dir = 0;
+    d.cur_conic = false;
   }
   r_ = d;
 }

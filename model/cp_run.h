@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "model/cp_conic_serial.h"
 #include "model/cp_core_ports.h"
 #include "model/cp_fifo.h"
 
@@ -17,6 +18,8 @@ namespace cpstep::model {
 
 struct CpRunParams {
   unsigned n = 4, w = 1024;
+  bool conic = false;  // the conic walker, for CONIC segments (docs/CORE.md)
+  unsigned ciw = 40;   // its internal width
 };
 
 struct CpRunIn {
@@ -24,7 +27,7 @@ struct CpRunIn {
   bool ch_valid = false;
   FifoWord ch_head{};      // 81 bits: {last, add2, count, add, interval}
   bool run_valid = false;
-  uint64_t run_head = 0;   // {lane, end, moving[N], dir[N]}
+  uint64_t run_head = 0;   // {[conic, u, v,] lane, end, moving[N], dir[N]}
   uint32_t run_level = 0;  // 2 bits
   bool segq_empty = false, build_busy = false;
   // The banks' write port (cp_build).
@@ -34,6 +37,10 @@ struct CpRunIn {
   bool len_we = false;
   uint32_t len_m1 = 0;
   uint32_t pulse_ready = 0;  // bit a: axis a's pulse timer is ready
+  // The conic walker's word port (cp_build).
+  bool cw_wr = false;
+  uint32_t cw_sel = 0, cw_data = 0;
+  bool cw_start = false;
 };
 
 struct CpRunOut {
@@ -41,7 +48,9 @@ struct CpRunOut {
   uint32_t step = 0, dir = 0;  // bit a: axis a
   bool running = false, cur_valid = false;
   bool fire = false, seg_done = false, stretch = false, seg_active = false;
-  bool fault = false;  // underrun
+  bool fault = false;        // underrun, or a conic's walk not ending on its last move
+  bool fault_conic = false;  // the fault is the conic's (CONIC_END)
+  bool walker_free = false;  // the conic walker is not walking and its last move is taken
 };
 
 class CpRun {
@@ -69,7 +78,11 @@ class CpRun {
   // Registered outputs, for the core's other parts.
   bool running() const { return r_.running; }
   bool cur_valid() const { return r_.cur_valid; }
-  uint32_t dir() const { return r_.dir; }
+  // DIR as the pulse timers see it: the registers, but a plane axis of a conic shows
+  // the presented move's direction before the move fires (rtl/cp_run.v dir_o).
+  uint32_t dir() const;
+  // The conic walker is free for the next conic (not walking, its last move taken).
+  bool walker_free() const;
 
  private:
   struct Regs {
@@ -91,6 +104,8 @@ class CpRun {
     // lane's pattern lengths minus one (lane, axis).
     std::array<uint32_t, kCoreMaxAxes> rp_ptr{};
     std::array<std::array<uint32_t, kCoreMaxAxes>, 2> lm1{};
+    bool cur_conic = false;  // reset: the loaded segment is a conic, and its plane axes
+    uint32_t cur_au = 0, cur_av = 0;
     bool operator==(const Regs&) const = default;
   };
   // The replay's read of the banks this cycle.
@@ -100,6 +115,7 @@ class CpRun {
     std::array<uint32_t, kCoreMaxAxes> next{};
   };
   Out eval(const In& i, Regs& d, Replay& rp) const;
+  void plane(uint32_t& step, uint32_t& dir) const;
 
   Params p_;
   unsigned aw_;
@@ -107,6 +123,7 @@ class CpRun {
   // (bit a: axis a's next move).
   std::vector<std::vector<uint8_t>> banks_;
   uint32_t rbits_ = 0;
+  CpConicSerial walker_;
   Regs r_;
 };
 

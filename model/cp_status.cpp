@@ -15,10 +15,10 @@ constexpr uint32_t kProtocolVersion = 2;
 }  // namespace
 
 FaultPick pick_fault(bool estop, bool abort, bool underrun, bool pattern, bool cmd_fault,
-                     uint32_t cmd_code) {
+                     uint32_t cmd_code, bool run_conic) {
   if (estop) return {true, uint32_t(CoreError::estop)};
   if (abort) return {true, uint32_t(CoreError::abort)};
-  if (underrun) return {true, uint32_t(CoreError::underrun)};
+  if (underrun) return {true, uint32_t(run_conic ? CoreError::conic_end : CoreError::underrun)};
   if (pattern) return {true, uint32_t(CoreError::seg_pattern)};
   if (cmd_fault) return {true, cmd_code & 0xFF};
   return {};
@@ -66,6 +66,7 @@ uint32_t CpStatus::read(const In& i, uint32_t reg) const {
     case 0x23: return kProtocolVersion << 16 | (p_.cbuf_aw & 0xFF) << 8 | (p_.pw & 0xFF);
     case 0x24: return p_.clock_hz;
     case 0x25: return p_.build_id;
+    case 0x26: return p_.conic ? p_.ciw : 0;
     default: {
       const uint32_t r = reg & 0xFF;
       if (r >= 0x10 && r < 0x10 + p_.n) return uint32_t(i.position[r - 0x10]);
@@ -114,7 +115,8 @@ CpStatus::Regs CpStatus::next(const In& i) const {
     d.err = 0;
     d.stretched = i.stretch;
   }
-  const FaultPick f = pick_fault(i.estop, i.abort, i.run_fault, i.build_fault, i.cmd_fault, i.cmd_code);
+  const FaultPick f =
+      pick_fault(i.estop, i.abort, i.run_fault, i.build_fault, i.cmd_fault, i.cmd_code, i.run_conic);
   if (f.set && (!q.fault || clearing)) {
     d.fault = true;
     d.err = f.code;

@@ -19,6 +19,9 @@ struct CpStatusParams {
   unsigned cbuf_aw = 0;
   uint32_t clock_hz = 48000000;
   uint32_t build_id = 0;
+  // Reported only (READ 0x26): conic segments taken, and the walker's width.
+  bool conic = false;
+  unsigned ciw = 40;
 };
 
 struct CpStatusIn {
@@ -29,6 +32,7 @@ struct CpStatusIn {
   bool cmd_fault = false;
   uint32_t cmd_code = 0;  // 8 bits
   bool build_fault = false, run_fault = false;
+  bool run_conic = false;  // the runner's fault is CONIC_END, not UNDERRUN
   bool stretch = false, fire = false, seg_done = false, seg_active = false;
   bool running = false, cur_valid = false;
   uint32_t segq = 0;
@@ -55,13 +59,14 @@ struct CpStatusOut {
 };
 
 // The fault priority encoder: which fault (if any) a cycle raises. Highest
-// first: E-stop, abort, underrun, pattern, the command parser's refusal.
+// first: E-stop, abort, the runner's (underrun, or CONIC_END when run_conic),
+// pattern, the command parser's refusal.
 struct FaultPick {
   bool set = false;
   uint32_t code = 0;
 };
 FaultPick pick_fault(bool estop, bool abort, bool underrun, bool pattern, bool cmd_fault,
-                     uint32_t cmd_code);
+                     uint32_t cmd_code, bool run_conic = false);
 
 class CpStatus {
  public:

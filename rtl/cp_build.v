@@ -10,6 +10,12 @@
 // end flag, moving axes, directions) goes into the run queue and the build lane
 // flips. It also counts the committed segments waiting in the segment queue.
 //
+// A CONIC segment (CONIC = 1, docs/CORE.md): its plane axes have v = 0 (constant
+// patterns); after the last axis, once the conic walker is free (the previous
+// conic's last move taken), its seven words go from the segment queue into the
+// walker, one a clock, the last with the walker's start, and the segment goes into
+// the run queue with its plane axes.
+//
 // Part of cp_core (docs/CORE.md "Structure"); model twin model/cp_build.*, bench
 // tb/core/test_core_parts.cpp.
 `resetall
@@ -20,7 +26,8 @@ module cp_build #(
     parameter integer N = 4,
     parameter integer W = 1024,
     parameter integer UMAX = 1048575,
-    parameter integer SAW = 2
+    parameter integer SAW = 2,
+    parameter integer CONIC = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -29,7 +36,7 @@ module cp_build #(
 
     // Segment queue head, and the parser's commit of a whole segment.
     input  wire          seg_valid_i,
-    input  wire [28+N:0] seg_head_i,
+    input  wire [SWW-1:0] seg_head_i,
     output reg           seg_pop_o,
     input  wire          seg_commit_i,
 
@@ -37,7 +44,7 @@ module cp_build #(
     input  wire [1:0]    run_level_i,
     input  wire          cur_valid_i,
     output reg           run_wr_o,
-    output reg  [1+2*N:0] run_wdata_o,     // {lane, end, moving[N], dir[N]}
+    output reg  [RDW-1:0] run_wdata_o,     // {[conic, u, v,] lane, end, moving[N], dir[N]}
 
     // Write port of the pattern banks (cp_run): axis, address, bit, in the build
     // lane; and the pattern's length - 1 when an axis is done.
@@ -49,6 +56,13 @@ module cp_build #(
     output reg           len_we_o,
     output wire [AW-1:0] len_m1_o,
 
+    // The conic walker (in cp_run): free for the next conic, and its word port.
+    input  wire          walker_free_i,
+    output reg           cw_wr_o,
+    output reg  [2:0]    cw_sel_o,
+    output reg  [31:0]   cw_data_o,
+    output reg           cw_start_o,
+
     output reg           fault_o,          // the engine refused a pattern (too long)
     output wire          busy_o,           // a segment is being built
     output wire [SQW:0]  segq_o            // committed segments in the segment queue
@@ -57,10 +71,13 @@ module cp_build #(
 localparam integer UW = $clog2(UMAX + 2);           // engine u/v width
 localparam integer AW = (W > 2) ? $clog2(W) : 1;
 localparam integer SQW = SAW + $clog2(N + 1);
+localparam integer SWW = (CONIC == 0) ? 29 + N : ((30 + N > 32) ? 30 + N : 32);
+localparam integer RDW = 2 + 2 * N + ((CONIC == 0) ? 0 : 7);
 
 localparam [1:0] B_IDLE = 2'd0;   // waiting for a committed segment and a free lane
 localparam [1:0] B_V    = 2'd1;   // next axis: its v_i at the segment queue's head
 localparam [1:0] B_CAP  = 2'd2;   // the engine's first period into the bank
+localparam [1:0] B_K    = 2'd3;   // a conic's seven words into the walker
 
 reg [1:0]    b_state_q, b_state_d;       // reset
 reg          build_lane_q, build_lane_d; // reset
@@ -70,11 +87,16 @@ reg [UW-1:0] b_u_q, b_u_d;
 reg          b_end_q, b_end_d;
 reg [N-1:0]  b_dir_q, b_dir_d, b_moving_q, b_moving_d;
 reg [AW-1:0] cap_addr_q, cap_addr_d;
+reg          b_conic_q, b_conic_d;       // the segment being built is a conic
+reg [2:0]    b_au_q, b_au_d, b_av_q, b_av_d, k_idx_q, k_idx_d;
 
 // Segment queue word fields.
 wire          head_end = seg_head_i[28 + N];
 wire [N-1:0]  head_dir = seg_head_i[24 +: N];
 wire [23:0]   head_val = seg_head_i[23:0];
+wire [39:0]   head_wide = {{(40-SWW){1'b0}}, seg_head_i};
+wire          head_conic = CONIC != 0 && head_wide[29 + N];
+wire unused_head = &{1'b0, head_wide[39:32]};
 
 // ---------------------------------------------------------------- the engine
 reg            eng_in_valid, eng_move_ready, eng_rst, cap_done;
@@ -102,12 +124,20 @@ wire unused = &{1'b0, dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter,
                 dbg_m1_len, dbg_m2_lo, dbg_m2_len, dbg_x, dbg_y, eng_err_code, eng_move_last};
 
 // ---------------------------------------------------------------- next state
+// A run queue word with the conic fields, before it is cut to RDW bits (and one
+// spare bit, so that the part a build without conics drops is never empty).
+localparam integer RFW = 9 + 2 * N;
+reg [RFW:0] run_wide;
+wire unused_run = &{1'b0, run_wide[RFW:RDW]};
 always @* begin
+    run_wide = {(RFW+1){1'b0}};
     b_state_d = b_state_q;  build_lane_d = build_lane_q;
     segq_d = segq_q + {{SQW{1'b0}}, seg_commit_i};
     b_axis_d = b_axis_q;  b_u_d = b_u_q;  b_end_d = b_end_q;
     b_dir_d = b_dir_q;  b_moving_d = b_moving_q;  cap_addr_d = cap_addr_q;
-    seg_pop_o = 1'b0;  run_wr_o = 1'b0;  run_wdata_o = {(2+2*N){1'b0}};
+    b_conic_d = b_conic_q;  b_au_d = b_au_q;  b_av_d = b_av_q;  k_idx_d = k_idx_q;
+    seg_pop_o = 1'b0;  run_wr_o = 1'b0;  run_wdata_o = {RDW{1'b0}};
+    cw_wr_o = 1'b0;  cw_sel_o = k_idx_q;  cw_data_o = head_wide[31:0];  cw_start_o = 1'b0;
     bank_we_o = 1'b0;  bank_waddr_o = {AW{1'b0}};  bank_wbit_o = 1'b0;
     eng_in_valid = 1'b0;  eng_move_ready = 1'b0;  cap_done = 1'b0;
     fault_o = 1'b0;
@@ -119,6 +149,7 @@ always @* begin
         b_u_d      = head_val[UW-1:0];
         b_dir_d    = head_dir;
         b_end_d    = head_end;
+        b_conic_d  = head_conic;
         b_axis_d   = 3'd0;
         b_moving_d = {N{1'b0}};
         b_state_d  = B_V;
@@ -152,12 +183,34 @@ always @* begin
             b_state_d = B_IDLE;
         end
     end
+    B_K: if (seg_valid_i && walker_free_i) begin
+        // K1 carries the plane axes: {cw, u, v, 9 zeros, C}.
+        seg_pop_o = 1'b1;
+        cw_wr_o   = 1'b1;
+        if (k_idx_q == 3'd1) begin
+            b_au_d = head_wide[30:28];
+            b_av_d = head_wide[27:25];
+        end
+        k_idx_d = k_idx_q + 1'b1;
+        if (k_idx_q == 3'd6) begin
+            cw_start_o   = 1'b1;
+            run_wr_o     = 1'b1;
+            run_wide     = {2'b01, b_au_q, b_av_q, build_lane_q, b_end_q, b_moving_q, b_dir_q};
+            run_wdata_o  = run_wide[RDW-1:0];
+            build_lane_d = !build_lane_q;
+            b_state_d    = B_IDLE;
+        end
+    end
     default: b_state_d = B_IDLE;
     endcase
     if (cap_done) begin
-        if ({29'd0, b_axis_q} == N - 1) begin
+        if ({29'd0, b_axis_q} == N - 1 && b_conic_q) begin
+            k_idx_d   = 3'd0;
+            b_state_d = B_K;
+        end else if ({29'd0, b_axis_q} == N - 1) begin
             run_wr_o     = 1'b1;
-            run_wdata_o  = {build_lane_q, b_end_q, b_moving_d, b_dir_q};
+            run_wide     = {8'd0, build_lane_q, b_end_q, b_moving_d, b_dir_q};
+            run_wdata_o  = run_wide[RDW-1:0];
             build_lane_d = !build_lane_q;
             b_state_d    = B_IDLE;
         end else begin
@@ -189,6 +242,7 @@ always @(posedge clk) begin
     end
     b_axis_q <= b_axis_d;  b_u_q <= b_u_d;  b_end_q <= b_end_d;
     b_dir_q <= b_dir_d;  b_moving_q <= b_moving_d;  cap_addr_q <= cap_addr_d;
+    b_conic_q <= b_conic_d;  b_au_q <= b_au_d;  b_av_q <= b_av_d;  k_idx_q <= k_idx_d;
 end
 
 // ---------------------------------------------------------------- outputs

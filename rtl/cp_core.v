@@ -44,7 +44,11 @@ module cp_core #(
     // clock in Hz and the build id (rtl/builds.json sets them for every build).
     parameter integer CBUF_AW = 0,
     parameter integer CLK_HZ = 48000000,
-    parameter [31:0] BUILD_ID = 32'h0
+    parameter [31:0] BUILD_ID = 32'h0,
+    // 1: CONIC segments (opcode 0x5) walked by the bit-serial conic walker of CIW bits
+    // (docs/CONIC.md section 8); 0: refused as BAD_OPCODE, and no walker.
+    parameter integer CONIC = 0,
+    parameter integer CIW = 40
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -88,11 +92,11 @@ module cp_core #(
 // ---------------------------------------------------------------- constants
 localparam integer AW = (W > 2) ? $clog2(W) : 1;    // pattern bank address width
 // Segment queue word: the header {end, k, dir[N], U} or a v_i in [23:0].
-localparam integer SWW = 29 + N;
+localparam integer SWW = (CONIC == 0) ? 29 + N : ((30 + N > 32) ? 30 + N : 32);
 // Segment queue address width: 2^SAW segments of N + 1 words each, at least.
 localparam integer SQW = SAW + $clog2(N + 1);
 // A built segment, waiting in the run queue: lane, end, moving[N], dir[N].
-localparam integer RDW = 2 + 2 * N;
+localparam integer RDW = 2 + 2 * N + ((CONIC == 0) ? 0 : 7);
 // Chunk queue word: last chunk of its segment, add2, count, add, interval.
 localparam integer CDW = 81;
 
@@ -151,13 +155,16 @@ wire [AW-1:0] bank_waddr, len_m1;
 wire          build_fault, build_busy;
 wire [SQW:0]  segq;
 // Runner.
-wire          running, cur_valid, fire, seg_done, stretch, seg_active, run_fault;
+wire          running, cur_valid, fire, seg_done, stretch, seg_active, run_fault, run_conic;
+wire          walker_free, cw_wr, cw_start;
+wire [2:0]    cw_sel;
+wire [31:0]   cw_data;
 wire [N-1:0]  pulse_step, run_dir, pulse_ready, pulse_busy;
 wire [PW-1:0] pulse_pos [0:N-1];
 wire unused = &{1'b0, seg_used, seg_level, ch_used, run_used, run_full};
 
 // ---------------------------------------------------------------- parts
-cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW)) u_cmd (
+cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW), .CONIC(CONIC)) u_cmd (
     .clk(clk), .rst(rst),
     .cmd_valid_i(cmd_valid_i), .cmd_ready_o(cmd_ready_o), .cmd_data_i(cmd_data_i),
     .rsp_valid_o(rsp_valid_o), .rsp_ready_i(rsp_ready_i), .rsp_data_o(rsp_data_o),
@@ -183,7 +190,7 @@ cp_fifo #(.DW(CDW), .AW(CAW)) u_chunk_fifo (
     .full_o(ch_full), .used_o(ch_used), .level_o(ch_level),
     .out_valid_o(ch_head_valid), .out_ready_i(ch_pop), .out_data_o(ch_head));
 
-cp_build #(.N(N), .W(W), .UMAX(UMAX), .SAW(SAW)) u_build (
+cp_build #(.N(N), .W(W), .UMAX(UMAX), .SAW(SAW), .CONIC(CONIC)) u_build (
     .clk(clk), .rst(rst), .flush_i(flush), .fault_i(fault),
     .seg_valid_i(seg_head_valid), .seg_head_i(seg_head), .seg_pop_o(seg_pop),
     .seg_commit_i(seg_commit),
@@ -191,6 +198,8 @@ cp_build #(.N(N), .W(W), .UMAX(UMAX), .SAW(SAW)) u_build (
     .run_wr_o(run_wr), .run_wdata_o(run_wdata),
     .bank_we_o(bank_we), .bank_axis_o(bank_axis), .bank_waddr_o(bank_waddr),
     .bank_wbit_o(bank_wbit), .build_lane_o(build_lane), .len_we_o(len_we), .len_m1_o(len_m1),
+    .walker_free_i(walker_free), .cw_wr_o(cw_wr), .cw_sel_o(cw_sel), .cw_data_o(cw_data),
+    .cw_start_o(cw_start),
     .fault_o(build_fault), .busy_o(build_busy), .segq_o(segq));
 
 cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
@@ -199,7 +208,7 @@ cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
     .full_o(run_full), .used_o(run_used), .level_o(run_level),
     .out_valid_o(run_head_valid), .out_ready_i(run_pop), .out_data_o(run_head));
 
-cp_run #(.N(N), .W(W)) u_run (
+cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW)) u_run (
     .clk(clk), .rst(rst), .flush_i(flush), .estop_i(estop_i),
     .start_i(start_req), .abort_i(abort_req), .fault_i(fault),
     .ch_valid_i(ch_head_valid), .ch_head_i(ch_head), .ch_pop_o(ch_pop),
@@ -208,20 +217,24 @@ cp_run #(.N(N), .W(W)) u_run (
     .segq_empty_i(segq == {(SQW+1){1'b0}}), .build_busy_i(build_busy),
     .bank_we_i(bank_we), .bank_axis_i(bank_axis), .bank_waddr_i(bank_waddr),
     .bank_wbit_i(bank_wbit), .bank_lane_i(build_lane), .len_we_i(len_we), .len_m1_i(len_m1),
+    .cw_wr_i(cw_wr), .cw_sel_i(cw_sel), .cw_data_i(cw_data), .cw_start_i(cw_start),
+    .walker_free_o(walker_free),
     .pulse_ready_i(pulse_ready), .step_o(pulse_step), .dir_o(run_dir),
     .running_o(running), .cur_valid_o(cur_valid), .fire_o(fire), .seg_done_o(seg_done),
-    .stretch_o(stretch), .seg_active_o(seg_active), .fault_o(run_fault));
+    .stretch_o(stretch), .seg_active_o(seg_active), .fault_o(run_fault),
+    .fault_conic_o(run_conic));
 
 cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(PW),
             .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
             .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
             .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET),
-            .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID)) u_status (
+            .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC),
+            .CIW(CIW)) u_status (
     .clk(clk), .rst(rst), .estop_i(estop_i),
     .abort_i(abort_req), .clear_i(clear_req), .drivers_on_i(drivers_on_req),
     .drivers_off_i(drivers_off_req), .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i),
     .cmd_fault_i(cmd_fault), .cmd_code_i(cmd_code), .build_fault_i(build_fault),
-    .run_fault_i(run_fault),
+    .run_fault_i(run_fault), .run_conic_i(run_conic),
     .stretch_i(stretch), .fire_i(fire), .seg_done_i(seg_done), .seg_active_i(seg_active),
     .running_i(running), .cur_valid_i(cur_valid), .segq_i(segq), .build_busy_i(build_busy),
     .run_level_i(run_level), .ch_level_i(ch_level), .position_i(position_o),

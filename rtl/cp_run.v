@@ -12,6 +12,13 @@
 // loaded from the run queue (its moving axes take their directions); with none
 // built and none coming, the run underruns.
 //
+// With CONIC = 1 it holds the conic walker (rtl/cp_conic_serial.v), which cp_build
+// loads: in a conic segment the plane axes u, v step by the walker's moves (each
+// move's direction on their DIR, and in the move's own directions), the others by
+// their patterns; a move fires only when the walker presents it too. The walk must
+// arrive at its end on the segment's last move and on no other: a presented move
+// that says otherwise does not fire and is a fault (CONIC_END).
+//
 // Part of cp_core (docs/CORE.md "Structure"); model twin model/cp_run.*, bench
 // tb/core/test_core_parts.cpp.
 `resetall
@@ -20,7 +27,10 @@
 
 module cp_run #(
     parameter integer N = 4,
-    parameter integer W = 1024
+    parameter integer W = 1024,
+    parameter integer CONIC = 0,
+    // The conic walker's internal width (docs/CONIC.md "The walk, bit-serial").
+    parameter integer CIW = 40
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -34,9 +44,9 @@ module cp_run #(
     input  wire          ch_valid_i,
     input  wire [80:0]   ch_head_i,
     output reg           ch_pop_o,
-    // Run queue head: {lane, end, moving[N], dir[N]}.
+    // Run queue head: {[conic, u, v,] lane, end, moving[N], dir[N]}.
     input  wire          run_valid_i,
-    input  wire [1+2*N:0] run_head_i,
+    input  wire [RDW-1:0] run_head_i,
     input  wire [1:0]    run_level_i,
     output reg           run_pop_o,
     // Whether more is coming: committed segments not yet built, one being built.
@@ -52,6 +62,14 @@ module cp_run #(
     input  wire          len_we_i,
     input  wire [AW-1:0] len_m1_i,
 
+    // The conic walker's word port (cp_build), and whether it is free for the next
+    // conic: not walking, and its last move taken.
+    input  wire          cw_wr_i,
+    input  wire [2:0]    cw_sel_i,
+    input  wire [31:0]   cw_data_i,
+    input  wire          cw_start_i,
+    output wire          walker_free_o,
+
     // Pulse timers: ready for a step; the steps of this move event and the
     // direction each axis steps in.
     input  wire [N-1:0]  pulse_ready_i,
@@ -64,10 +82,12 @@ module cp_run #(
     output wire          seg_done_o,       // the loaded segment's last move fires now
     output wire          stretch_o,        // a move is counted late now
     output wire          seg_active_o,     // a segment is under way and not ending now
-    output reg           fault_o           // underrun: the run ran out of segments
+    output reg           fault_o,          // underrun, or a conic's walk not ending on its last move
+    output wire          fault_conic_o     // the fault is the conic's (CONIC_END)
 );
 
 localparam integer AW = (W > 2) ? $clog2(W) : 1;
+localparam integer RDW = 2 + 2 * N + ((CONIC == 0) ? 0 : 7);
 
 reg          running_q, running_d;       // reset
 reg          cur_valid_q, cur_valid_d;   // reset: a segment is loaded for running
@@ -84,6 +104,8 @@ reg [15:0]   tadd2_q, tadd2_d;
 reg [31:0]   elapsed_q, elapsed_d;
 reg          tlast_q, tlast_d;           // the timer's chunk is its segment's last
 reg          due_q, due_d;               // reset: ch_loaded_q && elapsed_q >= delay_q
+reg          cur_conic_q, cur_conic_d;   // the loaded segment is a conic, its plane axes:
+reg [2:0]    cur_au_q, cur_au_d, cur_av_q, cur_av_d;
 
 genvar ga;
 
@@ -109,6 +131,42 @@ generate
     end
 endgenerate
 
+// ---------------------------------------------------------------- the conic walker
+wire       wk_valid, wk_end, wk_busy;
+wire [1:0] wk_dx, wk_dy;
+wire       wk_ready;                     // a conic move fires now
+generate
+    if (CONIC != 0) begin : g_walker
+        cp_conic_serial #(.QW(16), .IW(CIW), .XW(24)) u_walker (
+            .clk(clk), .rst(rst), .clear_i(flush_i),
+            .wr_i(cw_wr_i), .wr_sel_i(cw_sel_i), .wr_data_i(cw_data_i), .start_i(cw_start_i),
+            .busy_o(wk_busy), .move_valid_o(wk_valid), .move_ready_i(wk_ready),
+            .move_dx_o(wk_dx), .move_dy_o(wk_dy), .move_end_o(wk_end));
+    end else begin : g_no_walker
+        assign wk_valid = 1'b0;
+        assign wk_end   = 1'b0;
+        assign wk_busy  = 1'b0;
+        assign wk_dx    = 2'b00;
+        assign wk_dy    = 2'b00;
+        localparam [31:0] CIW_WORD = CIW;
+        wire unused_walker = &{1'b0, cw_wr_i, cw_sel_i, cw_data_i, cw_start_i, wk_ready, CIW_WORD};
+    end
+endgenerate
+assign walker_free_o = !wk_busy && !wk_valid;
+
+// The plane axes' steps and directions in the presented move (none outside a conic).
+wire          conic_on = CONIC != 0 && cur_conic_q;
+wire [N-1:0]  u_bit = {{(N-1){1'b0}}, 1'b1} << cur_au_q;
+wire [N-1:0]  v_bit = {{(N-1){1'b0}}, 1'b1} << cur_av_q;
+wire [N-1:0]  plane_step = (conic_on && wk_valid) ? ((wk_dx[0] ? u_bit : {N{1'b0}}) | (wk_dy[0] ? v_bit : {N{1'b0}}))
+                                                  : {N{1'b0}};
+// Positive: 01; negative: 11. A plane axis that steps shows the move's direction.
+wire [N-1:0]  plane_dir = (wk_dx[1] ? {N{1'b0}} : u_bit) | (wk_dy[1] ? {N{1'b0}} : v_bit);
+wire [N-1:0]  move_steps = lane_move | plane_step;
+wire          seg_last = left_q == 16'd1 && tlast_q;
+// A conic move's end mark must agree with the segment's last move.
+wire          conic_ok = !conic_on || (wk_valid && wk_end == seg_last);
+
 // ---------------------------------------------------------------- the decisions
 // A move fires when it is due, the replay registers hold it and every axis that
 // steps in it is ready; E-stop and abort stop it in the same cycle. A move is
@@ -117,14 +175,21 @@ endgenerate
 // due is ch_loaded_q && elapsed_q >= delay_q, registered: its next value is compared
 // beside the fire decision (below), not after it.
 wire due = due_q;
-assign fire_o = running_q && cur_valid_q && !estop_i && !abort_i && due && rp_valid_q &&
-                &(pulse_ready_i | ~lane_move);
+assign fire_o = running_q && cur_valid_q && !estop_i && !abort_i && due && rp_valid_q && conic_ok &&
+                &(pulse_ready_i | ~move_steps);
+assign wk_ready = fire_o && conic_on;
+assign fault_conic_o = running_q && cur_valid_q && !estop_i && !abort_i && due && rp_valid_q &&
+                       conic_on && wk_valid && wk_end != seg_last;
 assign stretch_o = running_q && due && !late_q && !estop_i && !abort_i &&
                    (!fire_o || elapsed_q != delay_q);
-assign seg_done_o = fire_o && left_q == 16'd1 && tlast_q;
+assign seg_done_o = fire_o && seg_last;
 
 // ---------------------------------------------------------------- next state
 integer i;
+// A run queue word with the conic fields (and a spare bit; see cp_build).
+localparam integer RFW = 9 + 2 * N;
+reg [RFW:0] run_wide;
+wire unused_run = &{1'b0, run_wide[RFW]};
 
 // The timer's next values, whatever fires: the count one on (saturating), the next
 // interval of the running chunk, the head chunk's first.
@@ -143,8 +208,10 @@ always @* begin
     ch_loaded_d = ch_loaded_q;  late_d = late_q;  rp_valid_d = rp_valid_q;  dir_d = dir_q;
     cur_end_d = cur_end_q;  delay_d = delay_q;  left_d = left_q;  tinc_d = tinc_q;
     tadd2_d = tadd2_q;  tlast_d = tlast_q;
+    cur_conic_d = cur_conic_q;  cur_au_d = cur_au_q;  cur_av_d = cur_av_q;
     elapsed_d = elapsed_inc;
-    ch_pop_o = 1'b0;  run_pop_o = 1'b0;  step_o = {N{1'b0}};  fault_o = 1'b0;
+    ch_pop_o = 1'b0;  run_pop_o = 1'b0;  step_o = {N{1'b0}};  fault_o = fault_conic_o;
+    run_wide = {(RFW+1){1'b0}};
     bank_re = 1'b0;  rp_lane = cur_lane_q;
     for (i = 0; i < N; i = i + 1) rp_next[i] = rp_ptr_q[i];
 
@@ -163,8 +230,11 @@ always @* begin
         tlast_d     = ch_head_i[80];
     end
     if (fire_o) begin
-        step_o    = lane_move;
+        step_o    = move_steps;
         elapsed_d = 32'd1;
+        // A plane axis that steps keeps the direction it stepped in.
+        for (i = 0; i < N; i = i + 1)
+            if (plane_step[i]) dir_d[i] = plane_dir[i];
         if (left_q != 16'd1) begin
             left_d  = left_q - 1'b1;
             delay_d = delay_sum;
@@ -195,6 +265,10 @@ always @* begin
         cur_valid_d = 1'b1;
         cur_lane_d  = run_head_i[1+2*N];
         cur_end_d   = run_head_i[2*N];
+        run_wide    = {{(RFW+1-RDW){1'b0}}, run_head_i};
+        cur_conic_d = CONIC != 0 && run_wide[RFW-1];
+        cur_au_d    = run_wide[RFW-2 -: 3];
+        cur_av_d    = run_wide[RFW-5 -: 3];
         for (i = 0; i < N; i = i + 1)
             if (run_head_i[N + i]) dir_d[i] = run_head_i[i];
         // The replay registers fetch each pattern's first move.
@@ -241,6 +315,7 @@ always @(posedge clk) begin
         rp_valid_q  <= 1'b0;
         dir_q       <= {N{1'b0}};
         due_q       <= 1'b0;
+        cur_conic_q <= 1'b0;
     end else begin
         running_q   <= running_d;
         cur_valid_q <= cur_valid_d;
@@ -250,7 +325,9 @@ always @(posedge clk) begin
         rp_valid_q  <= rp_valid_d;
         dir_q       <= dir_d;
         due_q       <= due_d;
+        cur_conic_q <= cur_conic_d;
     end
+    cur_au_q <= cur_au_d;  cur_av_q <= cur_av_d;
     cur_end_q <= cur_end_d;  delay_q <= delay_d;  left_q <= left_d;  tinc_q <= tinc_d;
     tadd2_q <= tadd2_d;  tlast_q <= tlast_d;  elapsed_q <= elapsed_d;
     for (a = 0; a < N; a = a + 1) if (bank_re) rp_ptr_q[a] <= rp_next[a];
@@ -259,7 +336,9 @@ always @(posedge clk) begin
 end
 
 // ---------------------------------------------------------------- outputs
-assign dir_o        = dir_q;
+// A plane axis shows the presented conic move's direction before the move fires,
+// so that its pulse timer keeps DIR setup (its readiness waits for the pin).
+assign dir_o        = (dir_q & ~plane_step) | (plane_dir & plane_step);
 assign running_o    = running_q;
 assign cur_valid_o  = cur_valid_q;
 assign seg_active_o = running_q && cur_valid_q && !seg_done_o;

@@ -3,8 +3,8 @@
 // the READ registers.
 //
 // Fault requests come from the parser (a refusal with its code), the builder
-// (a pattern too long), the runner (underrun), CONTROL abort and the E-stop
-// input; one priority encoder picks the code: E-stop, abort, underrun, pattern,
+// (a pattern too long), the runner (underrun, or a conic walk not ending on its last move), CONTROL abort and the E-stop
+// input; one priority encoder picks the code: E-stop, abort, the runner's (underrun or CONIC_END), pattern,
 // then the parser's. CLEAR drops what was latched before this cycle; then the
 // first fault latches. The flush (stop and empty every queue) is raised by the
 // E-stop, by abort, and by a latched fault once no segment is under way.
@@ -35,7 +35,10 @@ module cp_status #(
     parameter [0:0] DIR_POL_RESET = 1'b1,
     parameter integer CBUF_AW = 0,
     parameter integer CLK_HZ = 48000000,
-    parameter [31:0] BUILD_ID = 32'h0
+    parameter [31:0] BUILD_ID = 32'h0,
+    // Reported only (READ 0x26): conic segments taken, and the walker's width.
+    parameter integer CONIC = 0,
+    parameter integer CIW = 40
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -53,6 +56,7 @@ module cp_status #(
     input  wire [7:0]    cmd_code_i,
     input  wire          build_fault_i,
     input  wire          run_fault_i,
+    input  wire          run_conic_i,      // the runner's fault is CONIC_END, not UNDERRUN
 
     // Events from the runner.
     input  wire          stretch_i,
@@ -101,6 +105,7 @@ localparam [7:0] E_SEG_PATTERN = 8'd8;
 localparam [7:0] E_UNDERRUN    = 8'd9;
 localparam [7:0] E_ESTOP       = 8'd10;
 localparam [7:0] E_ABORT       = 8'd11;
+localparam [7:0] E_CONIC_END   = 8'd17;
 
 reg          fault_q, fault_d;
 reg [7:0]    err_q, err_d;
@@ -124,7 +129,7 @@ always @* begin
     fault_set = 1'b1;
     if (estop_i)            fault_code = E_ESTOP;
     else if (abort_i)       fault_code = E_ABORT;
-    else if (run_fault_i)   fault_code = E_UNDERRUN;
+    else if (run_fault_i)   fault_code = run_conic_i ? E_CONIC_END : E_UNDERRUN;
     else if (build_fault_i) fault_code = E_SEG_PATTERN;
     else if (cmd_fault_i)   fault_code = cmd_code_i;
     else begin
@@ -225,6 +230,7 @@ localparam [31:0] UMAX_WORD = UMAX;
 localparam [7:0] PROTOCOL_VERSION = 8'd2;
 localparam [31:0] CAPS2 = {8'd0, PROTOCOL_VERSION, CBUF_AW[7:0], PW[7:0]};
 localparam [31:0] CLK_WORD = CLK_HZ;
+localparam [31:0] CONIC_WORD = (CONIC == 0) ? 32'd0 : CIW;
 
 wire [7:0] read_addr [0:1];
 assign read_addr[0] = rd_addr0_i;
@@ -246,6 +252,7 @@ always @* begin
         8'h23: read_value[rp] = CAPS2;
         8'h24: read_value[rp] = CLK_WORD;
         8'h25: read_value[rp] = BUILD_ID;
+        8'h26: read_value[rp] = CONIC_WORD;
         default: begin
             for (ri = 0; ri < N; ri = ri + 1)
                 if (read_addr[rp] == 8'h10 + ri[7:0]) read_value[rp] = position_i[PW*ri +: 32];

@@ -67,6 +67,7 @@ ErrorName error_name(uint32_t code) {
       {"CONFIG_VALUE", "a step high or step low time of 0"},
       {"SEG_ADD2", "a chunk whose increment add + j*add2 changes sign"},
       {"CONIC_AXES", "a conic segment's plane axes equal or not axes, or a v of theirs not 0"},
+      {"CONIC_END", "a conic's walk arrived at its end before its last move, or not on it"},
   };
   if (code < std::size(names)) return names[code];
   return {"UNKNOWN", "an error code this program does not know"};

@@ -11,6 +11,8 @@
 #include "Vcp_part_build.h"
 #include "Vcp_part_cmd.h"
 #include "Vcp_part_cmd_conic.h"
+#include "Vcp_part_build_conic.h"
+#include "Vcp_part_run_conic.h"
 #include "Vcp_part_run.h"
 #include "Vcp_part_status.h"
 #include "core/core_bench.h"
@@ -89,14 +91,16 @@ struct CmdPortT {
 using CmdPort = CmdPortT<Vcp_part_cmd>;
 using CmdConicPort = CmdPortT<Vcp_part_cmd_conic, true>;
 
-struct BuildPort {
-  using Rtl = AfterOneResetEdge<Vcp_part_build>;
+template <class V, bool Conic = false>
+struct BuildPortT {
+  using Rtl = AfterOneResetEdge<V>;
   using Model = model::CpBuild;
   using In = model::CpBuildIn;
   using Out = model::CpBuildOut;
-  static Model::Params model_params() { return {3, 32, 200, 1}; }
+  static Model::Params model_params() { return {3, 32, 200, 1, Conic}; }
   static void drive(Rtl& r, const In& i) {
     r.rst = i.rst;
+    r.walker_free_i = i.walker_free;
     r.flush_i = i.flush;
     r.fault_i = i.fault;
     r.seg_valid_i = i.seg_valid;
@@ -120,6 +124,10 @@ struct BuildPort {
     o.fault = r.fault_o;
     o.busy = r.busy_o;
     o.segq = r.segq_o;
+    o.cw_wr = r.cw_wr_o;
+    o.cw_sel = r.cw_sel_o;
+    o.cw_data = r.cw_data_o;
+    o.cw_start = r.cw_start_o;
     return o;
   }
   static const std::vector<sim::Field<Out>>& fields() {
@@ -130,20 +138,30 @@ struct BuildPort {
         CPSTEP_FIELD("bank_wbit_o", o.bank_wbit),   CPSTEP_FIELD("build_lane_o", o.build_lane),
         CPSTEP_FIELD("len_we_o", o.len_we),         CPSTEP_FIELD("len_m1_o", o.len_m1),
         CPSTEP_FIELD("fault_o", o.fault),           CPSTEP_FIELD("busy_o", o.busy),
-        CPSTEP_FIELD("segq_o", o.segq),
+        CPSTEP_FIELD("segq_o", o.segq),             CPSTEP_FIELD("cw_wr_o", o.cw_wr),
+        CPSTEP_FIELD("cw_sel_o", o.cw_sel),         CPSTEP_FIELD("cw_data_o", o.cw_data),
+        CPSTEP_FIELD("cw_start_o", o.cw_start),
     };
     return f;
   }
 };
+using BuildPort = BuildPortT<Vcp_part_build>;
+using BuildConicPort = BuildPortT<Vcp_part_build_conic, true>;
 
-struct RunPort {
-  using Rtl = AfterOneResetEdge<Vcp_part_run>;
+// The conic runner's walker: IW = 36.
+template <class V, bool Conic = false>
+struct RunPortT {
+  using Rtl = AfterOneResetEdge<V>;
   using Model = model::CpRun;
   using In = model::CpRunIn;
   using Out = model::CpRunOut;
-  static Model::Params model_params() { return {3, 32}; }
+  static Model::Params model_params() { return {3, 32, Conic, 36}; }
   static void drive(Rtl& r, const In& i) {
     r.rst = i.rst;
+    r.cw_wr_i = i.cw_wr;
+    r.cw_sel_i = i.cw_sel & 7;
+    r.cw_data_i = i.cw_data;
+    r.cw_start_i = i.cw_start;
     r.flush_i = i.flush;
     r.estop_i = i.estop;
     r.start_i = i.start;
@@ -178,10 +196,13 @@ struct RunPort {
     o.stretch = r.stretch_o;
     o.seg_active = r.seg_active_o;
     o.fault = r.fault_o;
+    o.fault_conic = r.fault_conic_o;
+    o.walker_free = r.walker_free_o;
     return o;
   }
   static const std::vector<sim::Field<Out>>& fields() {
     static const std::vector<sim::Field<Out>> f = {
+        CPSTEP_FIELD("fault_conic_o", o.fault_conic), CPSTEP_FIELD("walker_free_o", o.walker_free),
         CPSTEP_FIELD("ch_pop_o", o.ch_pop),         CPSTEP_FIELD("run_pop_o", o.run_pop),
         CPSTEP_FIELD("step_o", o.step),             CPSTEP_FIELD("dir_o", o.dir),
         CPSTEP_FIELD("running_o", o.running),       CPSTEP_FIELD("cur_valid_o", o.cur_valid),
@@ -192,6 +213,8 @@ struct RunPort {
     return f;
   }
 };
+using RunPort = RunPortT<Vcp_part_run>;
+using RunConicPort = RunPortT<Vcp_part_run_conic, true>;
 
 struct StatusPort {
   using Rtl = AfterOneResetEdge<Vcp_part_status>;
@@ -218,6 +241,8 @@ struct StatusPort {
     p.cbuf_aw = 5;
     p.clock_hz = 12345678;
     p.build_id = 3735928559u;
+    p.conic = true;
+    p.ciw = 36;
     return p;
   }
   static void drive(Rtl& r, const In& i) {
@@ -233,6 +258,7 @@ struct StatusPort {
     r.cmd_code_i = i.cmd_code;
     r.build_fault_i = i.build_fault;
     r.run_fault_i = i.run_fault;
+    r.run_conic_i = i.run_conic;
     r.stretch_i = i.stretch;
     r.fire_i = i.fire;
     r.seg_done_i = i.seg_done;

@@ -182,28 +182,39 @@ TEST(CorePartCmd, ConicSegmentsMatchTheModel) { cmd_traffic<CmdConicPort>(12, 30
 // then v_0..v_2, 1 <= U <= UMAX = 200 and v <= U (cp_build's contract: its engine
 // runs in one-period mode, which checks nothing but the pattern's length); U up to
 // 200 against W = 32, so some patterns are too long.
-std::vector<uint64_t> build_words(Rng& rng) {
+// With conic: CONIC segments too, as the parser writes them (docs/CORE.md): the
+// header with the conic flag (bit 29 + N = 32), k = 0, v = 0 on the plane axes, then
+// K0 .. K6 with K1 = {cw, u, v, 9 zeros, C}.
+std::vector<uint64_t> build_words(Rng& rng, bool conic = false) {
   const uint32_t u = chance(rng, 30) ? pick(rng, 1, 8) : pick(rng, 1, 200);
+  const bool is_conic = conic && chance(rng, 35);
+  const uint32_t au = pick(rng, 0, 2), av = (au + pick(rng, 1, 2)) % 3;
   std::vector<uint64_t> w;
-  w.push_back(uint64_t(chance(rng, 10)) << 31 | uint64_t(pick(rng, 0, 3)) << 27 |
-              uint64_t(pick(rng, 0, 7)) << 24 | u);
-  for (int a = 0; a < 3; ++a) {
+  w.push_back(uint64_t(is_conic) << 32 | uint64_t(chance(rng, 10)) << 31 |
+              uint64_t(is_conic ? 0 : pick(rng, 0, 3)) << 27 | uint64_t(pick(rng, 0, 7)) << 24 | u);
+  for (uint32_t a = 0; a < 3; ++a) {
     const uint32_t r = pick(rng, 0, 9);
-    w.push_back(r < 2 ? 0 : r < 4 ? u : pick(rng, 0, u));
+    w.push_back(is_conic && (a == au || a == av) ? 0 : r < 2 ? 0 : r < 4 ? u : pick(rng, 0, u));
   }
+  if (is_conic)
+    for (int k = 0; k < 7; ++k)
+      w.push_back(k == 1 ? uint64_t(pick(rng, 0, 1)) << 31 | uint64_t(au) << 28 | uint64_t(av) << 25 |
+                               pick(rng, 0, 0xFFFF)
+                         : uint64_t(uint32_t(rng())));
   return w;
 }
 
-TEST(CorePartBuild, RandomSegmentsMatchTheModel) {
-  Rng rng(21);
-  Lockstep<BuildPort> ls;
+template <class P>
+void build_traffic(uint64_t seed, bool conic) {
+  Rng rng(seed);
+  Lockstep<P> ls;
   ls.reset();
   std::deque<uint64_t> words;
   model::CpBuildIn in;
-  uint64_t built = 0, refused = 0, engine_moves = 0;
+  uint64_t built = 0, refused = 0, engine_moves = 0, conic_built = 0;
   for (int c = 0; c < 300000; ++c) {
     if (words.empty())
-      for (uint64_t w : build_words(rng)) words.push_back(w);
+      for (uint64_t w : build_words(rng, conic)) words.push_back(w);
     in.rst = pick(rng, 0, 9999) == 0;
     in.flush = pick(rng, 0, 999) < 3;
     if (chance(rng, 1)) in.fault = !in.fault;
@@ -212,8 +223,10 @@ TEST(CorePartBuild, RandomSegmentsMatchTheModel) {
     in.seg_commit = chance(rng, 20);
     in.run_level = chance(rng, 60) ? 0 : pick(rng, 0, 3);
     in.cur_valid = chance(rng, 50);
+    in.walker_free = chance(rng, 70);
     const model::CpBuildOut o = ls.step(in);
     if (o.seg_pop) words.pop_front();
+    conic_built += o.cw_start && o.run_wr;
     // A flush or reset empties the segment queue: the next word is a header again.
     // So does a refused pattern in the core (its fault latches and flushes).
     if (in.flush || in.rst || o.fault) words.clear();
@@ -224,15 +237,28 @@ TEST(CorePartBuild, RandomSegmentsMatchTheModel) {
   EXPECT_GT(built, 500u);
   EXPECT_GT(refused, 10u);
   EXPECT_GT(engine_moves, 10000u);
+  if (conic) {
+    EXPECT_GT(conic_built, 100u) << "conics into the walker and the run queue";
+  } else {
+    EXPECT_EQ(conic_built, 0u);
+  }
 }
 
+TEST(CorePartBuild, RandomSegmentsMatchTheModel) { build_traffic<BuildPort>(21, false); }
+// With CONIC segments: their words into the walker once it is free (docs/CORE.md).
+TEST(CorePartBuild, ConicSegmentsMatchTheModel) { build_traffic<BuildConicPort>(22, true); }
+
 // ---------------------------------------------------------------- cp_run
-TEST(CorePartRun, RandomChunksAndSegmentsMatchTheModel) {
-  Rng rng(31);
-  Lockstep<RunPort> ls;
+// With conic: conic run entries (bit 2N + 8, plane axes, some not axes), and the
+// walker loaded with words of any bits (its walks are junk, so conic moves often meet
+// a wrong end mark: CONIC_END). Whole conics that end right: the core's benches.
+template <class P>
+void run_traffic(uint64_t seed, bool conic) {
+  Rng rng(seed);
+  Lockstep<P> ls;
   ls.reset();
   model::CpRunIn in;
-  uint64_t fires = 0, seg_done = 0, stretches = 0, underruns = 0;
+  uint64_t fires = 0, seg_done = 0, stretches = 0, underruns = 0, conic_faults = 0;
   for (int c = 0; c < 400000; ++c) {
     in.rst = pick(rng, 0, 9999) == 0;
     in.flush = pick(rng, 0, 999) < 5;
@@ -257,17 +283,32 @@ TEST(CorePartRun, RandomChunksAndSegmentsMatchTheModel) {
     in.len_we = chance(rng, 15);
     in.len_m1 = pick(rng, 0, 31);
     in.pulse_ready = chance(rng, 70) ? 7 : pick(rng, 0, 7);
+    if (conic) {
+      const uint32_t au = pick(rng, 0, 3), av = pick(rng, 0, 3);
+      if (chance(rng, 50)) in.run_head |= uint64_t(1) << 14 | uint64_t(au) << 11 | uint64_t(av) << 8;
+      in.cw_wr = chance(rng, 20);
+      in.cw_sel = pick(rng, 0, 7);
+      in.cw_data = uint32_t(rng());
+      if (in.cw_sel >= 5) in.cw_data = uint32_t(int32_t(pick(rng, 0, 8)) - 4);
+      in.cw_start = pick(rng, 0, 999) < 15;
+    }
     const model::CpRunOut o = ls.step(in);
+    conic_faults += o.fault_conic;
     fires += o.fire;
     seg_done += o.seg_done;
     stretches += o.stretch;
     underruns += o.fault;
   }
   EXPECT_GT(fires, 5000u);
-  EXPECT_GT(seg_done, 500u);
+  EXPECT_GT(seg_done, conic ? 200u : 500u);
   EXPECT_GT(stretches, 1000u);
   EXPECT_GT(underruns, 10u);
+  EXPECT_EQ(conic_faults > 0, conic) << conic_faults << " CONIC_END faults";
 }
+
+TEST(CorePartRun, RandomChunksAndSegmentsMatchTheModel) { run_traffic<RunPort>(31, false); }
+// With the conic walker (IW = 36) and conic segments (docs/CORE.md "CONIC").
+TEST(CorePartRun, ConicWalkerMatchesTheModel) { run_traffic<RunConicPort>(32, true); }
 
 // ---------------------------------------------------------------- cp_status
 TEST(CorePartStatus, RandomRequestsMatchTheModel) {
@@ -291,6 +332,7 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
     in.cmd_code = pick(rng, 0, 255);
     in.build_fault = pick(rng, 0, 999) < 5;
     in.run_fault = pick(rng, 0, 999) < 5;
+    in.run_conic = chance(rng, 30);
     in.stretch = chance(rng, 5);
     in.fire = chance(rng, 30);
     in.seg_done = chance(rng, 5);
