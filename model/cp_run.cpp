@@ -83,6 +83,13 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
         rp.next[a] = q.rp_ptr[a] == q.lm1[q.cur_lane][a] ? 0 : (q.rp_ptr[a] + 1) & bits::mask(aw_);
     }
   }
+  // A conic move whose end mark disagrees: the run stops before it, the segment is
+  // dropped (the latched fault then flushes the rest).
+  if (o.fault_conic) {
+    d.running = false;
+    d.cur_valid = false;
+    d.rp_valid = false;
+  }
   if (o.seg_done) {
     d.cur_valid = false;
     d.rp_valid = false;

@@ -21,8 +21,7 @@
 // Valid/ready contract on the moves (docs/ENGINE.md): valid never waits for ready;
 // while valid && !ready the move holds.
 //
-// Not yet instantiated by cp_core (issue 13's conic segment, next): linting rtl/ all
-// at once names it another top level (MULTITOP); tb/lint lints it as its own top.
+// cp_run instantiates it in a core built with CONIC = 1 (docs/CORE.md "CONIC").
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none

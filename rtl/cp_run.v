@@ -249,6 +249,13 @@ always @* begin
                 rp_next[i] = (rp_ptr_q[i] == lm1_q[{cur_lane_q, i[2:0]}]) ? {AW{1'b0}} : rp_ptr_q[i] + 1'b1;
         end
     end
+    // A conic move whose end mark disagrees: the run stops before it, the segment is
+    // dropped (the latched fault then flushes the rest).
+    if (fault_conic_o) begin
+        running_d   = 1'b0;
+        cur_valid_d = 1'b0;
+        rp_valid_d  = 1'b0;
+    end
     if (seg_done_o) begin
         cur_valid_d = 1'b0;
         rp_valid_d  = 1'b0;

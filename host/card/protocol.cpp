@@ -21,6 +21,29 @@ void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
   }
 }
 
+void encode_conic(const WireConic& s, std::vector<uint32_t>& out) {
+  bool add2 = false;
+  for (const WireChunk& c : s.chunks) add2 = add2 || c.add2 != 0;
+  out.push_back(0x5u << 28 | uint32_t(s.end) << 27 | uint32_t(s.cw) << 26 | (s.axis_u & 7u) << 23 |
+                uint32_t(add2) << 22 | (s.axis_v & 7u) << 19 | uint32_t(s.chunks.size() & 0xFFFF));
+  uint32_t dirs = 0;
+  for (size_t a = 0; a < s.dir_positive.size(); ++a) dirs |= uint32_t(s.dir_positive[a]) << a;
+  out.push_back(dirs << 24 | (s.t & 0xFFFFFF));
+  for (uint32_t v : s.v) out.push_back(v & 0xFFFFFF);
+  out.push_back(uint32_t(uint16_t(s.b)) << 16 | uint16_t(s.a));
+  out.push_back(uint16_t(s.c));
+  out.push_back(uint32_t(s.g));
+  out.push_back(uint32_t(s.gx));
+  out.push_back(uint32_t(s.gy));
+  out.push_back(uint32_t(s.du) & 0xFFFFFF);
+  out.push_back(uint32_t(s.dv) & 0xFFFFFF);
+  for (const WireChunk& c : s.chunks) {
+    out.push_back(c.interval);
+    out.push_back(uint32_t(uint16_t(c.add)) << 16 | c.count);
+    if (add2) out.push_back(uint16_t(c.add2));
+  }
+}
+
 void encode_config(unsigned axis, ConfigField field, uint32_t value, std::vector<uint32_t>& out) {
   out.push_back(0x2u << 28 | (axis & 0xFu) << 24 | uint32_t(field) << 20 | (value & 0xFFFF));
 }
@@ -39,8 +62,9 @@ void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out) {
 }
 
 size_t command_words(uint32_t first, unsigned axes) {
-  if (first >> 28 != 0x1) return 1;
-  return 2 + axes + ((first >> 22 & 1) ? 3 : 2) * size_t(first & 0xFFFF);
+  const uint32_t op = first >> 28;
+  if (op != 0x1 && op != 0x5) return 1;
+  return 2 + axes + (op == 0x5 ? 7 : 0) + ((first >> 22 & 1) ? 3 : 2) * size_t(first & 0xFFFF);
 }
 
 Status decode_status(uint32_t w) {

@@ -27,6 +27,22 @@ struct WireSegment {
   std::vector<WireChunk> chunks;  // counts sum to U * 2^k
 };
 
+// A CONIC segment (docs/CORE.md "CONIC"): T moves; axes u and v step by the conic
+// walk from the start node (G and its gradient there, in the curve's step units) to
+// the end node (du, dv from the start); every other axis by its pattern v_i over T.
+struct WireConic {
+  uint32_t t = 0;                 // moves (1..UMAX)
+  bool end = false;
+  bool cw = false;                // clockwise: G > 0 on the left of travel
+  unsigned axis_u = 0, axis_v = 1;
+  std::vector<bool> dir_positive; // per axis (those of u and v are not used)
+  std::vector<uint32_t> v;        // per axis, v_i <= T; 0 for u and v
+  int32_t a = 0, b = 0, c = 0;    // 16 bits each
+  int32_t g = 0, gx = 0, gy = 0;  // at the start node
+  int32_t du = 0, dv = 0;         // 24 bits each
+  std::vector<WireChunk> chunks;  // counts sum to T
+};
+
 enum class ConfigField : uint32_t { step_high = 0, step_low = 1, dir_setup = 2, dir_hold = 3, polarity = 4 };
 
 enum class Register : uint32_t {
@@ -42,12 +58,14 @@ enum class Register : uint32_t {
   caps2 = 0x23,         // [7:0] PW, [15:8] CBUF_AW (0: no command buffer), [23:16] protocol version
   clock_hz = 0x24,      // the card clock in Hz
   build_id = 0x25,      // the build id (rtl/builds.json)
+  conic_width = 0x26,   // the conic walker's width CIW; 0: no CONIC segments
 };
 constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
 
 // Appends the words of each command to `out`. A segment's chunks are two words
 // each, or three (with add2, header bit 22) when some chunk has add2 != 0.
 void encode_segment(const WireSegment& s, std::vector<uint32_t>& out);
+void encode_conic(const WireConic& s, std::vector<uint32_t>& out);
 void encode_config(unsigned axis, ConfigField field, uint32_t value, std::vector<uint32_t>& out);
 void encode_control(bool start, bool abort, bool clear, std::vector<uint32_t>& out);
 // CONTROL bit 3 (drivers on) or bit 4 (drivers off): the card's ENABLE pins.
@@ -55,7 +73,8 @@ void encode_drivers(bool on, std::vector<uint32_t>& out);
 void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out);
 
 // How many words the command whose first word is `first` has, on a card of
-// `axes` axes (a SEGMENT: 2 + axes + 2 or 3 words per chunk; others one).
+// `axes` axes (a SEGMENT: 2 + axes + 2 or 3 words per chunk; a CONIC 7 more; others
+// one).
 size_t command_words(uint32_t first, unsigned axes);
 
 // Status word fields.
