@@ -36,7 +36,10 @@ module cp_card #(
     // The card clock in Hz and the build id, only reported (READ 0x24 / 0x25):
     // rtl/builds.json sets both for every build.
     parameter integer CLK_HZ = 48000000,
-    parameter [31:0] BUILD_ID = 32'h0
+    parameter [31:0] BUILD_ID = 32'h0,
+    // CONIC segments and the conic walker's width (docs/CORE.md "CONIC").
+    parameter integer CONIC = 0,
+    parameter integer CIW = 40
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -87,7 +90,7 @@ cp_spi #(.N(N), .CBUF_AW(CBUF_AW)) u_spi (
     .estop_i(estop), .enable_i(enable_o));
 
 cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32),
-          .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID),
+          .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW),
           .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
           .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
           .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET)) u_core (

@@ -35,6 +35,9 @@ module cp_board #(
     // (scripts/synth sets both from rtl/builds.json).
     parameter integer CLK_HZ = 48000000,
     parameter [31:0] BUILD_ID = 32'h0,
+    // CONIC segments and the conic walker's width (docs/CORE.md "CONIC").
+    parameter integer CONIC = 0,
+    parameter integer CIW = 40,
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
     input  wire         osc_i,          // the 12 MHz oscillator's pin
@@ -125,7 +128,8 @@ wire [7:0] err_code;
 wire [N*32-1:0] position;
 cp_card #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
           .CBUF_AW(CBUF_AW), .STEP_POL_RESET(STEP_POL_RESET),
-          .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID)) u_card (
+          .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC),
+          .CIW(CIW)) u_card (
     .clk(clk), .rst(rst),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
     .spi_miso_o(miso), .spi_miso_oe_o(miso_oe),

@@ -740,7 +740,7 @@ TEST_F(SmallCard, PipelinedFramesAndARefusalTheClientCannotRepair) {
   EXPECT_EQ(c.last().moves, j.moves);
   EXPECT_EQ(c.last().positions, (std::vector<int32_t>{j.x, j.y}));
   EXPECT_EQ(c.stats().markers, 0u);
-  const std::vector<uint32_t> bad = {0x50000000u};
+  const std::vector<uint32_t> bad = {0x60000000u};  // no such opcode (0x5 is CONIC)
   c.send(bad);
   try {
     c.settle();

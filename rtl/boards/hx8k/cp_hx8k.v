@@ -28,6 +28,9 @@ module cp_hx8k #(
     // (scripts/synth sets both from rtl/builds.json).
     parameter integer CLK_HZ = 48000000,
     parameter [31:0] BUILD_ID = 32'h0,
+    // CONIC segments and the conic walker's width (docs/CORE.md "CONIC").
+    parameter integer CONIC = 0,
+    parameter integer CIW = 40,
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
     input  wire         CLK,
@@ -48,7 +51,8 @@ cp_board #(.PLL_PAD(1'b0), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(P
            .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
            .SAW(SAW), .TW(TW), .CBUF_AW(CBUF_AW),
            .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ),
-           .BUILD_ID(BUILD_ID), .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
+           .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW),
+           .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
     .osc_i(CLK), .btn_n(1'b1),
     .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
     .estop_loop_i(ESTOP_LOOP),
