@@ -183,7 +183,7 @@ always @* begin
             b_state_d = B_IDLE;
         end
     end
-    B_K: if (seg_valid_i && walker_free_i) begin
+    B_K: if (CONIC != 0 && seg_valid_i && walker_free_i) begin
         // K1 carries the plane axes: {cw, u, v, 9 zeros, C}.
         seg_pop_o = 1'b1;
         cw_wr_o   = 1'b1;
@@ -204,7 +204,7 @@ always @* begin
     default: b_state_d = B_IDLE;
     endcase
     if (cap_done) begin
-        if ({29'd0, b_axis_q} == N - 1 && b_conic_q) begin
+        if ({29'd0, b_axis_q} == N - 1 && CONIC != 0 && b_conic_q) begin
             k_idx_d   = 3'd0;
             b_state_d = B_K;
         end else if ({29'd0, b_axis_q} == N - 1) begin

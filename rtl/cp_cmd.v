@@ -236,7 +236,7 @@ always @* begin
         case (op)
         OP_SEGMENT, OP_CONIC: if (op == OP_SEGMENT || CONIC != 0) begin
             // A CONIC header: [26] clockwise, [25:23] axis u, [21:19] axis v; no k.
-            hdr_conic_d = op == OP_CONIC;
+            hdr_conic_d = CONIC != 0 && op == OP_CONIC;
             hdr_end_d = cmd_data_i[27];
             hdr_k_d   = hdr_conic_d ? 4'd0 : cmd_data_i[26:23];
             nchunks_d = cmd_data_i[15:0];
@@ -296,7 +296,7 @@ always @* begin
         seg_u_d     = cmd_data_i[23:0];
         seg_wr_o    = keep;
         seg_wide    = {{(40-29-N){1'b0}}, hdr_end_q, hdr_k_q, cmd_data_i[24 +: N], cmd_data_i[23:0]};
-        seg_wide[29+N] = hdr_conic_q;
+        seg_wide[29+N] = CONIC != 0 && hdr_conic_q;
         seg_wdata_o = seg_wide[SWW-1:0];
         if (keep && (cmd_data_i[23:0] == 24'd0 || {8'd0, cmd_data_i[23:0]} > UMAX)) begin
             refuse = 1'b1;  refuse_code = E_SEG_U;  discard_d = 1'b1;
@@ -309,7 +309,7 @@ always @* begin
         seg_wr_o    = keep;
         seg_wdata_o = {{(SWW-24){1'b0}}, cmd_data_i[23:0]};
         // A conic's plane axes step by the conic engine: their v must be 0.
-        if (keep && hdr_conic_q && (v_idx_q == hdr_au_q || v_idx_q == hdr_av_q) &&
+        if (keep && CONIC != 0 && hdr_conic_q && (v_idx_q == hdr_au_q || v_idx_q == hdr_av_q) &&
             cmd_data_i[23:0] != 24'd0) begin
             refuse = 1'b1;  refuse_code = E_CONIC_AXES;  discard_d = 1'b1;
         end else if (keep && cmd_data_i[23:0] > seg_u_q) begin
@@ -319,13 +319,13 @@ always @* begin
         // A segment announced with no chunk was refused at its header; it ends here.
         if ({29'd0, v_idx_q} == N - 1) begin
             v_idx_d   = 3'd0;
-            p_state_d = hdr_conic_q ? P_K : (nchunks_q == 16'd0) ? P_CMD : P_C0;
+            p_state_d = (CONIC != 0 && hdr_conic_q) ? P_K : (nchunks_q == 16'd0) ? P_CMD : P_C0;
         end
     end
 
     // A conic's words K0 .. K6, as they come but K1: the header's plane axes and
     // direction go with C to the builder, {cw, u, v, 9'b0, C}.
-    P_K: if (take) begin
+    P_K: if (CONIC != 0 && take) begin
         seg_wr_o = keep;
         seg_wide = {8'd0, cmd_data_i};
         if (v_idx_q == 3'd1) seg_wide[31:16] = {hdr_cw_q, hdr_au_q, hdr_av_q, 9'd0};
