@@ -145,10 +145,16 @@ void CpSpi::tick() {
           d.left = (q.left - 1) & 0xFFFF;
           if (q.left == 1) d.ph = kPhaseCrc;
           if (!in_cmd) {
-            // A command starts: a SEGMENT has H1, N v words and its chunks to come.
+            // A command starts: a SEGMENT has H1, N v words and its chunks to come,
+            // a CONIC also K0..K6 before its chunks.
             switch (rx_word >> 28) {
               case 0x1:
-                d.hdr_left = (1 + p_.n) & 15;
+              case 0x5:
+                if ((rx_word >> 28) == 0x5 && !p_.conic) {
+                  d.bad_cmd = true;
+                  break;
+                }
+                d.hdr_left = ((rx_word >> 28) == 0x5 ? 8 + p_.n : 1 + p_.n) & 31;
                 d.chunks_left = rx_word & 0xFFFF;
                 d.seg_add2 = (rx_word >> 22 & 1) != 0;
                 d.cw = 0;

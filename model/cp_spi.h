@@ -16,6 +16,7 @@ namespace cpstep::model {
 struct CpSpiParams {
   unsigned n = 4;        // axes: the reply carries n positions, a SEGMENT 2 + n + ... words
   unsigned cbuf_aw = 9;  // command buffer address width: it holds 2^cbuf_aw words
+  bool conic = false;    // CONIC commands (opcode 5) framed whole; else refused (BAD_COMMAND)
 };
 
 struct CpSpiIn {

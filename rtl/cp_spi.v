@@ -22,7 +22,11 @@ module cp_spi #(
     // Number of axes: the reply carries N positions; a SEGMENT has 2 + N + ... words.
     parameter integer N = 4,
     // Command buffer address width: it holds 2^CBUF_AW words.
-    parameter integer CBUF_AW = 9
+    parameter integer CBUF_AW = 9,
+    // 1: CONIC commands (opcode 5, docs/CORE.md "CONIC") are framed as whole commands
+    // of 2 + N + 7 + chunk words; 0: opcode 5 is refused (BAD_COMMAND), as the core
+    // would refuse it.
+    parameter integer CONIC = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -57,6 +61,9 @@ generate
     if (CBUF_AW < 1 || CBUF_AW > 14) begin : g_check_aw
         cp_spi_parameter_CBUF_AW_must_be_1_to_14 u_bad ();
     end
+    if (CONIC != 0 && CONIC != 1) begin : g_check_conic
+        cp_spi_parameter_CONIC_must_be_0_or_1 u_bad ();
+    end
 endgenerate
 
 // ---------------------------------------------------------------- constants
@@ -85,7 +92,8 @@ localparam [TXW-1:0] TX_POS0 = 5'd7;
 localparam [TXW-1:0] TX_CRC  = 5'd7 + N[TXW-1:0];
 localparam [TXW-1:0] TX_ZERO = 5'd8 + N[TXW-1:0];
 
-localparam [3:0] SEG_HDR_WORDS = 4'd1 + N[3:0];   // H1 and the N v words after H0
+localparam [4:0] SEG_HDR_WORDS = 5'd1 + N[4:0];   // H1 and the N v words after H0
+localparam [4:0] CON_HDR_WORDS = 5'd8 + N[4:0];   // and a CONIC's seven K words
 
 // CRC-16/CCITT-FALSE, one bit: polynomial 0x1021, MSB first.
 function [15:0] crc_bit(input [15:0] crc, input b);
@@ -161,7 +169,7 @@ reg           bad_type_q, bad_type_d;
 reg           no_room_q, no_room_d;
 reg           bad_cmd_q, bad_cmd_d;
 // Whole-command tracking: a segment's header words, then its chunks' words.
-reg [3:0]     hdr_left_q, hdr_left_d;
+reg [4:0]     hdr_left_q, hdr_left_d;
 reg [15:0]    chunks_left_q, chunks_left_d;
 reg [1:0]     cw_q, cw_d;                // words of the current chunk taken
 reg           seg_add2_q, seg_add2_d;    // three words per chunk
@@ -171,7 +179,7 @@ reg [7:0]     last_addr_q;              // the register the last READ named
 
 assign rx_word = {sr_q[30:0], bit_in};
 wire [15:0] crc_tx_next = crc_bit(crc_tx_q, sr_q[31]);
-wire        in_cmd = (hdr_left_q != 4'd0) || (chunks_left_q != 16'd0);
+wire        in_cmd = (hdr_left_q != 5'd0) || (chunks_left_q != 16'd0);
 wire        word_end = shift && (bit_q == 5'd31);
 
 // The reply words, each loaded onto MISO when its first bit goes out: word 0 at
@@ -214,7 +222,7 @@ always @* begin
         ph_d = PH_HDR;  bit_d = 5'd0;  txn_d = 5'd1;
         crc_rx_d = 16'hFFFF;  crc_tx_d = 16'hFFFF;
         wr_ok_d = 1'b0;  bad_type_d = 1'b0;  no_room_d = 1'b0;  bad_cmd_d = 1'b0;
-        hdr_left_d = 4'd0;  chunks_left_d = 16'd0;  cw_d = 2'd0;
+        hdr_left_d = 5'd0;  chunks_left_d = 16'd0;  cw_d = 2'd0;
     end else if (shift) begin
         bit_d = bit_q + 1'b1;
         if (ph_q != PH_DONE) crc_rx_d = crc_bit(crc_rx_q, bit_in);
@@ -246,7 +254,8 @@ always @* begin
             left_d = left_q - 1'b1;
             if (left_q == 16'd1) ph_d = PH_CRC;
             if (!in_cmd) begin
-                // A command starts: a SEGMENT has H1, N v words and its chunks to come.
+                // A command starts: a SEGMENT has H1, N v words and its chunks to
+                // come, a CONIC also K0..K6 before its chunks.
                 case (rx_word[31:28])
                 4'h1: begin
                     hdr_left_d = SEG_HDR_WORDS;
@@ -254,10 +263,20 @@ always @* begin
                     seg_add2_d = rx_word[22];
                     cw_d = 2'd0;
                 end
+                4'h5: begin
+                    if (CONIC != 0) begin
+                        hdr_left_d = CON_HDR_WORDS;
+                        chunks_left_d = rx_word[15:0];
+                        seg_add2_d = rx_word[22];
+                        cw_d = 2'd0;
+                    end else begin
+                        bad_cmd_d = 1'b1;
+                    end
+                end
                 4'h2, 4'h3, 4'h4: ;
                 default: bad_cmd_d = 1'b1;
                 endcase
-            end else if (hdr_left_q != 4'd0) begin
+            end else if (hdr_left_q != 5'd0) begin
                 hdr_left_d = hdr_left_q - 1'b1;
             end else if (cw_q == {seg_add2_q, !seg_add2_q}) begin
                 cw_d = 2'd0;
@@ -353,6 +372,8 @@ wire [15:0] f_free_now = (used >= CBUF_WORDS) ? 16'd0 : CBUF_WORDS - used;
 // Words of a command starting with this word, after it (docs/PROTOCOL.md).
 wire [17:0] f_nchunks = {2'd0, f_word[15:0]};
 wire [17:0] f_seg_len = N + (f_word[22] ? 18'd3 * f_nchunks : 18'd2 * f_nchunks) + 18'd1;
+wire [17:0] f_con_len = f_seg_len + 18'd7;
+wire        f_conic   = CONIC != 0;
 
 // The result of the frame ending now: the first failing check.
 reg [2:0] f_result;
@@ -385,6 +406,7 @@ always @(posedge clk) begin
             if (f_wr_ok) f_nwr <= f_nwr + 1'b1;
             if (f_cl != 18'd0)                f_cl <= f_cl - 1'b1;
             else if (f_word[31:28] == 4'h1)   f_cl <= f_seg_len;
+            else if (f_word[31:28] == 4'h5 && f_conic) f_cl <= f_con_len;
             else if (f_word[31:28] < 4'h2 || f_word[31:28] > 4'h4) f_bc <= 1'b1;
         end
     end
@@ -400,7 +422,7 @@ end
 
 // RTL counterparts of the shadow's command parser.
 wire [17:0] f_cpc = seg_add2_q ? 18'd3 : 18'd2;             // words per chunk
-wire [17:0] f_rtl_cl = {14'd0, hdr_left_q} + f_cpc * {2'd0, chunks_left_q} - {16'd0, cw_q};
+wire [17:0] f_rtl_cl = {13'd0, hdr_left_q} + f_cpc * {2'd0, chunks_left_q} - {16'd0, cw_q};
 wire [31:0] f_mask = (32'd1 << f_b5) - 32'd1;
 
 always @* if (f_past_valid) begin
@@ -430,8 +452,8 @@ always @* if (f_past_valid) begin
         assert(((sr_q ^ f_sr) & f_mask) == 32'd0);
         assert(bad_cmd_q == f_bc);
         assert(f_rtl_cl == f_cl);
-        assert(cw_q < f_cpc[1:0] && hdr_left_q <= SEG_HDR_WORDS);
-        if (hdr_left_q != 4'd0 || chunks_left_q == 16'd0) assert(cw_q == 2'd0);
+        assert(cw_q < f_cpc[1:0] && hdr_left_q <= (f_conic ? CON_HDR_WORDS : SEG_HDR_WORDS));
+        if (hdr_left_q != 5'd0 || chunks_left_q == 16'd0) assert(cw_q == 2'd0);
         if (!f_hdr_ok) begin
             assert(ph_q == PH_HDR && f_cl == 18'd0 && !f_bc && f_nwr == 17'd0);
         end else begin

@@ -44,7 +44,7 @@ inline std::vector<BadInput> bad_inputs(const model::CpCoreParams& p) {
   // One chunk more than the chunk queue holds.
   const uint32_t nmany = (1u << p.caw) + 1;
   std::vector<card::WireChunk> many(nmany, card::WireChunk{10, 1, 0});
-  return {
+  std::vector<BadInput> cases = {
       {"U_zero", 1, [] { return words_of(0, 0, {0, 0, 0, 0}, {{10, 1, 0}}); }},
       {"U_above_UMAX", 1, [p] { return words_of(p.umax + 1, 0, {p.umax + 1, 0, 0, 0}, {{10, 1, 0}}); }},
       {"v_above_U", 2, [] { return words_of(10, 0, {10, 0, 11, 0}, {{10, 10, 0}}); }},
@@ -82,7 +82,7 @@ inline std::vector<BadInput> bad_inputs(const model::CpCoreParams& p) {
       {"pattern_above_W", 8,
        [p] { return words_of(p.w + 1, 0, {p.w + 1, 1, 0, 0}, {{5, uint16_t(p.w + 1), 0}}); }},
       {"opcode_0", 12, [] { return std::vector<uint32_t>{0x00000000u}; }},
-      {"opcode_5", 12, [] { return std::vector<uint32_t>{0x50000001u}; }},
+      {"opcode_6", 12, [] { return std::vector<uint32_t>{0x60000001u}; }},
       {"opcode_F", 12, [] { return std::vector<uint32_t>{0xF1234567u}; }},
       {"config_while_running", 13, [] { return config_word(0, 0, 5); }, true},
       {"config_step_high_0", 14, [] { return config_word(1, 0, 0); }},
@@ -90,6 +90,9 @@ inline std::vector<BadInput> bad_inputs(const model::CpCoreParams& p) {
       {"config_axis_out_of_range", 14, [] { return config_word(4, 0, 3); }},
       {"config_unknown_field", 14, [] { return config_word(0, 5, 3); }},
   };
+  // CONIC (opcode 5) is a command only in a core built with CONIC = 1.
+  if (!p.conic) cases.push_back({"opcode_5_without_conic", 12, [] { return std::vector<uint32_t>{0x50000001u}; }});
+  return cases;
 }
 
 template <class Harness>

@@ -107,7 +107,7 @@ std::vector<BadInput> bad_segments() {
       "v_above_U", "k_above_KMAX", "more_chunks_than_the_queue", "count_zero", "delay_negative",
       "delay_above_2pow32", "add2_increments_change_sign", "add2_last_delay_negative",
       "add2_last_delay_far_above_2pow32", "add2_last_delay_with_a_34_bit_product", "counts_short",
-      "pattern_above_W", "opcode_5"};
+      "pattern_above_W", "opcode_6"};
   std::vector<BadInput> picked;
   for (const BadInput& b : bad_inputs(CoreNetlist::model_params()))
     for (const char* n : kNames)

@@ -112,9 +112,11 @@ inline uint16_t crc_reference(std::span<const uint8_t> bytes) {
 }
 
 // What docs/PROTOCOL.md says the card answers to the first `bits` bits of `b`
-// (the frame's result code), given the free words its reply announced. Written
-// from the protocol's table, independently of the RTL and the codec.
-inline uint8_t expected_result(std::span<const uint8_t> b, size_t bits, size_t free, unsigned axes) {
+// (the frame's result code), given the free words its reply announced; `conic`:
+// the card's core takes CONIC commands (opcode 5). Written from the protocol's
+// table, independently of the RTL and the codec.
+inline uint8_t expected_result(std::span<const uint8_t> b, size_t bits, size_t free, unsigned axes,
+                               bool conic = false) {
   auto got = [&](size_t nbytes) { return bits >= 8 * nbytes && b.size() >= nbytes; };
   if (!got(4)) return 1;
   const size_t nwords = size_t(b[2]) << 8 | b[3];
@@ -131,6 +133,7 @@ inline uint8_t expected_result(std::span<const uint8_t> b, size_t bits, size_t f
     const uint32_t w = uint32_t(b[at]) << 24 | uint32_t(b[at + 1]) << 16 | uint32_t(b[at + 2]) << 8 | b[at + 3];
     const unsigned op = w >> 28;
     if (op == 1) i += 2 + axes + ((w >> 22 & 1) ? 3 : 2) * (w & 0xFFFF);
+    else if (op == 5 && conic) i += 2 + axes + 7 + ((w >> 22 & 1) ? 3 : 2) * (w & 0xFFFF);
     else if (op >= 2 && op <= 4) i += 1;
     else return 5;
   }

@@ -34,6 +34,8 @@
 
 #include "card_harness.h"
 #include "common/lockstep.h"
+#include "model/cp_conic.h"
+#include "model/cp_conic_serial.h"
 #include "sim/fast_card.h"
 
 namespace cpstep::tb {
@@ -57,6 +59,7 @@ template <class P>
 class Bench {
  public:
   static constexpr unsigned N = P::kAxes;
+  static constexpr bool kConic = P::kBuild.conic != 0;
   using Ls = Lockstep<P>;
 
   explicit Bench(uint64_t seed = 1, SpiTiming t = {}) : ls_("card_model"), spi_(ls_, t), rng_(seed) {
@@ -109,10 +112,10 @@ class Bench {
     frame_free_.reset();
     if (readable && bits >= 64) {
       const size_t free = size_t(miso[4]) << 8 | miso[5];
-      want_ = Want{expected_result(bytes, bits, free, N), seq, false};
+      want_ = Want{expected_result(bytes, bits, free, N, kConic), seq, false};
       frame_free_ = free;
     } else {
-      const uint8_t lo = expected_result(bytes, bits, 0, N), hi = expected_result(bytes, bits, 0xFFFF, N);
+      const uint8_t lo = expected_result(bytes, bits, 0, N, kConic), hi = expected_result(bytes, bits, 0xFFFF, N, kConic);
       if (lo == hi && (want_ || bits >= 16)) want_ = Want{lo, seq, false};
       else want_.reset();
     }
@@ -213,6 +216,50 @@ SegmentShape random_segment(Bench<P>& b, const builds::Build& build) {
   return s;
 }
 
+// A CONIC over a random segment's T and chunks: a circle of radius 3..12 about the
+// origin, walked from (r, 0) by the walker's rule (the model's, as the host runs it)
+// to the node T moves on; now and then an end off the walk (CONIC_END), a plane
+// axis with v (CONIC_AXES) or equal plane axes.
+template <class P>
+card::WireConic random_conic(Bench<P>& b, const SegmentShape& s) {
+  constexpr unsigned N = P::kAxes;
+  card::WireConic k;
+  k.t = 0;
+  for (const card::WireChunk& ch : s.chunks) k.t += ch.count;
+  k.cw = b.chance(0.5);
+  k.axis_u = b.rand(0, N - 1);
+  k.axis_v = (k.axis_u + b.rand(1, N - 1)) % N;
+  if (b.chance(0.03)) k.axis_v = k.axis_u;
+  k.dir_positive = s.positive;
+  k.v = s.v;
+  for (unsigned a = 0; a < N; ++a) k.v[a] = std::min<uint32_t>(k.v[a], k.t);
+  if (!b.chance(0.03)) k.v[k.axis_u] = k.v[k.axis_v] = 0;
+  const int64_t r = b.rand(3, 12);
+  const model::CpConic::Coeffs co{256, 0, 256, 0, 0, -256 * r * r};
+  model::CpConic::Node n = model::CpConic::at(co, r, 0);
+  const model::CpConic::Node start = n;
+  int64_t du = 0, dv = 0;
+  for (uint32_t j = 0; j < k.t; ++j) {
+    int dx = 0, dy = 0;
+    model::CpConicSerial::rule(co, n, k.cw, 40, dx, dy);
+    n = model::CpConic::advance(co, n, dx, dy);
+    du += dx;
+    dv += dy;
+  }
+  if (b.chance(0.15)) du += b.chance(0.5) ? 1 : -1;
+  const auto w = model::CpConicSerial::words(co, start, k.cw, du, dv);
+  k.a = int32_t(w[0] & 0xFFFF);
+  k.b = int32_t(w[0] >> 16);
+  k.c = int32_t(w[1] & 0xFFFF);
+  k.g = int32_t(w[2]);
+  k.gx = int32_t(w[3]);
+  k.gy = int32_t(w[4]);
+  k.du = int32_t(du);
+  k.dv = int32_t(dv);
+  k.chunks = s.chunks;
+  return k;
+}
+
 // A random command list of at most `max_words` words: READs, CONFIGs, drivers on
 // and off, CONTROL (START more often than ABORT and CLEAR), segments (now and
 // then a bad one: the core refuses it and faults).
@@ -234,6 +281,10 @@ std::vector<uint32_t> random_commands(Bench<P>& b, const builds::Build& build, s
       case 5: card::encode_control(b.chance(0.3), b.chance(0.2), b.chance(0.8), c); break;
       default: {
         SegmentShape s = random_segment(b, build);
+        if (build.conic && b.chance(0.3)) {
+          card::encode_conic(random_conic(b, s), c);
+          break;
+        }
         if (b.chance(0.08)) s.v[0] = s.u + 1;  // SEG_V_GT_U
         if (b.chance(0.05)) s.chunks[0].count = 0;
         card::encode_segment(to_wire(s, b.chance(0.5)), c);
@@ -525,7 +576,8 @@ void random_run(uint64_t seed, uint64_t budget, RandomStats& stats) {
         starts.push_back(i);
         if (i == w.size()) break;
       }
-      const uint32_t op = b.chance(0.3) ? 0 : b.rand(5, 15);
+      // (5 is CONIC where the card's core takes conics.)
+      const uint32_t op = b.chance(0.3) ? 0 : b.rand(Bench<P>::kConic ? 6 : 5, 15);
       const size_t at = starts[b.rand(0, uint32_t(starts.size() - 1))];
       w.insert(w.begin() + ptrdiff_t(at), op << 28 | b.rand(0, 0xFFFFFF));
       b.frame(b.encode(0x01, w));

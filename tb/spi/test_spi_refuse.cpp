@@ -18,6 +18,7 @@ template <class P>
 class SpiRefuse : public ::testing::Test {
  protected:
   static constexpr unsigned N = P::kAxes;
+  static constexpr bool kConic = P::kBuild.conic != 0;
 
   // The visible job's frame, as the host would send it (seq 0x40).
   static std::vector<uint8_t> good_frame() {
@@ -42,7 +43,7 @@ class SpiRefuse : public ::testing::Test {
     // The free words this frame's own reply announced (when it got that far).
     size_t free = was.free_words;
     if (bits >= 64) free = size_t(miso[4]) << 8 | miso[5];
-    EXPECT_EQ(expected_result(padded, bits, free, N), want) << "the test's own reference disagrees";
+    EXPECT_EQ(expected_result(padded, bits, free, N, kConic), want) << "the test's own reference disagrees";
 
     const card::Reply r = h.poll();
     ASSERT_TRUE(r.ok()) << r.error;
@@ -123,13 +124,13 @@ TYPED_TEST(SpiRefuse, NoRoomForMoreWordsThanFree) {
   words.resize(TypeParam::kCbufWords + 1, 0x4000001F);
   this->refused("buffer + 1 words", card::encode_frame(card::FrameType::commands, 0x46, words), 4);
   // No room wins over a bad command.
-  words.back() = 0x50000000;
+  words.back() = 0x60000000;
   this->refused("buffer + 1 words and a bad opcode", card::encode_frame(card::FrameType::commands, 0x47, words), 4);
 }
 
 TYPED_TEST(SpiRefuse, UnknownOpcodeWhereACommandStarts) {
   const VisibleJob job = visible_job(TestFixture::N);
-  for (uint32_t bad_word : {0x00000000u, 0x50000000u, 0x9000001Fu, 0xF0000001u}) {
+  for (uint32_t bad_word : {0x00000000u, 0x60000000u, 0x9000001Fu, 0xF0000001u}) {
     for (size_t at : {size_t(0), size_t(2), job.segment_first, job.segment_first + job.segment_words,
                       job.words.size()}) {
       auto words = job.words;
@@ -168,6 +169,60 @@ TYPED_TEST(SpiRefuse, SplitCommand) {
   ASSERT_EQ(words.size(), 2 + n + 3);
   words.pop_back();
   this->refused("add2 segment without its C2", card::encode_frame(card::FrameType::commands, 0x4B, words), 6);
+}
+
+// CONIC (opcode 5, docs/CORE.md): a card whose core takes conics frames one whole,
+// 2 + N + 7 + its chunks' words, and refuses one cut anywhere (SPLIT); a card without
+// refuses the opcode where a command starts (BAD_COMMAND).
+TYPED_TEST(SpiRefuse, ConicCommandsWholeOrRefused) {
+  const unsigned n = TestFixture::N;
+  card::WireConic c;
+  c.t = 4;
+  c.axis_u = 0;
+  c.axis_v = 1;
+  c.dir_positive.assign(n, true);
+  c.v.assign(n, 0);
+  c.a = c.c = 256;
+  c.chunks = {{20, 3, 0, 0}, {30, 1, 2, 0}};
+  std::vector<uint32_t> conic;
+  card::encode_conic(c, conic);
+  ASSERT_EQ(conic.size(), 2 + n + 7 + 2 * 2);
+  const VisibleJob job = visible_job(n);
+  if (!TestFixture::kConic) {
+    auto words = job.words;
+    words.insert(words.begin() + 1, conic.begin(), conic.end());
+    this->refused("CONIC on a card without conics", card::encode_frame(card::FrameType::commands, 0x4C, words), 5);
+    return;
+  }
+  // Cut after H0, H1, the v words, each K word, the middle of a chunk, one word short.
+  std::vector<size_t> cuts = {1, 2, 2 + n};
+  for (size_t k = 1; k <= 7; ++k) cuts.push_back(2 + n + k);
+  cuts.push_back(2 + n + 7 + 1);
+  cuts.push_back(conic.size() - 1);
+  for (size_t keep : cuts) {
+    std::vector<uint32_t> words = job.words;
+    words.insert(words.end(), conic.begin(), conic.begin() + ptrdiff_t(keep));
+    this->refused("CONIC cut after " + std::to_string(keep) + " words",
+                  card::encode_frame(card::FrameType::commands, 0x4D, words), 6);
+  }
+  // Whole, it is one command: a bad opcode after it is where a command starts.
+  std::vector<uint32_t> words = conic;
+  words.push_back(0x60000000);
+  this->refused("CONIC, then a bad opcode", card::encode_frame(card::FrameType::commands, 0x4E, words), 5);
+  // Whole, with three-word chunks.
+  c.chunks = {{20, 3, 0, 1}, {30, 1, 2, 0}};
+  conic.clear();
+  card::encode_conic(c, conic);
+  ASSERT_EQ(conic.size(), 2 + n + 7 + 3 * 2);
+  conic.pop_back();
+  this->refused("add2 CONIC without its last C2", card::encode_frame(card::FrameType::commands, 0x4F, conic), 6);
+  conic.push_back(0);
+  CardHarness<TypeParam> h;
+  h.poll();
+  h.commands(conic);
+  const card::Reply r = h.poll();
+  ASSERT_TRUE(r.ok()) << r.error;
+  EXPECT_EQ(unsigned(r.last_result), 0u) << card::frame_result_name(r.last_result).name;
 }
 
 // Random damage to the good frame: flipped bits, cut frames, other types, other
@@ -238,7 +293,7 @@ TYPED_TEST(SpiRefuse, RandomDamageAgreesWithTheProtocol) {
     if (bytes.size() < card::reply_bytes(TestFixture::N)) bytes.resize(card::reply_bytes(TestFixture::N), 0);
     const auto miso = h.spi().transfer_bits(bytes, bits);
     const size_t free = bits >= 64 ? (size_t(miso[4]) << 8 | miso[5]) : TypeParam::kCbufWords;
-    const uint8_t want = expected_result(bytes, bits, free, TestFixture::N);
+    const uint8_t want = expected_result(bytes, bits, free, TestFixture::N, TestFixture::kConic);
     ++seen[want];
     const card::Reply r = h.poll();
     ASSERT_TRUE(r.ok()) << r.error;
