@@ -54,6 +54,10 @@ class CpConicSerial {
   void tick();
 
   const CpConicSerialParams& params() const { return p_; }
+  // No pass is running and none will start by itself: idle, or a decided move
+  // waiting behind the one presented. Until an input changes (a word, start,
+  // clear, reset, or the presented move taken) the walker's state stays as it is.
+  bool quiet() const { return !r_.pass && (!r_.pend || r_.ov); }
 
   // The move from a node, docs/CONIC.md "The rule", with every value taken modulo
   // 2^iw as the walker's adders take them: CpConic::rule for any walk whose values

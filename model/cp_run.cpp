@@ -165,11 +165,10 @@ CpRun::Out CpRun::eval_outputs(const In& i) const {
 
 uint64_t CpRun::quiet_for(const In& i) const {
   if (i.rst || i.bank_we || i.len_we) return 0;
-  // The conic walker turns its passes every clock: clocked, not skipped.
-  if (p_.conic) {
-    const CpConicSerialOut wo = walker_.outputs();
-    if (wo.busy || wo.move_valid || i.cw_wr || i.cw_start) return 0;
-  }
+  // The conic walker turns its passes every clock: clocked while a pass runs or
+  // starts; between its passes (a move presented and the next decided, waiting for
+  // the run to take it) it holds still, and the span to the move's due time skips.
+  if (p_.conic && (!walker_.quiet() || i.cw_wr || i.cw_start || i.flush)) return 0;
   Regs d = r_;
   Replay rp;
   const Out o = eval(i, d, rp);

@@ -20,6 +20,7 @@ CardCaps decode_caps(const std::array<uint32_t, kCapsRegisters.size()>& v) {
   c.protocol = v[4] >> 16 & 0xFF;
   c.clock_hz = v[5];
   c.build_id = v[6];
+  c.ciw = v[7] & 0xFF;
   return c;
 }
 
@@ -38,6 +39,7 @@ CardCaps caps_of(const builds::Build& b) {
   c.protocol = kProtocolVersion;
   c.clock_hz = b.clock_hz;
   c.build_id = b.build_id;
+  c.ciw = b.conic ? 40 : 0;  // the walker at the RTL's default width (cp_core's CIW)
   return c;
 }
 
@@ -71,7 +73,8 @@ std::string describe(const CardCaps& c) {
   return fmt::format("{}: {} axes, W {}, UMAX {}, KMAX {}, chunk queue {}, segment queue {}, TW {}, "
                      "command buffer {} words, clock {} Hz, protocol {}",
                      card_name(c), c.n, c.w, c.umax, c.kmax, c.chunk_queue(), c.segment_queue(), c.tw,
-                     c.command_buffer_words(), c.clock_hz, c.protocol);
+                     c.command_buffer_words(), c.clock_hz, c.protocol) +
+         (c.ciw ? fmt::format(", conic walker {} bits", c.ciw) : std::string());
 }
 
 std::string unusable(const CardCaps& c, unsigned axes) {

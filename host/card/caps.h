@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// What a card says of itself: the capability registers (READ 0x1F, 0x20..0x25,
+// What a card says of itself: the capability registers (READ 0x1F, 0x20..0x26,
 // docs/CORE.md), read at connect, and what the host plans with from them.
 #pragma once
 
@@ -18,10 +18,10 @@ namespace cpstep::card {
 constexpr unsigned kProtocolVersion = 2;
 
 // The registers read at connect, in order.
-constexpr std::array<Register, 7> kCapsRegisters = {Register::id,        Register::caps,
+constexpr std::array<Register, 8> kCapsRegisters = {Register::id,        Register::caps,
                                                    Register::pattern_capacity, Register::umax,
                                                    Register::caps2,     Register::clock_hz,
-                                                   Register::build_id};
+                                                   Register::build_id,  Register::conic_width};
 
 struct CardCaps {
   uint32_t id = 0;                 // 0x1F: "CPS1"
@@ -31,6 +31,7 @@ struct CardCaps {
   unsigned pw = 0, cbuf_aw = 0, protocol = 0;  // 0x23: position width, command buffer, version
   uint32_t clock_hz = 0;           // 0x24
   uint32_t build_id = 0;           // 0x25
+  unsigned ciw = 0;                // 0x26: the conic walker's width; 0: no CONIC segments
 
   [[nodiscard]] unsigned chunk_queue() const { return 1u << caw; }
   [[nodiscard]] unsigned segment_queue() const { return 1u << saw; }

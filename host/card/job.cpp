@@ -97,6 +97,41 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
         return r;
       }
     }
+    if (job.card[s].conic) {
+      // A CONIC: its plane's walk can restart at any node (a new segment with the
+      // walker's words there), so a planar one is cut where the chunk queue or
+      // UMAX says; one whose other axes step (a helix) has patterns over its whole
+      // T (k = 0) and is not cut (the planner makes its pieces fit).
+      const plan::ConicWalk& walk = *job.card[s].conic;
+      bool planar = true;
+      for (int a = 0; a < plan::kAxes; ++a) planar = planar && seg.v[a] == 0;
+      plan::ConicWalk rest = walk;
+      size_t next_chunk = 0;
+      for (uint64_t done = 0; done < seg.moves;) {
+        uint64_t n = std::min<uint64_t>(seg.moves - done, card.umax);
+        n = std::min(n, moves_in_chunks(chunks, next_chunk, card.chunk_queue));
+        if (!planar && n < seg.moves) {
+          r.errors.push_back(error(file, seg.loc, fmt::format("a helix piece of {} moves needs more than the card's "
+                                                        "{} timing chunks or {} moves",
+                                                        seg.moves, card.chunk_queue, card.umax)));
+          return r;
+        }
+        const plan::ConicWalk piece = n < rest.moves.size() ? rest.head(n) : rest;
+        if (n < rest.moves.size()) rest = rest.tail(n);
+        WireSegment w;
+        w.u = uint32_t(n);
+        for (int a = 0; a < plan::kAxes; ++a) {
+          w.dir_positive.push_back(seg.delta[a] >= 0);
+          w.v.push_back(seg.v[a]);
+        }
+        w.chunks = take_moves(chunks, next_chunk, n);
+        w.conic = WireSegment::Conic{piece.cw, unsigned(piece.axis_u), unsigned(piece.axis_v), piece.words()};
+        out.segments.push_back(std::move(w));
+        out.source.push_back(s);
+        done += n;
+      }
+      continue;
+    }
     // The patterns repeat every L = lcm(u_i) moves; pieces of whole periods.
     const uint64_t T = seg.moves;
     uint64_t period = 1;

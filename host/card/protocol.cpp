@@ -8,12 +8,18 @@ namespace cpstep::card {
 void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
   bool add2 = false;
   for (const WireChunk& c : s.chunks) add2 = add2 || c.add2 != 0;
-  out.push_back(0x1u << 28 | uint32_t(s.end) << 27 | (s.k & 0xFu) << 23 | uint32_t(add2) << 22 |
-                uint32_t(s.chunks.size() & 0xFFFF));
+  if (s.conic)
+    out.push_back(0x5u << 28 | uint32_t(s.end) << 27 | uint32_t(s.conic->cw) << 26 | (s.conic->axis_u & 7u) << 23 |
+                  uint32_t(add2) << 22 | (s.conic->axis_v & 7u) << 19 | uint32_t(s.chunks.size() & 0xFFFF));
+  else
+    out.push_back(0x1u << 28 | uint32_t(s.end) << 27 | (s.k & 0xFu) << 23 | uint32_t(add2) << 22 |
+                  uint32_t(s.chunks.size() & 0xFFFF));
   uint32_t dirs = 0;
   for (size_t a = 0; a < s.dir_positive.size(); ++a) dirs |= uint32_t(s.dir_positive[a]) << a;
   out.push_back(dirs << 24 | (s.u & 0xFFFFFF));
   for (uint32_t v : s.v) out.push_back(v & 0xFFFFFF);
+  if (s.conic)
+    for (size_t i = 0; i < 7; ++i) out.push_back(i == 1 ? s.conic->words[1] & 0xFFFF : s.conic->words[i]);
   for (const WireChunk& c : s.chunks) {
     out.push_back(c.interval);
     out.push_back(uint32_t(uint16_t(c.add)) << 16 | c.count);

@@ -2,8 +2,10 @@
 // The card's command words (docs/CORE.md), built from values.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -25,6 +27,15 @@ struct WireSegment {
   std::vector<bool> dir_positive; // per axis
   std::vector<uint32_t> v;        // per axis, v_i <= U (U on the major axis)
   std::vector<WireChunk> chunks;  // counts sum to U * 2^k
+  // Set: a CONIC segment (opcode 5) of T = U moves (k = 0) whose axes u, v step by
+  // the walk these seven words load (K0..K6 of docs/CORE.md "CONIC"; K1's [31:16]
+  // are sent as 0); v is 0 for those two axes.
+  struct Conic {
+    bool cw = false;
+    unsigned axis_u = 0, axis_v = 1;
+    std::array<uint32_t, 7> words{};
+  };
+  std::optional<Conic> conic;
 };
 
 // A CONIC segment (docs/CORE.md "CONIC"): T moves; axes u and v step by the conic

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <tuple>
 
 #include "model/oracle.h"
@@ -104,6 +105,11 @@ struct SegmentPlan {
   size_t parent = 0;                     // its step segment
   uint64_t parent_move = 0;              // moves of the step segment before it
   int line = 0;
+  // A CONIC segment: the plane's walk (each move's direction), where the segment
+  // starts, its circle in steps and how far cpstep's own walk strays from it.
+  std::shared_ptr<const plan::ConicWalk> conic;
+  plan::PerAxis<int64_t> start{};
+  double cu = 0, cv = 0, r = 0, limit = 0.5;
 };
 
 // A step segment: the straight line its parts follow and how close cpstep's
@@ -157,7 +163,7 @@ class Checker {
     std::map<size_t, std::vector<plan::CardSegment>> parts;
     // Pause segments (a long dwell's moves that step no axis) never show at the pins.
     for (const plan::PlannedCardSegment& c : pj.card)
-      if (!c.segment.pause) parts[c.segment.step_segment].push_back(c.segment);
+      if (!c.segment.pause && !c.conic) parts[c.segment.step_segment].push_back(c.segment);
     for (const auto& [p, list] : parts) {
       LinePlan& l = lines_[p];
       l.start = pj.step_segments[p].start;
@@ -165,6 +171,7 @@ class Checker {
       for (const plan::CardSegment& s : list) l.moves += s.moves;
       l.limit = std::max(0.5, plan::max_deviation(l.delta, list));
     }
+    plan::PerAxis<int64_t> at = pj.step_segments.empty() ? plan::PerAxis<int64_t>{} : pj.step_segments.front().start;
     for (const plan::PlannedCardSegment& c : pj.card) {
       if (c.segment.pause) continue;
       SegmentPlan s;
@@ -173,16 +180,45 @@ class Checker {
       s.parent = c.segment.step_segment;
       s.parent_move = c.segment.first_move;
       s.line = c.segment.loc.line;
+      s.start = at;
       for (int a = 0; a < plan::kAxes; ++a) {
         const int64_t d = c.segment.delta[a];
         s.sign[a] = d > 0 ? 1 : d < 0 ? -1 : 0;
         if (d != 0) s.string[a] = oracle::closed_form(s.moves, uint64_t(d < 0 ? -d : d));
+        at[a] += d;
       }
+      if (c.conic) conic_plan(s, c.conic);
       first += s.moves;
       segs_.push_back(std::move(s));
       seg_of_move_.resize(first, segs_.size() - 1);
     }
     if (!pj.step_segments.empty()) start_ = pj.step_segments.front().start;
+  }
+
+  // A CONIC segment's plane: each move's steps and directions from the walk, the
+  // G-code's circle the walk stands for, and the farthest cpstep's own nodes lie from
+  // it (half a step, or more where the walker's circle had to go through a start node
+  // the rounding put off the G-code's).
+  static void conic_plan(SegmentPlan& s, std::shared_ptr<const plan::ConicWalk> w) {
+    const int u = w->axis_u, v = w->axis_v;
+    s.string[u].assign(s.moves, '0');
+    s.string[v].assign(s.moves, '0');
+    s.sign[u] = s.sign[v] = 0;  // per move: the walk's
+    s.cu = w->centre_u;
+    s.cv = w->centre_v;
+    s.r = w->radius;
+    int64_t x = w->u0, y = w->v0;
+    double worst = std::abs(std::hypot(double(x) - s.cu, double(y) - s.cv) - s.r);
+    for (uint32_t j = 0; j < s.moves && j < w->moves.size(); ++j) {
+      const int dx = plan::ConicWalk::dx_of(w->moves[j]), dy = plan::ConicWalk::dy_of(w->moves[j]);
+      if (dx) s.string[u][j] = '1';
+      if (dy) s.string[v][j] = '1';
+      x += dx;
+      y += dy;
+      worst = std::max(worst, std::abs(std::hypot(double(x) - s.cu, double(y) - s.cv) - s.r));
+    }
+    s.limit = std::max(0.5, worst);
+    s.conic = std::move(w);
   }
 
   double default_skew() const {
@@ -290,10 +326,15 @@ class Checker {
         add(FindingKind::move_string, s + 1, -1, k, e.t, 0, 0,
             fmt::format("{}: cpstep steps {}, the trace steps {}", where(k), axes_text(expected), axes_text(e.mask)));
       for (int a = 0; a < plan::kAxes; ++a) {
-        if (!(e.mask >> a & 1) || sp.sign[a] == 0 || e.dir[a] == sp.sign[a]) continue;
-        add(FindingKind::direction, s + 1, a, k, e.t, sp.sign[a], e.dir[a],
-            fmt::format("{}: {} steps {} but the segment moves it {}", where(k), letter(a),
-                        e.dir[a] > 0 ? "+" : e.dir[a] < 0 ? "-" : "with DIR unknown (x/z)", sp.sign[a] > 0 ? "+" : "-"));
+        int want = sp.sign[a];
+        if (sp.conic && (a == sp.conic->axis_u || a == sp.conic->axis_v) && i < sp.conic->moves.size())
+          want = a == sp.conic->axis_u ? plan::ConicWalk::dx_of(sp.conic->moves[i])
+                                       : plan::ConicWalk::dy_of(sp.conic->moves[i]);
+        if (!(e.mask >> a & 1) || want == 0 || e.dir[a] == want) continue;
+        add(FindingKind::direction, s + 1, a, k, e.t, want, e.dir[a],
+            fmt::format("{}: {} steps {} but the {} moves it {}", where(k), letter(a),
+                        e.dir[a] > 0 ? "+" : e.dir[a] < 0 ? "-" : "with DIR unknown (x/z)",
+                        sp.conic ? "conic's walk" : "segment", want > 0 ? "+" : "-"));
       }
       deviation(k, s, pos, e.t);
       if (k + 1 == job_.checkpoints[s].moves) check_end(next_end++, true);
@@ -316,6 +357,7 @@ class Checker {
   // |position - the step segment's line| at its move m, exactly over its moves.
   void deviation(uint64_t k, size_t s, const plan::PerAxis<int64_t>& pos, double t) {
     const SegmentPlan& sp = segs_[s];
+    if (sp.conic) return conic_deviation(k, s, pos, t);
     const LinePlan& l = lines_.at(sp.parent);
     const int64_t m = int64_t(sp.parent_move + (k - sp.first) + 1);
     __extension__ using i128 = __int128;
@@ -331,6 +373,37 @@ class Checker {
                         letter(a), dev, l.limit),
             [](double x, double y) { return x > y; });
     }
+  }
+
+  // A CONIC segment's move: the plane's node against the walk's circle (radially),
+  // every other axis against the segment's own line over its moves.
+  void conic_deviation(uint64_t k, size_t s, const plan::PerAxis<int64_t>& pos, double t) {
+    const SegmentPlan& sp = segs_[s];
+    const int u = sp.conic->axis_u, v = sp.conic->axis_v;
+    const double radial = std::abs(std::hypot(double(pos[u]) - sp.cu, double(pos[v]) - sp.cv) - sp.r);
+    const int64_t m = int64_t(k - sp.first) + 1;
+    for (int a = 0; a < plan::kAxes; ++a) {
+      double dev = radial, limit = sp.limit;
+      const char* from = "the arc";
+      if (a != u && a != v) {
+        const int64_t d = segment_delta(sp, a);
+        dev = std::abs(double(pos[a] - sp.start[a]) * double(sp.moves) - double(d) * double(m)) / double(sp.moves);
+        limit = 0.5;
+        from = "the planned line";
+      }
+      AxisSummary& ax = v_.axes[a];
+      ax.max_deviation = std::max(ax.max_deviation, dev);
+      ax.deviation_limit = std::max(ax.deviation_limit, limit);
+      if (dev > limit + kEps)
+        add(FindingKind::deviation, s + 1, a, k, t, limit, dev,
+            fmt::format("{}: {} is {:.3f} steps from {}; cpstep's stays within {:.3f}", where(k), letter(a), dev,
+                        from, limit),
+            [](double x, double y) { return x > y; });
+    }
+  }
+  static int64_t segment_delta(const SegmentPlan& sp, int a) {
+    const std::string& str = sp.string[a];
+    return sp.sign[a] * int64_t(std::count(str.begin(), str.end(), '1'));
   }
 
   // Each move event against its planned time, START placed at the median offset.

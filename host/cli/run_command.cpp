@@ -73,7 +73,21 @@ void print_plan_summary(const run::CardJob& j) {
   fmt::print("job        {}\n", j.job_file);
   fmt::print("machine    {}\n", j.machine.file);
   fmt::print("card       {}\n", card::describe(j.caps));
-  fmt::print("segments   {} card segments ({} step segments)\n", j.wire.segments.size(), s.step_segments);
+  size_t conics = 0;
+  for (const card::WireSegment& w : j.wire.segments) conics += w.conic.has_value();
+  if (conics)
+    fmt::print("segments   {} card segments, {} of them CONIC ({} step segments)\n", j.wire.segments.size(), conics,
+               s.step_segments);
+  else
+    fmt::print("segments   {} card segments ({} step segments)\n", j.wire.segments.size(), s.step_segments);
+  if (j.caps.ciw && s.conic_arcs + s.chord_arcs > 0) {  // a card with a walker: how the arcs went
+    fmt::print("arcs       {} walked by the card's conic walker ({} CONIC segments), {} as chords", s.conic_arcs,
+               s.conic_segments, s.chord_arcs);
+    if (s.conic_arcs)
+      fmt::print("; nodes within {:.3f} step of the arcs, other axes within {:.3f}", s.conic.max_node_deviation,
+                 s.conic.max_other_deviation);
+    fmt::print("\n");
+  }
   fmt::print("moves      {}\n", j.moves());
   fmt::print("chunks     {}, {:.2f} moves per chunk\n", chunks,
              chunks ? double(j.moves()) / double(chunks) : 0.0);

@@ -333,7 +333,7 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
     if (const toml::table* pl = r.table(root, "planner", "planner", false)) {
         r.only_keys(*pl, "planner",
                     {"arc_tolerance_mm", "junction_deviation_mm", "chunk_tolerance_us",
-                     "on_limit", "chunk_add2", "split_epsilon_steps", "curvature_step_ms"});
+                     "on_limit", "chunk_add2", "split_epsilon_steps", "curvature_step_ms", "arcs"});
         auto& p = m.planner;
         p.arc_tolerance_mm = r.number(*pl, "planner", "arc_tolerance_mm", false, positive, "> 0")
                                  .value_or(p.arc_tolerance_mm);
@@ -358,6 +358,16 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
                 r.error(loc_of(*pl->get("on_limit")),
                         fmt::format("planner.on_limit: must be \"refuse\" or \"slow\", not \"{}\"",
                                     *s));
+            }
+        }
+        if (auto s = r.string(*pl, "planner", "arcs")) {
+            if (*s == "conic") {
+                p.arcs = ArcMode::conic;
+            } else if (*s == "chords") {
+                p.arcs = ArcMode::chords;
+            } else {
+                r.error(loc_of(*pl->get("arcs")),
+                        fmt::format("planner.arcs: must be \"conic\" or \"chords\", not \"{}\"", *s));
             }
         }
         if (auto ms = r.number(*pl, "planner", "curvature_step_ms", false, positive, "> 0"))
@@ -442,6 +452,8 @@ std::vector<Diagnostic> bind_card(Machine& m, const CardFacts& card) {
     m.card.clock_hz = card.clock_hz;
     m.card.pattern_capacity = c.stated_pattern_capacity ? c.stated_pattern_capacity : card.pattern_capacity;
     m.card.max_doubling = c.stated_max_doubling ? c.stated_max_doubling : card.max_doubling;
+    m.card.max_moves = card.max_moves;
+    m.card.conic_width = card.conic_width;
     m.card.bound = true;
     for (int a = 0; a < kAxes; ++a)
         if (m.axes[static_cast<std::size_t>(a)].present)

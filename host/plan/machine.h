@@ -75,6 +75,8 @@ struct CardConfig {
     double clock_hz = 0;
     std::uint32_t pattern_capacity = 1024;  // W: longest reduced pattern
     std::uint32_t max_doubling = 8;         // k: largest step-doubling exponent
+    std::uint32_t max_moves = 1048575;      // UMAX: most moves of one card segment
+    unsigned conic_width = 0;               // CIW: the card's conic walker (0: none, arcs are chords)
     bool bound = false;                     // set by bind_card()
     // What the machine file says, and where (line 0: not given).
     double stated_clock_hz = 0;
@@ -89,9 +91,14 @@ struct CardFacts {
     std::uint32_t pattern_capacity = 0;  // W
     std::uint32_t max_doubling = 0;      // KMAX
     unsigned timing_bits = 16;           // TW: pulse timing fields hold up to 2^TW - 1 cycles
+    std::uint32_t max_moves = 1048575;   // UMAX
+    unsigned conic_width = 0;            // CIW (READ 0x26): CONIC segments, 0: none
 };
 
 enum class OnLimit { refuse, slow };
+// How G2/G3 arcs reach the card: as CONIC segments its walker steps (where the card
+// has one and the arc qualifies, docs/PLANNING.md "Arcs as conics"), or as chords.
+enum class ArcMode { conic, chords };
 
 struct PlannerConfig {
     double arc_tolerance_mm = 0.002;        // max chord-to-arc distance
@@ -104,6 +111,7 @@ struct PlannerConfig {
     // tangent arc) counts as a ramp over this time: each axis's share of it at
     // most its max_jerk times this (planner.cpp, docs/PLANNING.md).
     double curvature_step_s = 0.02;
+    ArcMode arcs = ArcMode::conic;          // planner.arcs = "conic" | "chords"
 };
 
 // What the G-code reader takes from the machine file: the optional [gcode]

@@ -2,6 +2,9 @@
 #include "plan/pipeline.h"
 
 #include <cmath>
+#include <limits>
+#include <span>
+#include <variant>
 
 #include <fmt/format.h>
 
@@ -63,20 +66,105 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
         prev = chunks.last_event;
         pj.stats.pause_moves += n;
         pj.stats.chunks += chunks.chunks.size();
-        pj.card.push_back({pause, std::move(chunks.chunks)});
+        pj.card.push_back({pause, std::move(chunks.chunks), nullptr});
         return true;
     };
     // Equal intervals, each under 2^32 - 1 cycles, that make up `cycles`.
     const auto intervals = [](double cycles) {
         return static_cast<std::uint64_t>(std::floor(cycles / double(kMaxMoveDelayCycles))) + 1;
     };
+    // Where the card is: a conic's walk may end a step off its arc's rounded end,
+    // and the segment after it starts from there.
+    PerAxis<std::int64_t> pos{};
+    if (!pj.step_segments.empty()) pos = pj.step_segments.front().start;
+    // The last move of the last CONIC segment: the next one's first move comes
+    // conic_gap_cycles() after it at the earliest.
+    std::int64_t last_conic_event = std::numeric_limits<std::int64_t>::min() / 2;
+    const bool conics = m.planner.arcs == ArcMode::conic && m.card.conic_width > 0;
+    std::size_t chords_until = 0;  // an arc left to chords: its step segments up to here
+    // A pause before the move at `first_ideal` when it is further than one
+    // interval can time.
+    const auto pause_before = [&](double first_ideal) -> bool {
+        if (dwell_first != kNone && first_ideal - double(prev) > double(kMaxMoveDelayCycles)) {
+            // Longer than one interval: pause moves split the gap, the move
+            // after them times the last part (each at most 2^32 - 1 cycles).
+            const double gap = first_ideal - double(prev);
+            const std::uint64_t parts = intervals(gap);
+            return add_pause(double(prev) + gap * double(parts - 1) / double(parts), parts - 1, dwell_first);
+        }
+        return true;
+    };
     for (std::size_t i = 0; i < pj.step_segments.size(); ++i) {
-        const StepSegment& s = pj.step_segments[i];
+        StepSegment& s = pj.step_segments[i];
         if (s.kind == MotionKind::dwell) {  // a pause shows as a longer first interval
             if (dwell_first == kNone) dwell_first = i;
             dwell_s += s.dwell_s;
+            s.start = s.end = pos;
             continue;
         }
+        const bool arc = s.kind == MotionKind::arc_cw || s.kind == MotionKind::arc_ccw;
+        if (arc && m.planner.arcs == ArcMode::conic && i >= chords_until) {
+            // The arc's chords: the step segments of its block.
+            std::size_t e = i + 1;
+            while (e < pj.step_segments.size() && pj.step_segments[e].block == s.block) ++e;
+            ConicArcInput in;
+            in.block = &job.blocks[s.block];
+            in.chords = std::span<const StepSegment>(pj.step_segments).subspan(i, e - i);
+            in.feeds = std::span<const PlannedSegment>(pj.feeds).subspan(i, e - i);
+            in.first_step_segment = i;
+            in.start = pos;
+            in.last_motion = true;
+            for (std::size_t n = e; n < pj.step_segments.size(); ++n)
+                if (pj.step_segments[n].kind != MotionKind::dwell) in.last_motion = false;
+            in.ciw = m.card.conic_width;
+            in.umax = m.card.max_moves;
+            in.w = m.card.pattern_capacity;
+            in.clock_hz = m.card.clock_hz;
+            in.tolerance_cycles = tol;
+            std::variant<std::vector<ConicPiece>, std::string> pieces = std::string("the card has no conic walker");
+            ConicArcStats arc_stats;
+            if (conics) pieces = plan_conic_arc(in, m, &arc_stats);
+            if (auto* list = std::get_if<std::vector<ConicPiece>>(&pieces)) {
+                const double first = list->front().walk->ideal.front();
+                if (first - tol < double(last_conic_event) + double(conic_gap_cycles(m.card.conic_width)))
+                    pieces = std::string("its first move comes too soon after the conic before it");
+            }
+            if (auto* list = std::get_if<std::vector<ConicPiece>>(&pieces)) {
+                if (!pause_before(list->front().walk->ideal.front())) return result;
+                for (ConicPiece& piece : *list) {
+                    auto chunks = compress(piece.walk->ideal, prev, tol, lim);
+                    if (!chunks.ok()) {
+                        result.errors.push_back({job.file, s.loc, fmt::format("timing: {}", chunks.error)});
+                        return result;
+                    }
+                    prev = chunks.last_event;
+                    pj.stats.moves += piece.segment.moves;
+                    pj.stats.chunks += chunks.chunks.size();
+                    ++pj.stats.conic_segments;
+                    for (int a = 0; a < kAxes; ++a) pos[a] += piece.segment.delta[a];
+                    pj.card.push_back({piece.segment, std::move(chunks.chunks), std::move(piece.walk)});
+                }
+                last_conic_event = prev;
+                ++pj.stats.conic_arcs;
+                pj.stats.conic.max_node_deviation =
+                    std::max(pj.stats.conic.max_node_deviation, arc_stats.max_node_deviation);
+                pj.stats.conic.max_other_deviation =
+                    std::max(pj.stats.conic.max_other_deviation, arc_stats.max_other_deviation);
+                // The chords' step segments stay as the feed plan's record: they
+                // make no card segment of their own.
+                for (std::size_t c = i; c < e; ++c) pj.step_segments[c].conic = true;
+                i = e - 1;
+                dwell_first = kNone;
+                dwell_s = 0;
+                continue;
+            }
+            ++pj.stats.chord_arcs;
+            chords_until = e;
+            if (conics)
+                result.warnings.push_back({job.file, s.loc,
+                                           "arc sent as chords: " + std::get<std::string>(pieces)});
+        }
+        s.start = pos;  // after a conic, where its walk ended
         auto split = reduce_segment(s.delta(), m.card.pattern_capacity, m.planner.split_epsilon_steps);
         pj.stats.worst_split_error = std::max(pj.stats.worst_split_error, split.deviation_bound - 0.5);
         std::uint64_t total = 0;
@@ -86,15 +174,7 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
             part.step_segment = i;
             const auto ideal = ideal_move_times(pj.feeds[i], total, part.first_move, part.moves,
                                                 m.card.clock_hz);
-            if (dwell_first != kNone && !ideal.empty() &&
-                ideal.front() - double(prev) > double(kMaxMoveDelayCycles)) {
-                // Longer than one interval: pause moves split the gap, the move
-                // after them times the last part (each at most 2^32 - 1 cycles).
-                const double gap = ideal.front() - double(prev);
-                const std::uint64_t parts = intervals(gap);
-                if (!add_pause(double(prev) + gap * double(parts - 1) / double(parts), parts - 1, dwell_first))
-                    return result;
-            }
+            if (!ideal.empty() && !pause_before(ideal.front())) return result;
             auto chunks = compress(ideal, prev, tol, lim);
             if (!chunks.ok()) {
                 result.errors.push_back({job.file, s.loc, fmt::format("timing: {}", chunks.error)});
@@ -103,7 +183,8 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
             prev = chunks.last_event;
             pj.stats.moves += part.moves;
             pj.stats.chunks += chunks.chunks.size();
-            pj.card.push_back({part, std::move(chunks.chunks)});
+            for (int a = 0; a < kAxes; ++a) pos[a] += part.delta[a];
+            pj.card.push_back({part, std::move(chunks.chunks), nullptr});
         }
         dwell_first = kNone;
         dwell_s = 0;
@@ -142,6 +223,10 @@ std::vector<double> ideal_times(const PlannedJob& job, double clock_hz) {
         for (; c < end; ++c) {
             const CardSegment& part = job.card[c].segment;
             if (part.pause) continue;  // the pins show no pause move
+            if (job.card[c].conic) {
+                out.insert(out.end(), job.card[c].conic->ideal.begin(), job.card[c].conic->ideal.end());
+                continue;
+            }
             const auto t = ideal_move_times(job.feeds[step_segment], total, part.first_move,
                                             part.moves, clock_hz);
             out.insert(out.end(), t.begin(), t.end());

@@ -3,9 +3,11 @@
 // Pure: no I/O, everything it needs is in its arguments.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "plan/chunks.h"
+#include "plan/conic_arc.h"
 #include "plan/gcode.h"
 #include "plan/machine.h"
 #include "plan/planner.h"
@@ -17,6 +19,9 @@ namespace cpstep::plan {
 struct PlannedCardSegment {
     CardSegment segment;
     std::vector<Chunk> chunks;   // their counts sum to segment.moves
+    // A CONIC segment (an arc's piece, plan/conic_arc.h): the plane's walk, every
+    // move's ideal time; segment.step_segment is the arc's first chord.
+    std::shared_ptr<const ConicWalk> conic;
 };
 
 struct PlanStats {
@@ -26,6 +31,10 @@ struct PlanStats {
     std::uint64_t step_segments = 0;
     std::uint64_t card_segments = 0;
     double worst_split_error = 0;   // steps, beyond half a step
+    std::uint64_t conic_arcs = 0;     // arcs the card walks (CONIC segments)
+    std::uint64_t conic_segments = 0; // their pieces
+    std::uint64_t chord_arcs = 0;     // arcs sent as chords (planner.arcs, the card, or a reason)
+    ConicArcStats conic;              // the walks' deviations
     double duration_s = 0;
     [[nodiscard]] double moves_per_chunk() const {
         return chunks ? static_cast<double>(moves) / static_cast<double>(chunks) : 0;

@@ -44,26 +44,15 @@ std::int64_t mm_to_steps(double mm, double steps_per_mm) {
     return static_cast<std::int64_t>(std::floor(mm * steps_per_mm + 0.5));
 }
 
-namespace {
-
-// An arc's geometry in its plane (G17/G18/G19): u, v its two axes (the others
-// move linearly), the centre, the end radii, the start angle and the sweep
-// (positive, 2 pi for a full circle), in the arc's own direction.
-struct ArcGeom {
-    std::size_t u = 0, v = 1;
-    double cx = 0, cy = 0, r0 = 0, r1 = 0, a0 = 0, sweep = 0;
-    bool cw = false;
-    // The point at fraction `frac` of the sweep (the radius interpolated).
-    PerAxis<double> at(const MotionBlock& b, double frac) const {
-        const double ang = a0 + (cw ? -1 : 1) * sweep * frac;
-        const double rad = r0 + (r1 - r0) * frac;
-        PerAxis<double> p{};
-        for (std::size_t a = 0; a < kAxes; ++a) p[a] = b.start[a] + (b.end[a] - b.start[a]) * frac;
-        p[u] = cx + rad * std::cos(ang);
-        p[v] = cy + rad * std::sin(ang);
-        return p;
-    }
-};
+PerAxis<double> ArcGeom::at(const MotionBlock& b, double frac) const {
+    const double ang = a0 + (cw ? -1 : 1) * sweep * frac;
+    const double rad = r0 + (r1 - r0) * frac;
+    PerAxis<double> p{};
+    for (std::size_t a = 0; a < kAxes; ++a) p[a] = b.start[a] + (b.end[a] - b.start[a]) * frac;
+    p[u] = cx + rad * std::cos(ang);
+    p[v] = cy + rad * std::sin(ang);
+    return p;
+}
 
 ArcGeom arc_geom(const MotionBlock& b) {
     const ArcFrame f = arc_frame(b);
@@ -88,6 +77,8 @@ ArcGeom arc_geom(const MotionBlock& b) {
     }
     return g;
 }
+
+namespace {
 
 // How many chords stand off the arc by at most tol: a chord of angle theta on
 // radius r stands off it by r(1 - cos(theta/2)).

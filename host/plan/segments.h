@@ -34,6 +34,9 @@ struct StepSegment {
     double radius_mm = std::numeric_limits<double>::infinity();
     double radius_ends_max_mm = std::numeric_limits<double>::infinity();  // the larger of its two ends'
     double radius_start_mm = std::numeric_limits<double>::infinity();     // at its start point
+    // A chord of an arc the card walks as a conic (plan_job, plan/conic_arc.h): its
+    // moves are the conic's, not a card segment of its own.
+    bool conic = false;
 
     [[nodiscard]] PerAxis<std::int64_t> delta() const;
     // Euclidean length of the quantized segment in mm (over the present axes).
@@ -52,6 +55,19 @@ inline constexpr double kMinUnroundedLengthRatio = 0.5;
 
 // round(mm * steps_per_mm), halves away from -infinity (floor(x + 0.5)).
 std::int64_t mm_to_steps(double mm, double steps_per_mm);
+
+// An arc's geometry in its plane (G17/G18/G19): u, v its two axes (the others
+// move linearly), the centre, the end radii, the start angle and the sweep
+// (positive, 2 pi for a full circle), in the arc's own direction (cw: the angle
+// atan2(v, u) decreases).
+struct ArcGeom {
+    std::size_t u = 0, v = 1;
+    double cx = 0, cy = 0, r0 = 0, r1 = 0, a0 = 0, sweep = 0;
+    bool cw = false;
+    // The point at fraction `frac` of the sweep (the radius interpolated).
+    [[nodiscard]] PerAxis<double> at(const MotionBlock& b, double frac) const;
+};
+ArcGeom arc_geom(const MotionBlock& b);
 
 // The chord end points of an arc block (the block's start excluded, its exact
 // end included), each within `tolerance_mm` of the arc.

@@ -37,7 +37,7 @@ uint64_t CardJob::wire_chunks() const {
 }
 
 plan::CardFacts card_facts(const card::CardCaps& caps) {
-  return {card::card_name(caps), double(caps.clock_hz), caps.w, caps.kmax, caps.tw};
+  return {card::card_name(caps), double(caps.clock_hz), caps.w, caps.kmax, caps.tw, caps.umax, caps.ciw};
 }
 
 plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std::filesystem::path& machine_file,

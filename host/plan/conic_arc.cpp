@@ -1,0 +1,348 @@
+// SPDX-License-Identifier: MIT
+#include "plan/conic_arc.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "model/cp_conic.h"
+#include "model/cp_conic_serial.h"
+
+namespace cpstep::plan {
+
+namespace {
+
+using model::CpConic;
+using model::CpConicSerial;
+using model::i128;
+
+// Circles are scaled by 256 (A = C = 256): a centre on the 1/16-step grid gives
+// integer D, E and F exactly (docs/CONIC.md §7); the radius is rounded to F's
+// unit, 1/(512 r) steps.
+constexpr std::int64_t kScale = 256;
+constexpr double kCentreGrid = 16;
+// Smallest radius walked as a conic (steps): below a few steps the walk can turn
+// back inside one square (docs/CONIC.md §3), and chords are as good.
+constexpr double kMinRadiusSteps = 4;
+// Smallest piece a helix is split into before it is left to chords.
+constexpr std::size_t kMinPieceMoves = 16;
+
+bool fits_signed(i128 v, unsigned bits) {
+    const i128 lim = i128(1) << (bits - 1);
+    return v >= -lim && v < lim;
+}
+
+CpConic::Coeffs coeffs_of(const ConicWalk& w) { return {w.a, w.b, w.c, w.d, w.e, w.f}; }
+
+// Progress along the arc's sweep of the point (x, y) (steps), in radians, from the
+// angle `from`, unwrapped near `near`.
+double progress(double x, double y, double cu, double cv, double from, bool cw, double near) {
+    double p = std::atan2(y - cv, x - cu) - from;
+    if (cw) p = -p;
+    constexpr double two_pi = 2 * std::numbers::pi;
+    p -= two_pi * std::round((p - near) / two_pi);
+    return p;
+}
+
+}  // namespace
+
+std::array<std::uint32_t, 7> ConicWalk::words() const {
+    const CpConic::Coeffs k = coeffs_of(*this);
+    return CpConicSerial::words(k, CpConic::at(k, u0, v0), cw, du, dv);
+}
+
+ConicWalk ConicWalk::head(std::size_t n) const {
+    ConicWalk h = *this;
+    h.moves.resize(n);
+    h.ideal.resize(n);
+    h.du = h.dv = 0;
+    for (std::uint8_t m : h.moves) h.du += dx_of(m), h.dv += dy_of(m);
+    return h;
+}
+
+ConicWalk ConicWalk::tail(std::size_t n) const {
+    ConicWalk t = *this;
+    for (std::size_t j = 0; j < n; ++j) t.u0 += dx_of(moves[j]), t.v0 += dy_of(moves[j]);
+    t.moves.assign(moves.begin() + std::ptrdiff_t(n), moves.end());
+    t.ideal.assign(ideal.begin() + std::ptrdiff_t(n), ideal.end());
+    t.du = (u0 + du) - t.u0;
+    t.dv = (v0 + dv) - t.v0;
+    return t;
+}
+
+std::variant<std::vector<ConicPiece>, std::string> plan_conic_arc(const ConicArcInput& in, const Machine& m,
+                                                                  ConicArcStats* stats) {
+    const MotionBlock& b = *in.block;
+    if (in.ciw == 0) return std::string("the card has no conic walker");
+    if (in.chords.empty() || in.chords.size() != in.feeds.size()) return std::string("no chords planned");
+    if (in.chords.front().from_mm != b.start || in.chords.back().to_mm != b.end)
+        return std::string("an end of it shares a step with the block beside it");
+    const ArcGeom g = arc_geom(b);
+    const int u = int(g.u), v = int(g.v);
+    const double su = m.axes[u].steps_per_mm, sv = m.axes[v].steps_per_mm;
+    if (!m.axes[u].present || !m.axes[v].present) return std::string("the arc's plane has an axis the machine lacks");
+    if (std::abs(su - sv) > 1e-12 * su)
+        return fmt::format("axes {} and {} have different steps/mm ({:g}, {:g}): the arc is no circle in steps",
+                           kAxisLetters[u], kAxisLetters[v], su, sv);
+    if (std::abs(g.r1 - g.r0) * su > 0.25)
+        return fmt::format("its end radii differ by {:.3g} steps (a spiral)", std::abs(g.r1 - g.r0) * su);
+
+    // The circle on the card: the centre on the 1/16-step grid, the radius of the
+    // start point (G-code's), or through the start node when that node fails the
+    // walker's on-curve test (it is within 0.71 step of the circle: rounding).
+    const double cu = g.cx * su, cv = g.cy * sv;  // exact centre, steps
+    const auto i = std::int64_t(std::llround(cu * kCentreGrid)), j = std::int64_t(std::llround(cv * kCentreGrid));
+    const double gu = double(i) / kCentreGrid, gv = double(j) / kCentreGrid;  // the card's centre
+    const double r = g.r0 * su;
+    if (!(r >= kMinRadiusSteps)) return fmt::format("its radius is {:.3g} steps (conics from {:g})", r, kMinRadiusSteps);
+    ConicWalk w;
+    w.axis_u = u;
+    w.axis_v = v;
+    w.cw = g.cw;
+    w.a = w.c = kScale;
+    w.d = -2 * kScale / std::int64_t(kCentreGrid) * i;
+    w.e = -2 * kScale / std::int64_t(kCentreGrid) * j;
+    w.u0 = in.start[u];
+    w.v0 = in.start[v];
+    w.centre_u = cu;
+    w.centre_v = cv;
+    w.radius = r;
+    const auto f_of = [&](long double r2) {
+        return i * i + j * j - std::int64_t(std::llroundl((long double)kScale * r2));
+    };
+    w.f = f_of((long double)r * r);
+    CpConic::Coeffs k = coeffs_of(w);
+    CpConic::Node node = CpConic::at(k, w.u0, w.v0);
+    double r_card = r;
+    if (!CpConic::on_curve(k, node)) {
+        const long double r2 = std::pow((long double)w.u0 - gu, 2) + std::pow((long double)w.v0 - gv, 2);
+        w.f = f_of(r2);
+        k = coeffs_of(w);
+        node = CpConic::at(k, w.u0, w.v0);
+        r_card = double(std::sqrt(r2));
+        if (!CpConic::on_curve(k, node)) return std::string("its start node is not on the walker's circle");
+    }
+    if (!fits_signed(node.g, 32) || !fits_signed(node.gx, 32) || !fits_signed(node.gy, 32))
+        return std::string("its start values exceed the walker's 32-bit load words");
+
+    // The walk, to just past the end of the sweep.
+    const double from = g.a0;  // progress 0: the G-code's start point (angles are the same in steps)
+    const double margin = 3 / r;
+    const double end_u = b.end[std::size_t(u)] * su, end_v = b.end[std::size_t(v)] * sv;  // exact end, steps
+    const std::size_t max_moves = std::size_t(8 * (r + 2) * g.sweep) + 64;
+    std::vector<std::pair<std::int64_t, std::int64_t>> nodes{{w.u0, w.v0}};
+    std::vector<double> prog{progress(double(w.u0), double(w.v0), cu, cv, from, w.cw, 0)};
+    // The end node: the arc's end rounded to steps (where its chords end and the
+    // next block starts) when the walk passes it near the end of the sweep, else
+    // the walk's node nearest the exact end point (the next block then starts there;
+    // an arc the job ends on must end on its rounded end).
+    const PerAxis<std::int64_t> end = in.chords.back().end;
+    std::size_t best = 0, rounded = 0;
+    double best_d = std::numeric_limits<double>::infinity();
+    std::int64_t x = w.u0, y = w.v0;
+    double p = prog[0], worst_node = std::abs(std::hypot(double(w.u0) - cu, double(w.v0) - cv) - r);
+    while (true) {
+        if (!CpConicSerial::fits(k, node, in.ciw))
+            return fmt::format("its values exceed the walker's {} bits", in.ciw);
+        int dx = 0, dy = 0;
+        CpConicSerial::rule(k, node, w.cw, in.ciw, dx, dy);
+        if (dx == 0 && dy == 0) return std::string("the walk stops (the gradient vanishes)");
+        node = CpConic::advance(k, node, dx, dy);
+        x += dx;
+        y += dy;
+        w.moves.push_back(ConicWalk::pack(dx, dy));
+        p = progress(double(x), double(y), cu, cv, from, w.cw, p);
+        nodes.emplace_back(x, y);
+        prog.push_back(p);
+        worst_node = std::max(worst_node, std::abs(std::hypot(double(x) - cu, double(y) - cv) - r));
+        if (std::abs(p - g.sweep) <= margin) {
+            const double dd = std::hypot(double(x) - end_u, double(y) - end_v);
+            if (dd < best_d) best_d = dd, best = w.moves.size();
+            if (x == end[std::size_t(u)] && y == end[std::size_t(v)] && rounded == 0) rounded = w.moves.size();
+        }
+        if (p > g.sweep + margin) break;
+        if (w.moves.size() > max_moves) return std::string("the walk does not come round to its end");
+    }
+    if (rounded) best = rounded;
+    else if (in.last_motion) return std::string("the job ends on it and its walk misses the end's step");
+    if (best == 0 || !(best_d <= 1.5)) return fmt::format("the walk passes {:.3g} steps from its end", best_d);
+    const std::size_t T = best;
+    for (std::size_t n = 1; n < T; ++n)
+        if (nodes[n] == nodes[T]) return std::string("the walk visits its end node before its end");
+    w.moves.resize(T);
+    w.du = nodes[T].first - w.u0;
+    w.dv = nodes[T].second - w.v0;
+    if (!fits_signed(w.du, 24) || !fits_signed(w.dv, 24)) return std::string("it spans more than 2^23 steps");
+    (void)r_card;
+
+    // The other axes (a helix's): each steps by a pattern over the piece's moves; its
+    // ideal position at node n follows the sweep.
+    const double sweep = g.sweep;
+    const auto ideal_other = [&](std::size_t a, std::size_t n) {
+        const double s = m.axes[a].steps_per_mm;
+        const double f = std::clamp(prog[n] / sweep, 0.0, 1.0);
+        return (b.start[a] + (b.end[a] - b.start[a]) * f) * s;
+    };
+    bool helix = false;
+    for (std::size_t a = 0; a < std::size_t(kAxes); ++a)
+        if (int(a) != u && int(a) != v && end[a] != in.start[a]) helix = true;
+    std::size_t max_piece = in.umax;
+    if (helix) max_piece = std::min<std::size_t>(max_piece, in.w);
+    // Piece boundaries fall where every other axis's ideal position is nearest a
+    // whole step (within an eighth of a piece of the even split), so that each
+    // piece's pattern runs between lattice points close to the helix, as the GCD
+    // split of a line does (reduce.h); the pieces are planned a quarter shorter than
+    // the limit to leave that room.
+    std::size_t pieces = helix ? (4 * T + 3 * max_piece - 1) / (3 * max_piece) : (T + max_piece - 1) / max_piece;
+    const auto off_lattice = [&](std::size_t n) {
+        double worst = 0;
+        for (std::size_t a = 0; a < std::size_t(kAxes); ++a) {
+            if (int(a) == u || int(a) == v || end[a] == in.start[a]) continue;
+            const double x = ideal_other(a, n);
+            worst = std::max(worst, std::abs(x - std::floor(x + 0.5)));
+        }
+        return worst;
+    };
+    // Moves per step of the fastest other axis: the window a boundary needs to find
+    // a node near a whole step.
+    std::int64_t rise = 0;
+    for (std::size_t a = 0; a < std::size_t(kAxes); ++a)
+        if (int(a) != u && int(a) != v) rise = std::max(rise, std::abs(end[a] - in.start[a]));
+    const std::size_t per_step = rise > 0 ? T / std::size_t(rise) + 1 : T;
+    // Splits of twice as many pieces are tried until every other axis stays within
+    // half a step (+ split_epsilon_steps) of its line along the sweep; the best one
+    // is kept if that never happens, when it is within a step (as a line's GCD split,
+    // reduce.h, allows up to a step where nothing closer exists).
+    std::vector<std::size_t> at;              // piece boundaries (move indices)
+    std::vector<PerAxis<std::int64_t>> pos;   // the other axes at each boundary
+    double worst_other = std::numeric_limits<double>::infinity();
+    bool steep = false;
+    for (std::size_t tries = pieces; pieces == tries || T / tries >= kMinPieceMoves; tries *= 2) {
+        std::vector<std::size_t> at_t;
+        std::vector<PerAxis<std::int64_t>> pos_t;
+        const std::size_t L = T / tries;
+        const std::size_t reach =
+            std::min(max_piece > L ? (max_piece - L) / 2 : 0, std::max(L / 8, std::min(per_step, L / 3)));
+        for (std::size_t q = 0; q <= tries; ++q) {
+            std::size_t n = T * q / tries;
+            if (helix && q > 0 && q < tries) {
+                std::size_t bestn = n;
+                for (std::size_t c = n - std::min(reach, n - at_t.back() - 1); c <= n + reach && c < T; ++c)
+                    if (off_lattice(c) < off_lattice(bestn)) bestn = c;
+                n = bestn;
+            }
+            at_t.push_back(n);
+            PerAxis<std::int64_t> pa = in.start;
+            for (std::size_t a = 0; a < std::size_t(kAxes); ++a) {
+                if (int(a) == u || int(a) == v) continue;
+                if (q == tries) pa[a] = end[a];
+                else if (q > 0 && end[a] != in.start[a]) pa[a] = std::int64_t(std::floor(ideal_other(a, n) + 0.5));
+            }
+            pos_t.push_back(pa);
+        }
+        double worst = 0;
+        bool steep_t = false;
+        for (std::size_t q = 0; q < tries; ++q) {
+            const std::uint64_t len = at_t[q + 1] - at_t[q];
+            for (std::size_t a = 0; a < std::size_t(kAxes); ++a) {
+                if (int(a) == u || int(a) == v) continue;
+                const std::int64_t d = pos_t[q + 1][a] - pos_t[q][a];
+                const std::uint64_t ad = std::uint64_t(d < 0 ? -d : d);
+                if (ad > len) steep_t = true;
+                if (d == 0 && ideal_other(a, at_t[q]) == ideal_other(a, at_t[q + 1])) continue;
+                for (std::uint64_t n = 1; n <= len; ++n) {
+                    // The pattern's position after move n of len: floor((2 v n + len) / (2 len)).
+                    const auto stepped = std::int64_t((2 * ad * n + len) / (2 * len));
+                    const double card = double(pos_t[q][a] + (d < 0 ? -stepped : stepped));
+                    worst = std::max(worst, std::abs(card - ideal_other(a, at_t[q] + n)));
+                }
+            }
+        }
+        if (steep_t) {
+            steep = true;
+            continue;
+        }
+        if (worst < worst_other) {
+            worst_other = worst;
+            at = std::move(at_t);
+            pos = std::move(pos_t);
+            pieces = tries;
+        }
+        if (worst_other <= 0.5 + m.planner.split_epsilon_steps) break;
+    }
+    if (at.empty()) {
+        if (steep) return std::string("its other axes move more steps than its plane's walk has moves");
+        return std::string("no split of it keeps its other axes near their lines");
+    }
+    if (!(worst_other <= 1.0))
+        return fmt::format("its other axes stray {:.3g} steps from their lines in every split tried", worst_other);
+
+    // Ideal times: a node's progress along the sweep falls on a chord; the chord's
+    // feed profile times it at the same fraction of the chord.
+    std::vector<double> chord_end(in.chords.size());
+    {
+        double q = 0;
+        for (std::size_t c = 0; c < in.chords.size(); ++c) {
+            const auto& to = in.chords[c].to_mm;
+            q = progress(to[std::size_t(u)] * su, to[std::size_t(v)] * sv, cu, cv, from, w.cw, q);
+            chord_end[c] = q;
+        }
+        chord_end.back() = std::max(chord_end.back(), prog[T]);
+    }
+    w.ideal.resize(T);
+    const double gap = double(conic_gap_cycles(in.ciw)) + in.tolerance_cycles;
+    double chord_start = 0;
+    std::size_t c = 0;
+    for (std::size_t n = 1; n <= T; ++n) {
+        double t;
+        if (n == T) {
+            const PlannedSegment& f = in.feeds.back();
+            t = (f.t_start + f.profile.duration) * in.clock_hz;
+        } else {
+            const double pn = std::clamp(prog[n], 0.0, chord_end.back());
+            while (c + 1 < in.chords.size() && pn > chord_end[c]) chord_start = chord_end[c], ++c;
+            const PlannedSegment& f = in.feeds[c];
+            const double span = chord_end[c] - chord_start;
+            const double frac = span > 0 ? std::clamp((pn - chord_start) / span, 0.0, 1.0) : 1.0;
+            t = (f.t_start + f.profile.time_at(f.length * frac)) * in.clock_hz;
+        }
+        if (n > 1 && !(t - w.ideal[n - 2] >= gap))
+            return fmt::format("its moves come faster than the walker's one in {} cycles", std::uint64_t(gap));
+        w.ideal[n - 1] = t;
+    }
+
+    if (stats) {
+        stats->max_node_deviation = std::max(stats->max_node_deviation, worst_node);
+        stats->max_other_deviation = std::max(stats->max_other_deviation, worst_other);
+    }
+    std::vector<ConicPiece> out;
+    out.reserve(pieces);
+    ConicWalk rest = std::move(w);
+    for (std::size_t q = 0; q < pieces; ++q) {
+        const std::size_t L = at[q + 1] - at[q];
+        ConicWalk piece = q + 1 < pieces ? rest.head(L) : rest;
+        if (q + 1 < pieces) rest = rest.tail(L);
+        ConicPiece cp;
+        CardSegment& s = cp.segment;
+        s.major = u;
+        s.moves = std::uint32_t(L);
+        s.first_move = std::uint32_t(at[q]);
+        s.loc = b.loc;
+        s.step_segment = in.first_step_segment;
+        for (std::size_t a = 0; a < std::size_t(kAxes); ++a) {
+            const std::int64_t d = int(a) == u ? piece.du : int(a) == v ? piece.dv : pos[q + 1][a] - pos[q][a];
+            s.delta[a] = d;
+            s.dir_positive[a] = d >= 0;
+            s.u[a] = std::uint32_t(L);
+            s.v[a] = (int(a) == u || int(a) == v) ? 0 : std::uint32_t(d < 0 ? -d : d);
+        }
+        cp.walk = std::make_shared<const ConicWalk>(std::move(piece));
+        out.push_back(std::move(cp));
+    }
+    return out;
+}
+
+}  // namespace cpstep::plan

@@ -1,0 +1,88 @@
+// SPDX-License-Identifier: MIT
+// Arcs on the card: a G2/G3 arc as CONIC card segments (docs/CORE.md "CONIC",
+// docs/PLANNING.md "Arcs as conics"). The card's walker steps the arc's plane by
+// seed 001's rule; the host runs the same walk (model::CpConicSerial::rule, modulo
+// the walker's width) to know every node, picks the end node, times every move
+// from the feed planned over the arc's chords, and splits what the card cannot
+// take in one segment. An arc the walker cannot step within the card's limits is
+// left to chords, with the reason.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "plan/gcode.h"
+#include "plan/machine.h"
+#include "plan/planner.h"
+#include "plan/reduce.h"
+#include "plan/segments.h"
+
+namespace cpstep::plan {
+
+// The walk of one CONIC card segment: the plane, the curve, the start node, every
+// move and its ideal time.
+struct ConicWalk {
+    int axis_u = 0, axis_v = 1;
+    bool cw = false;  // the walker's sense: clockwise in (u, v), G > 0 on the left of travel
+    // The circle in steps, A x^2 + B xy + C y^2 + D x + E y + F = 0 (A = C = 256).
+    std::int64_t a = 0, b = 0, c = 0, d = 0, e = 0, f = 0;
+    // The G-code's circle in steps (its exact centre and start radius), which the
+    // walk's integers round: what `cpstep check` measures the nodes against.
+    double centre_u = 0, centre_v = 0, radius = 0;
+    std::int64_t u0 = 0, v0 = 0;      // the start node
+    std::int64_t du = 0, dv = 0;      // the end node minus the start node
+    std::vector<std::uint8_t> moves;  // per move: (dx + 1) | (dy + 1) << 2
+    std::vector<double> ideal;        // per move: its ideal time, card cycles from the job start
+
+    [[nodiscard]] static std::uint8_t pack(int dx, int dy) { return std::uint8_t((dx + 1) | (dy + 1) << 2); }
+    [[nodiscard]] static int dx_of(std::uint8_t m) { return int(m & 3) - 1; }
+    [[nodiscard]] static int dy_of(std::uint8_t m) { return int(m >> 2 & 3) - 1; }
+    // The seven words K0..K6 that load the walker for this walk (docs/CORE.md).
+    [[nodiscard]] std::array<std::uint32_t, 7> words() const;
+    // The same walk's first `n` moves, and the walk from move n on (with their times).
+    [[nodiscard]] ConicWalk head(std::size_t n) const;
+    [[nodiscard]] ConicWalk tail(std::size_t n) const;
+};
+
+// One CONIC card segment: what the planner records of it (moves, delta, the other
+// axes' patterns over T with k = 0) and its walk.
+struct ConicPiece {
+    CardSegment segment;
+    std::shared_ptr<const ConicWalk> walk;
+};
+
+struct ConicArcStats {
+    double max_node_deviation = 0;  // steps: the farthest node from the G-code arc
+    double max_other_deviation = 0; // steps: the farthest other axis (a helix's) from its line
+};
+
+// What plan_conic_arc needs: the arc, its chords as the feed planner planned them,
+// the card position it starts from, and the card's limits.
+struct ConicArcInput {
+    const MotionBlock* block = nullptr;
+    std::span<const StepSegment> chords;     // the arc's step segments, in order
+    std::span<const PlannedSegment> feeds;   // their planned feeds
+    std::size_t first_step_segment = 0;      // index of chords[0] in the job
+    PerAxis<std::int64_t> start{};           // where the card is (normally chords[0].start)
+    bool last_motion = false;                // no motion follows: the walk must end on the arc's end step
+    unsigned ciw = 0;                        // the card's walker width (0: none)
+    std::uint32_t umax = 0;                  // largest T
+    std::uint32_t w = 0;                     // pattern capacity (the other axes' patterns over T)
+    double clock_hz = 0;
+    double tolerance_cycles = 0;             // a move may be this much early (chunks)
+};
+
+// The arc as CONIC pieces (their moves sum to the walk's), or why it must be chords.
+std::variant<std::vector<ConicPiece>, std::string> plan_conic_arc(const ConicArcInput& in, const Machine& m,
+                                                                  ConicArcStats* stats = nullptr);
+
+// Cycles the walker needs between the last move of one CONIC segment and the first
+// of the next (docs/CORE.md "CONIC": 8 + CIW + 2), and between two moves of one.
+inline constexpr std::uint64_t conic_gap_cycles(unsigned ciw) { return 8u + ciw + 2u; }
+
+}  // namespace cpstep::plan
