@@ -280,8 +280,26 @@ std::variant<std::vector<ConicPiece>, std::string> plan_conic_arc(const ConicArc
     if (!(worst_other <= 1.0))
         return fmt::format("its other axes stray {:.3g} steps from their lines in every split tried", worst_other);
 
-    // Ideal times: a node's progress along the sweep falls on a chord; the chord's
-    // feed profile times it at the same fraction of the chord.
+    // Ideal times, as a line's moves are timed (steptime.h: move i of T when the path
+    // reaches i/T of its length, i.e. where the line's major coordinate reaches the
+    // move's): a node is due where the circle reaches the node's coordinate along the
+    // axis its octant steps every move (y where the tangent is nearer y, else x), so
+    // that moves a whole step apart on that axis come at an even pace and the chunks
+    // fit them as they fit a line's, however the walk mixes axial and combined moves.
+    // That point's progress along the sweep falls on a chord; the chord's feed
+    // profile times it at the same fraction of the chord.
+    const auto timing_progress = [&](std::size_t n, double near) {
+        const double x = double(nodes[n].first) - cu, y = double(nodes[n].second) - cv;
+        double px = x, py = y;
+        if (std::abs(x) >= std::abs(y)) {  // the tangent is nearer y: y steps every move
+            py = std::clamp(y, -r, r);
+            px = std::copysign(std::sqrt(std::max(0.0, r * r - py * py)), x);
+        } else {
+            px = std::clamp(x, -r, r);
+            py = std::copysign(std::sqrt(std::max(0.0, r * r - px * px)), y);
+        }
+        return progress(px + cu, py + cv, cu, cv, from, w.cw, near);
+    };
     std::vector<double> chord_end(in.chords.size());
     {
         double q = 0;
@@ -302,7 +320,7 @@ std::variant<std::vector<ConicPiece>, std::string> plan_conic_arc(const ConicArc
             const PlannedSegment& f = in.feeds.back();
             t = (f.t_start + f.profile.duration) * in.clock_hz;
         } else {
-            const double pn = std::clamp(prog[n], 0.0, chord_end.back());
+            const double pn = std::clamp(timing_progress(n, prog[n]), 0.0, chord_end.back());
             while (c + 1 < in.chords.size() && pn > chord_end[c]) chord_start = chord_end[c], ++c;
             const PlannedSegment& f = in.feeds[c];
             const double span = chord_end[c] - chord_start;
