@@ -118,12 +118,20 @@ std::variant<std::vector<ConicPiece>, std::string> plan_conic_arc(const ConicArc
     CpConic::Node node = CpConic::at(k, w.u0, w.v0);
     double r_card = r;
     if (!CpConic::on_curve(k, node)) {
-        const long double r2 = std::pow((long double)w.u0 - gu, 2) + std::pow((long double)w.v0 - gv, 2);
-        w.f = f_of(r2);
-        k = coeffs_of(w);
-        node = CpConic::at(k, w.u0, w.v0);
-        r_card = double(std::sqrt(r2));
-        if (!CpConic::on_curve(k, node)) return std::string("its start node is not on the walker's circle");
+        // The radius moved towards the start node's distance d0 until the node passes:
+        // d0 less 0.45 step first (the walk then stays within |d0 - r| - 0.45 + 0.5 of
+        // the G-code's circle), through d0 itself (a circle through the node).
+        const long double d0 = std::hypot((long double)w.u0 - gu, (long double)w.v0 - gv);
+        bool passed = false;
+        for (const long double back : {0.45L, 0.4L, 0.3L, 0.2L, 0.1L, 0.0L}) {
+            const long double rr = d0 - (d0 > (long double)r ? back : -back);
+            w.f = f_of(rr * rr);
+            k = coeffs_of(w);
+            node = CpConic::at(k, w.u0, w.v0);
+            r_card = double(rr);
+            if ((passed = CpConic::on_curve(k, node))) break;
+        }
+        if (!passed) return std::string("its start node is not on the walker's circle");
     }
     if (!fits_signed(node.g, 32) || !fits_signed(node.gx, 32) || !fits_signed(node.gy, 32))
         return std::string("its start values exceed the walker's 32-bit load words");

@@ -117,7 +117,7 @@ double walk_job(const PlannedJob& pj, const Machine& m, const std::vector<Circle
             // The walker keeps its nodes within half a step of its own circle: the
             // G-code's (its centre on the 1/16-step grid: 0.045 step), or the one
             // through the start node when the rounded start is off the walker's test.
-            const double bound = 0.5 + 0.05 + std::max(0.0, start_off - 0.45);
+            const double bound = 0.5 + 0.05 + std::max(0.0, start_off - 0.45);  // (the planner moves the radius by start_off - 0.45 at most)
             std::int64_t x = w.u0, y = w.v0;
             for (std::uint8_t mv : w.moves) {
                 x += ConicWalk::dx_of(mv);
