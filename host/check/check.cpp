@@ -109,7 +109,7 @@ struct SegmentPlan {
   // starts, its circle in steps and how far cpstep's own walk strays from it.
   std::shared_ptr<const plan::ConicWalk> conic;
   plan::PerAxis<int64_t> start{};
-  double cu = 0, cv = 0, r = 0, limit = 0.5;
+  double limit = 0.5;
 };
 
 // A step segment: the straight line its parts follow and how close cpstep's
@@ -204,18 +204,15 @@ class Checker {
     s.string[u].assign(s.moves, '0');
     s.string[v].assign(s.moves, '0');
     s.sign[u] = s.sign[v] = 0;  // per move: the walk's
-    s.cu = w->centre_u;
-    s.cv = w->centre_v;
-    s.r = w->radius;
     int64_t x = w->u0, y = w->v0;
-    double worst = std::abs(std::hypot(double(x) - s.cu, double(y) - s.cv) - s.r);
+    double worst = w->off_curve(double(x), double(y));
     for (uint32_t j = 0; j < s.moves && j < w->moves.size(); ++j) {
       const int dx = plan::ConicWalk::dx_of(w->moves[j]), dy = plan::ConicWalk::dy_of(w->moves[j]);
       if (dx) s.string[u][j] = '1';
       if (dy) s.string[v][j] = '1';
       x += dx;
       y += dy;
-      worst = std::max(worst, std::abs(std::hypot(double(x) - s.cu, double(y) - s.cv) - s.r));
+      worst = std::max(worst, w->off_curve(double(x), double(y)));
     }
     s.limit = std::max(0.5, worst);
     s.conic = std::move(w);
@@ -380,7 +377,7 @@ class Checker {
   void conic_deviation(uint64_t k, size_t s, const plan::PerAxis<int64_t>& pos, double t) {
     const SegmentPlan& sp = segs_[s];
     const int u = sp.conic->axis_u, v = sp.conic->axis_v;
-    const double radial = std::abs(std::hypot(double(pos[u]) - sp.cu, double(pos[v]) - sp.cv) - sp.r);
+    const double radial = sp.conic->off_curve(double(pos[u]), double(pos[v]));
     const int64_t m = int64_t(k - sp.first) + 1;
     for (int a = 0; a < plan::kAxes; ++a) {
       double dev = radial, limit = sp.limit;

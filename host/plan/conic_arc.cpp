@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numbers>
 
@@ -38,16 +39,43 @@ bool fits_signed(i128 v, unsigned bits) {
 CpConic::Coeffs coeffs_of(const ConicWalk& w) { return {w.a, w.b, w.c, w.d, w.e, w.f}; }
 
 // Progress along the arc's sweep of the point (x, y) (steps), in radians, from the
-// angle `from`, unwrapped near `near`.
-double progress(double x, double y, double cu, double cv, double from, bool cw, double near) {
-    double p = std::atan2(y - cv, x - cu) - from;
+// angle `from`, unwrapped near `near`; `k` = su / sv stretches v into u's steps, where
+// the arc is a circle (its angle is the G-code's, in mm).
+double progress(double x, double y, double cu, double cv, double k, double from, bool cw, double near) {
+    double p = std::atan2(k * (y - cv), x - cu) - from;
     if (cw) p = -p;
     constexpr double two_pi = 2 * std::numbers::pi;
     p -= two_pi * std::round((p - near) / two_pi);
     return p;
 }
 
+// The best fraction p / q of x with p, q <= limit (continued fractions).
+std::pair<std::int64_t, std::int64_t> best_fraction(double x, std::int64_t limit) {
+    std::int64_t p0 = 0, q0 = 1, p1 = 1, q1 = 0;
+    double f = x;
+    for (int it = 0; it < 64; ++it) {
+        const double a = std::floor(f);
+        const std::int64_t ai = std::int64_t(a);
+        const std::int64_t p2 = ai * p1 + p0, q2 = ai * q1 + q0;
+        if (p2 > limit || q2 > limit) break;
+        p0 = p1, q0 = q1, p1 = p2, q1 = q2;
+        if (f - a < 1e-12) break;
+        f = 1 / (f - a);
+    }
+    return {p1, q1};
+}
+
 }  // namespace
+
+double ConicWalk::off_curve(double x, double y) const {
+    const double du_ = x - centre_u, dv_ = stretch_v * (y - centre_v);
+    if (stretch_v == 1) return std::abs(std::hypot(du_, dv_) - radius);
+    // An ellipse in steps: first order, |G| / |grad G| of (x - cu)^2 + (k (y - cv))^2 - r^2.
+    const double gval = du_ * du_ + dv_ * dv_ - radius * radius;
+    const double gx = 2 * du_, gy = 2 * stretch_v * dv_;
+    const double n = std::hypot(gx, gy);
+    return n > 0 ? std::abs(gval) / n : radius;
+}
 
 std::array<std::uint32_t, 7> ConicWalk::words() const {
     const CpConic::Coeffs k = coeffs_of(*this);
@@ -84,65 +112,96 @@ std::variant<std::vector<ConicPiece>, std::string> plan_conic_arc(const ConicArc
     const int u = int(g.u), v = int(g.v);
     const double su = m.axes[u].steps_per_mm, sv = m.axes[v].steps_per_mm;
     if (!m.axes[u].present || !m.axes[v].present) return std::string("the arc's plane has an axis the machine lacks");
-    if (std::abs(su - sv) > 1e-12 * su)
-        return fmt::format("axes {} and {} have different steps/mm ({:g}, {:g}): the arc is no circle in steps",
-                           kAxisLetters[u], kAxisLetters[v], su, sv);
+
     if (std::abs(g.r1 - g.r0) * su > 0.25)
         return fmt::format("its end radii differ by {:.3g} steps (a spiral)", std::abs(g.r1 - g.r0) * su);
 
-    // The circle on the card: the centre on the 1/16-step grid, the radius of the
-    // start point (G-code's), or through the start node when that node fails the
-    // walker's on-curve test (it is within 0.71 step of the circle: rounding).
+    // The curve on the card. In u's steps, with v stretched by k = su / sv, the arc is
+    // the G-code's circle: (x - cu)^2 + (k (y - cv))^2 = r^2. Equal steps/mm (k = 1):
+    // A = C = 256, the centre on the 1/16-step grid (D, E, F exact). Otherwise an
+    // ellipse in steps: C / A = k^2 as a fraction p / q of at most 32767 (exact for
+    // steps/mm whose squares have a small ratio, 80 and 400: 1/25), the radius is the
+    // G-code's within 0.05 step or the arc is left to chords, A as large as the
+    // walker's 16-bit coefficients and 32-bit load words allow.
+    const double k = su / sv;
+    const bool circle = std::abs(k - 1) <= 1e-12;
     const double cu = g.cx * su, cv = g.cy * sv;  // exact centre, steps
-    const auto i = std::int64_t(std::llround(cu * kCentreGrid)), j = std::int64_t(std::llround(cv * kCentreGrid));
-    const double gu = double(i) / kCentreGrid, gv = double(j) / kCentreGrid;  // the card's centre
-    const double r = g.r0 * su;
-    if (!(r >= kMinRadiusSteps)) return fmt::format("its radius is {:.3g} steps (conics from {:g})", r, kMinRadiusSteps);
+    const double r = g.r0 * su;                   // in u's steps
+    if (!(r >= kMinRadiusSteps) || !(r / k >= kMinRadiusSteps))
+        return fmt::format("its radius is {:.3g} steps (conics from {:g})", std::min(r, r / k), kMinRadiusSteps);
     ConicWalk w;
     w.axis_u = u;
     w.axis_v = v;
     w.cw = g.cw;
-    w.a = w.c = kScale;
-    w.d = -2 * kScale / std::int64_t(kCentreGrid) * i;
-    w.e = -2 * kScale / std::int64_t(kCentreGrid) * j;
     w.u0 = in.start[u];
     w.v0 = in.start[v];
     w.centre_u = cu;
     w.centre_v = cv;
     w.radius = r;
-    const auto f_of = [&](long double r2) {
-        return i * i + j * j - std::int64_t(std::llroundl((long double)kScale * r2));
-    };
+    w.stretch_v = circle ? 1.0 : k;
+    double gu = cu, gv = cv;  // the card's centre
+    std::function<std::int64_t(long double)> f_of;  // F for a radius (u's steps) squared
+    if (circle) {
+        const auto i = std::int64_t(std::llround(cu * kCentreGrid)), j = std::int64_t(std::llround(cv * kCentreGrid));
+        gu = double(i) / kCentreGrid;
+        gv = double(j) / kCentreGrid;
+        w.a = w.c = kScale;
+        w.d = -2 * kScale / std::int64_t(kCentreGrid) * i;
+        w.e = -2 * kScale / std::int64_t(kCentreGrid) * j;
+        f_of = [i, j](long double r2) { return i * i + j * j - std::int64_t(std::llroundl((long double)kScale * r2)); };
+    } else {
+        const auto [pp, qq] = best_fraction(k * k, 32767);
+        if (pp <= 0 || qq <= 0) return fmt::format("no ratio of 16-bit coefficients for steps/mm {:g} and {:g}", su, sv);
+        // Shape: the v semi-axis in steps is r / k; with C / A = p / q it is r sqrt(q / p).
+        const double v_err = std::abs(r * std::sqrt(double(qq) / double(pp)) - r / k);
+        if (v_err > 0.05)
+            return fmt::format("steps/mm {:g} and {:g} make an ellipse whose axes' ratio 16-bit coefficients miss "
+                               "by {:.3g} steps",
+                               su, sv, v_err);
+        const std::int64_t big = std::max(pp, qq);
+        const double span = r + std::max(std::abs(double(w.u0) - cu), std::abs(double(w.v0) - cv)) + 4;
+        const std::int64_t mult =
+            std::min<std::int64_t>(32767 / big, std::int64_t(std::floor(double(1 << 29) / (span * double(big)))));
+        if (mult < 1) return std::string("it is too large for the walker's 32-bit load words as an ellipse");
+        w.a = qq * mult;
+        w.c = pp * mult;
+        w.d = std::llround(-2.0L * w.a * cu);
+        w.e = std::llround(-2.0L * w.c * cv);
+        gu = -double(w.d) / (2.0 * double(w.a));
+        gv = -double(w.e) / (2.0 * double(w.c));
+        const long double a_ = w.a, c_ = w.c, gu_ = gu, gv_ = gv;
+        f_of = [a_, c_, gu_, gv_](long double r2) {
+            return std::int64_t(std::llroundl(a_ * gu_ * gu_ + c_ * gv_ * gv_ - a_ * r2));
+        };
+    }
     w.f = f_of((long double)r * r);
-    CpConic::Coeffs k = coeffs_of(w);
-    CpConic::Node node = CpConic::at(k, w.u0, w.v0);
-    double r_card = r;
-    if (!CpConic::on_curve(k, node)) {
-        // The radius moved towards the start node's distance d0 until the node passes:
-        // d0 less 0.45 step first (the walk then stays within |d0 - r| - 0.45 + 0.5 of
-        // the G-code's circle), through d0 itself (a circle through the node).
-        const long double d0 = std::hypot((long double)w.u0 - gu, (long double)w.v0 - gv);
+    CpConic::Coeffs kc = coeffs_of(w);
+    CpConic::Node node = CpConic::at(kc, w.u0, w.v0);
+    if (!CpConic::on_curve(kc, node)) {
+        // The radius moved towards the start node's d0 until the node passes: d0 less
+        // 0.45 step first (the walk then stays within |d0 - r| - 0.45 + 0.5 of the
+        // G-code's curve), through d0 itself (a curve through the node).
+        const long double d0 = std::hypot((long double)w.u0 - gu, (long double)(w.stretch_v * (double(w.v0) - gv)));
         bool passed = false;
         for (const long double back : {0.45L, 0.4L, 0.3L, 0.2L, 0.1L, 0.0L}) {
             const long double rr = d0 - (d0 > (long double)r ? back : -back);
             w.f = f_of(rr * rr);
-            k = coeffs_of(w);
-            node = CpConic::at(k, w.u0, w.v0);
-            r_card = double(rr);
-            if ((passed = CpConic::on_curve(k, node))) break;
+            kc = coeffs_of(w);
+            node = CpConic::at(kc, w.u0, w.v0);
+            if ((passed = CpConic::on_curve(kc, node))) break;
         }
-        if (!passed) return std::string("its start node is not on the walker's circle");
+        if (!passed) return std::string("its start node is not on the walker's curve");
     }
     if (!fits_signed(node.g, 32) || !fits_signed(node.gx, 32) || !fits_signed(node.gy, 32))
         return std::string("its start values exceed the walker's 32-bit load words");
 
     // The walk, to just past the end of the sweep.
     const double from = g.a0;  // progress 0: the G-code's start point (angles are the same in steps)
-    const double margin = 3 / r;
+    const double margin = 3 / std::min(r, r / k);
     const double end_u = b.end[std::size_t(u)] * su, end_v = b.end[std::size_t(v)] * sv;  // exact end, steps
-    const std::size_t max_moves = std::size_t(8 * (r + 2) * g.sweep) + 64;
+    const std::size_t max_moves = std::size_t(8 * (std::max(r, r / k) + 2) * g.sweep) + 64;
     std::vector<std::pair<std::int64_t, std::int64_t>> nodes{{w.u0, w.v0}};
-    std::vector<double> prog{progress(double(w.u0), double(w.v0), cu, cv, from, w.cw, 0)};
+    std::vector<double> prog{progress(double(w.u0), double(w.v0), cu, cv, w.stretch_v, from, w.cw, 0)};
     // The end node: the arc's end rounded to steps (where its chords end and the
     // next block starts) when the walk passes it near the end of the sweep, else
     // the walk's node nearest the exact end point (the next block then starts there;
@@ -151,21 +210,21 @@ std::variant<std::vector<ConicPiece>, std::string> plan_conic_arc(const ConicArc
     std::size_t best = 0, rounded = 0;
     double best_d = std::numeric_limits<double>::infinity();
     std::int64_t x = w.u0, y = w.v0;
-    double p = prog[0], worst_node = std::abs(std::hypot(double(w.u0) - cu, double(w.v0) - cv) - r);
+    double p = prog[0], worst_node = w.off_curve(double(w.u0), double(w.v0));
     while (true) {
-        if (!CpConicSerial::fits(k, node, in.ciw))
+        if (!CpConicSerial::fits(kc, node, in.ciw))
             return fmt::format("its values exceed the walker's {} bits", in.ciw);
         int dx = 0, dy = 0;
-        CpConicSerial::rule(k, node, w.cw, in.ciw, dx, dy);
+        CpConicSerial::rule(kc, node, w.cw, in.ciw, dx, dy);
         if (dx == 0 && dy == 0) return std::string("the walk stops (the gradient vanishes)");
-        node = CpConic::advance(k, node, dx, dy);
+        node = CpConic::advance(kc, node, dx, dy);
         x += dx;
         y += dy;
         w.moves.push_back(ConicWalk::pack(dx, dy));
-        p = progress(double(x), double(y), cu, cv, from, w.cw, p);
+        p = progress(double(x), double(y), cu, cv, w.stretch_v, from, w.cw, p);
         nodes.emplace_back(x, y);
         prog.push_back(p);
-        worst_node = std::max(worst_node, std::abs(std::hypot(double(x) - cu, double(y) - cv) - r));
+        worst_node = std::max(worst_node, w.off_curve(double(x), double(y)));
         if (std::abs(p - g.sweep) <= margin) {
             const double dd = std::hypot(double(x) - end_u, double(y) - end_v);
             if (dd < best_d) best_d = dd, best = w.moves.size();
@@ -184,7 +243,6 @@ std::variant<std::vector<ConicPiece>, std::string> plan_conic_arc(const ConicArc
     w.du = nodes[T].first - w.u0;
     w.dv = nodes[T].second - w.v0;
     if (!fits_signed(w.du, 24) || !fits_signed(w.dv, 24)) return std::string("it spans more than 2^23 steps");
-    (void)r_card;
 
     // The other axes (a helix's): each steps by a pattern over the piece's moves; its
     // ideal position at node n follows the sweep.
@@ -209,8 +267,8 @@ std::variant<std::vector<ConicPiece>, std::string> plan_conic_arc(const ConicArc
         double worst = 0;
         for (std::size_t a = 0; a < std::size_t(kAxes); ++a) {
             if (int(a) == u || int(a) == v || end[a] == in.start[a]) continue;
-            const double x = ideal_other(a, n);
-            worst = std::max(worst, std::abs(x - std::floor(x + 0.5)));
+            const double at_n = ideal_other(a, n);
+            worst = std::max(worst, std::abs(at_n - std::floor(at_n + 0.5)));
         }
         return worst;
     };
@@ -297,23 +355,25 @@ std::variant<std::vector<ConicPiece>, std::string> plan_conic_arc(const ConicArc
     // That point's progress along the sweep falls on a chord; the chord's feed
     // profile times it at the same fraction of the chord.
     const auto timing_progress = [&](std::size_t n, double near) {
-        const double x = double(nodes[n].first) - cu, y = double(nodes[n].second) - cv;
-        double px = x, py = y;
-        if (std::abs(x) >= std::abs(y)) {  // the tangent is nearer y: y steps every move
-            py = std::clamp(y, -r, r);
-            px = std::copysign(std::sqrt(std::max(0.0, r * r - py * py)), x);
+        // In u's steps with v stretched (a circle of radius r): v steps every move
+        // where |x| / k >= |k y|, i.e. its speed in steps is the larger.
+        const double xs = double(nodes[n].first) - cu, ys = w.stretch_v * (double(nodes[n].second) - cv);
+        double px = xs, py = ys;
+        if (std::abs(xs) >= w.stretch_v * std::abs(ys)) {  // v steps every move: keep it
+            py = std::clamp(ys, -r, r);
+            px = std::copysign(std::sqrt(std::max(0.0, r * r - py * py)), xs);
         } else {
-            px = std::clamp(x, -r, r);
-            py = std::copysign(std::sqrt(std::max(0.0, r * r - px * px)), y);
+            px = std::clamp(xs, -r, r);
+            py = std::copysign(std::sqrt(std::max(0.0, r * r - px * px)), ys);
         }
-        return progress(px + cu, py + cv, cu, cv, from, w.cw, near);
+        return progress(px + cu, py / w.stretch_v + cv, cu, cv, w.stretch_v, from, w.cw, near);
     };
     std::vector<double> chord_end(in.chords.size());
     {
         double q = 0;
         for (std::size_t c = 0; c < in.chords.size(); ++c) {
             const auto& to = in.chords[c].to_mm;
-            q = progress(to[std::size_t(u)] * su, to[std::size_t(v)] * sv, cu, cv, from, w.cw, q);
+            q = progress(to[std::size_t(u)] * su, to[std::size_t(v)] * sv, cu, cv, w.stretch_v, from, w.cw, q);
             chord_end[c] = q;
         }
         chord_end.back() = std::max(chord_end.back(), prog[T]);

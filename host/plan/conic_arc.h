@@ -31,9 +31,13 @@ struct ConicWalk {
     bool cw = false;  // the walker's sense: clockwise in (u, v), G > 0 on the left of travel
     // The circle in steps, A x^2 + B xy + C y^2 + D x + E y + F = 0 (A = C = 256).
     std::int64_t a = 0, b = 0, c = 0, d = 0, e = 0, f = 0;
-    // The G-code's circle in steps (its exact centre and start radius), which the
-    // walk's integers round: what `cpstep check` measures the nodes against.
-    double centre_u = 0, centre_v = 0, radius = 0;
+    // The G-code's circle in steps (its exact centre and start radius in u's steps;
+    // v's steps stretched by su / sv make it a circle), which the walk's integers
+    // round: what `cpstep check` measures the nodes against.
+    double centre_u = 0, centre_v = 0, radius = 0, stretch_v = 1;
+    // A node's distance in steps from that curve (a circle: exact; an ellipse in
+    // steps, unequal steps/mm: to first order, |G| / |grad G|).
+    [[nodiscard]] double off_curve(double x, double y) const;
     std::int64_t u0 = 0, v0 = 0;      // the start node
     std::int64_t du = 0, dv = 0;      // the end node minus the start node
     std::vector<std::uint8_t> moves;  // per move: (dx + 1) | (dy + 1) << 2

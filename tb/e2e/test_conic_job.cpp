@@ -148,6 +148,36 @@ TEST(ConicJob, TheSameJobAsChordsEndsAtTheSameSteps) {
   EXPECT_TRUE(ice->warnings.empty()) << plan::join(ice->warnings);
 }
 
+// An arc whose plane's axes have different steps/mm (seed002.toml: X 80, Z 400) is an
+// ellipse in steps; the card walks it as one (docs/PLANNING.md "Arcs as conics"): the
+// fast engine runs it, the trace conforms to the plan, the card ends where the G-code
+// does.
+TEST(ConicJob, AnArcInXZOnUnequalStepsPerMmIsAnEllipseOnTheCard) {
+  const fs::path g = write_job("xz.ngc", "G21 G90\nG0 X20 Y10 Z0\nG18 G2 X30 Z0 I5 K0 F600\nG3 X20 Z0 I-5 K0\nM2\n");
+  auto job = run::prepare_job(g.string(), kSource + "/examples/machines/seed002.toml", *card::board_caps("hx8k"));
+  ASSERT_TRUE(job.ok()) << plan::join(job.errors);
+  EXPECT_EQ(job->planned.stats.conic_arcs, 2u) << plan::join(job->warnings);
+  const fs::path vcd = fs::path(CPSTEP_TEST_DIR) / "conic_job" / "xz.vcd";
+  run::SimRunOptions o;
+  o.board = "hx8k";
+  o.vcd = vcd.string();
+  const run::CardRun r = run::run_on_sim(*job, o);
+  ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
+  EXPECT_EQ(r.position[0], 20 * 80);
+  EXPECT_EQ(r.position[2], 0);
+  EXPECT_EQ(r.stretch_count, 0u);
+  const auto text = check::read_text(vcd);
+  ASSERT_TRUE(text.has_value());
+  const auto trace = check::parse_vcd(*text, vcd.string());
+  ASSERT_TRUE(trace.ok()) << plan::join(trace.errors);
+  const auto pins = check::read_pins(*trace, check::default_pin_map(), *job);
+  ASSERT_TRUE(pins.ok()) << plan::join(pins.errors);
+  const check::Verdict v = check::check_trace(*job, *pins);
+  EXPECT_TRUE(v.conforms()) << check::verdict_summary(v);
+  EXPECT_LE(v.axes[0].max_deviation, 0.55);
+  EXPECT_LE(v.axes[2].max_deviation, 0.55);
+}
+
 // Seed 001's figure on the card's pins: a G-code quarter circle of radius 1,000 steps
 // (3.125 mm at 320 steps/mm) about a node, planned for the HX8K card and stepped by its
 // walker, every move event read off STEP/DIR: 1,414 moves of which 586 are combined

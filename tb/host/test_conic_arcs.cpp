@@ -17,6 +17,7 @@
 
 #include "card/job.h"
 #include "model/cp_conic.h"
+#include "model/conic_oracle.h"
 #include "model/cp_conic_serial.h"
 #include "plan/pipeline.h"
 
@@ -191,7 +192,9 @@ TEST(ConicArcs, MovesAreTimedOnTheFeedAndNeverFasterThanTheWalker) {
             last_conic = t.back();
         }
         for (std::size_t j = 0; j < c.segment.moves; ++j, ++k)
-            if (c.conic) EXPECT_EQ(ideal[k], c.conic->ideal[j]);
+            if (c.conic) {
+                EXPECT_EQ(ideal[k], c.conic->ideal[j]);
+            }
     }
     // The arcs' last moves are their last chords' ends: the feed plan's times.
     for (std::size_t c = 0; c + 1 < pj.card.size() + 1; ++c) {
@@ -302,13 +305,14 @@ TEST(ConicArcs, ChordsWhenAskedWhenTheCardHasNoWalkerOrTheArcDoesNotQualify) {
     EXPECT_EQ(pj.stats.conic_arcs, 0u);
     EXPECT_EQ(pj.stats.chord_arcs, 1u);
     EXPECT_TRUE(w.empty()) << join(w);
-    // Unequal steps/mm in the plane: an ellipse in steps; chords, with the reason.
+    // Steps/mm whose squares' ratio no 16-bit coefficients hold: chords, with the reason.
     Machine uneq = machine();
-    uneq.axes[1].steps_per_mm = 400;
-    pj = plan_of(g, uneq, &w);
+    uneq.axes[0].steps_per_mm = 400;
+    uneq.axes[1].steps_per_mm = 2;  // (400 / 2)^2 = 40000: above 16 bits
+    pj = plan_of("G21 G90 G17\nG0 X10 Y0\nG3 X-10 Y0 I-10 J0 F300\n", uneq, &w);
     EXPECT_EQ(pj.stats.conic_arcs, 0u);
     ASSERT_EQ(w.size(), 1u);
-    EXPECT_NE(w[0].message.find("different steps/mm"), std::string::npos) << w[0].message;
+    EXPECT_NE(w[0].message.find("ratio"), std::string::npos) << w[0].message;
     EXPECT_EQ(w[0].loc.line, 3);
     // A radius of a step or two: chords.
     pj = plan_of("G21 G90 G17\nG0 X0.01 Y0\nG3 X-0.01 Y0 I-0.01 J0 F300\n", machine(), &w);
@@ -322,6 +326,47 @@ TEST(ConicArcs, ChordsWhenAskedWhenTheCardHasNoWalkerOrTheArcDoesNotQualify) {
             for (int a = 0; a < kAxes; ++a) pos[a] += c.segment.delta[a];
         EXPECT_EQ(pos, steps(-10, 0, 0));
     }
+}
+
+// Unequal steps/mm in the plane (seed002.toml's 80 on X and 400 on Z): the G-code's
+// circle is an ellipse in steps, walked as one (C / A = 1/25 exactly). Every node's
+// distance from that ellipse in steps, by the untimed oracle's nearest point (not the
+// planner's first-order figure), within 0.55 step; the walk ends where the G-code does.
+TEST(ConicArcs, UnequalStepsPerMmAreEllipsesInSteps) {
+    const Machine m = machine(80, 400);
+    std::vector<Diagnostic> warnings;
+    const PlannedJob pj = plan_of("G21 G90\nG0 X3 Y0 Z0\nG18 G2 X3 Z0 I-3 K0 F1200\nG2 X-3 Z0 I-3 K0\n"
+                                  "G17 G3 X3 Y0 I3 J0\nG0 X0\n", m, &warnings);
+    EXPECT_EQ(pj.stats.conic_arcs, 3u) << join(warnings);
+    double worst = 0;
+    std::size_t ellipses = 0;
+    PerAxis<std::int64_t> pos = pj.step_segments.front().start;
+    for (const PlannedCardSegment& c : pj.card) {
+        if (c.conic) {
+            const ConicWalk& w = *c.conic;
+            const double su = m.axes[std::size_t(w.axis_u)].steps_per_mm, sv = m.axes[std::size_t(w.axis_v)].steps_per_mm;
+            EXPECT_EQ(w.u0, pos[w.axis_u]);
+            EXPECT_EQ(w.v0, pos[w.axis_v]);
+            // The G-code circle about (0, 0) mm, radius 3, in steps: (x/su)^2 + (y/sv)^2 = 9.
+            const oracle::Conic curve{1.0L / (su * su), 0, 1.0L / (sv * sv), 0, 0, -9};
+            if (su != sv) {
+                ++ellipses;
+                EXPECT_EQ(double(w.c) * sv * sv, double(w.a) * su * su) << "C / A = (su / sv)^2, exactly";
+            }
+            std::int64_t x = w.u0, y = w.v0;
+            for (std::uint8_t mv : w.moves) {
+                x += ConicWalk::dx_of(mv);
+                y += ConicWalk::dy_of(mv);
+                const double d = double(oracle::nearest(curve, x, y).distance);
+                worst = std::max(worst, d);
+                EXPECT_LE(d, 0.55) << "node (" << x << ", " << y << ")";
+            }
+        }
+        for (int a = 0; a < kAxes; ++a) pos[a] += c.segment.delta[a];
+    }
+    EXPECT_EQ(ellipses, 2u) << "the G18 arcs (Z, X): ellipses; the G17 arc a circle";
+    EXPECT_EQ(pos, (PerAxis<std::int64_t>{0, 0, 0, 0}));
+    std::printf("ellipse and circle nodes: within %.4f step of the G-code's curves in steps\n", worst);
 }
 
 TEST(ConicArcs, MachineFileArcsKeyIsCheckedWithItsPlace) {
