@@ -108,6 +108,19 @@ Outcome run_engine(Stepper& dut, const Request& rq, uint64_t max_cycles) {
 
 }  // namespace
 
+ConicRun conic_rtl_moves(const std::array<int64_t, 6>& k, std::array<int64_t, 2> start, std::array<int64_t, 2> end,
+                         bool cw) {
+  Request rq;
+  rq.a = k[0], rq.b = k[1], rq.c = k[2], rq.d = k[3], rq.e = k[4], rq.f = k[5];
+  rq.k = {rq.a, rq.b, rq.c, rq.d, rq.e, rq.f};
+  rq.start = {start[0], start[1]};
+  rq.end = {end[0], end[1]};
+  rq.cw = cw;
+  sim::RtlDut<P> dut;
+  const Outcome r = run_engine(dut, rq, uint64_t(P::model_params().nmax) + 64 * 64 + 1000);
+  return {r.moves, r.err};
+}
+
 int run_conic(const ConicOptions& o) {
   const auto params = P::model_params();
   Request rq;

@@ -9,6 +9,9 @@
 #include <numeric>
 #include <random>
 
+#include "cli/conic_command.h"
+#include "model/cp_conic.h"
+#include "model/cp_conic_serial.h"
 #include "model/oracle.h"
 #include "sim/engine_configs.h"
 #include "sim/engine_session.h"
@@ -30,7 +33,7 @@ std::string engine_moves(sim::RtlDut<sim::EngineDefault>& dut, uint32_t u, uint3
 
 CLI::App* add_vectors_command(CLI::App& app, VectorsOptions& o) {
   auto* c = app.add_subcommand("vectors", "Write conformance vectors (docs/VALIDATING.md) into OUT_DIR");
-  c->add_option("OUT_DIR", o.out_dir, "directory to write engine.vec and segments.vec into")->required();
+  c->add_option("OUT_DIR", o.out_dir, "directory to write engine.vec, segments.vec and conic.vec into")->required();
   c->add_option("--seed", o.seed, "seed of the random segments");
   c->add_option("--random", o.random, "number of random 4-axis segments");
   return c;
@@ -104,6 +107,59 @@ int run_vectors(const VectorsOptions& o) {
     seg({1000, 999, -1, 500});
     for (unsigned i = 0; i < o.random; ++i) seg({mag(rng), mag(rng), mag(rng), mag(rng)});
     fmt::print("{}: {} segment vectors\n", (fs::path(o.out_dir) / "segments.vec").string(), n);
+  }
+
+  // conic.vec: circle walks by seed 001's combined steps (docs/CONIC.md), from the
+  // Verilated conic engine, each equal to the card's walker rule (CONIC segments).
+  {
+    auto f = fmt::output_file((fs::path(o.out_dir) / "conic.vec").string());
+    f.print("# cpstep conformance vectors: walks of the curve A x^2 + B xy + C y^2 + D x + E y + F = 0\n"
+            "# (integers, step units) by seed 001's combined steps (docs/CONIC.md: the rule, the\n"
+            "# quadrant flags, the ties), from node (x0, y0) to node (x1, y1) (a full turn when\n"
+            "# equal), cw 1 = clockwise (G > 0 on the left of travel). Each move is one digit,\n"
+            "# 3 (dx + 1) + (dy + 1): 0 = (-1,-1), 1 = (-1,0), 2 = (-1,+1), 3 = (0,-1), 5 = (0,+1),\n"
+            "# 6 = (+1,-1), 7 = (+1,0), 8 = (+1,+1). Every node lies within half a step of a\n"
+            "# circle of radius >= 1; the walk reaches (x1, y1) on its last move and on no other.\n"
+            "# Taken from rtl/cp_conic.v's streams, each equal to the card walker's rule\n"
+            "# (rtl/cp_conic_serial.v: model::CpConicSerial::rule at IW = 40).\n"
+            "# Format: A B C D E F x0 y0 x1 y1 cw moves\n");
+    size_t n = 0;
+    const auto walk = [&](std::array<int64_t, 6> k, std::array<int64_t, 2> s, std::array<int64_t, 2> e, bool cw) {
+      const ConicRun r = conic_rtl_moves(k, s, e, cw);
+      if (r.err != 0 || r.moves.empty())
+        throw std::runtime_error(fmt::format("the conic engine refused a vector (code {})", r.err));
+      // The card's walker, from the same start, must make the same moves.
+      const model::CpConic::Coeffs co{k[0], k[1], k[2], k[3], k[4], k[5]};
+      model::CpConic::Node node = model::CpConic::at(co, s[0], s[1]);
+      std::string digits;
+      for (const auto& [dx, dy] : r.moves) {
+        int wx = 0, wy = 0;
+        model::CpConicSerial::rule(co, node, cw, 40, wx, wy);
+        if (wx != dx || wy != dy) throw std::runtime_error("the conic engine and the card's walker rule disagree");
+        node = model::CpConic::advance(co, node, dx, dy);
+        digits += char('0' + 3 * (dx + 1) + (dy + 1));
+      }
+      f.print("{} {} {} {} {} {} {} {} {} {} {} {}\n", k[0], k[1], k[2], k[3], k[4], k[5], s[0], s[1], e[0], e[1],
+              int(cw), digits);
+      ++n;
+    };
+    // Circles about a node (radius r: x^2 + y^2 = r^2), a quarter from (r, 0) and a
+    // full turn each way; about (1/2, 1/4) (scaled by 16: 16x^2 + 16y^2 - 16x - 8y + F).
+    for (int64_t r : {1, 2, 3, 4, 5, 7, 8, 13, 16, 25, 64, 100, 1000}) {
+      walk({1, 0, 1, 0, 0, -r * r}, {r, 0}, {0, r}, false);
+      walk({1, 0, 1, 0, 0, -r * r}, {0, r}, {r, 0}, true);
+      walk({1, 0, 1, 0, 0, -r * r}, {r, 0}, {r, 0}, false);
+      walk({1, 0, 1, 0, 0, -r * r}, {r, 0}, {r, 0}, true);
+    }
+    for (int64_t r : {3, 10, 50}) {  // centre (1/2, 1/4), through (r, 0): F = -16 r^2 + 16 r
+      const std::array<int64_t, 6> k{16, 0, 16, -16, -8, -16 * r * r + 16 * r};
+      walk(k, {r, 0}, {r, 0}, false);
+      walk(k, {r, 0}, {r, 0}, true);
+    }
+    // Seed 001's other conics: an ellipse (x^2 + 4 y^2 = 400) and a rotated one.
+    walk({1, 0, 4, 0, 0, -400}, {20, 0}, {20, 0}, false);
+    walk({5, 4, 5, 0, 0, -1125}, {15, 0}, {15, 0}, true);
+    fmt::print("{}: {} conic vectors\n", (fs::path(o.out_dir) / "conic.vec").string(), n);
   }
   return 0;
 }

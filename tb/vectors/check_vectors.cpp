@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: MIT
 // check_vectors DIR: checks every line of DIR/engine.vec and DIR/segments.vec
 // against its own few lines of SPEC section 1's closed form (not the project's
-// oracle), and that each segment lands on its deltas. Prints "N passed, M failed".
+// oracle), and that each segment lands on its deltas; and every walk of
+// DIR/conic.vec: king moves, nodes near the curve, the end on the last move.
+// Prints "N passed, M failed".
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -53,6 +56,44 @@ int main(int argc, char** argv) {
     if (ok) ++passed;
     else { ++failed; std::printf("segments.vec: wrong: %.80s...\n", line.c_str()); }
   }
+  // conic.vec: every move a step to one of the eight neighbours; every node of a
+  // circle (A = C, B = 0) within half a step of it, of another conic within √½ (its
+  // first-order distance |G| / |grad G|); the end node on the last move, on no other.
+  std::ifstream c(dir + "/conic.vec");
+  unsigned conics = 0;
+  for (std::string line; std::getline(c, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream in(line);
+    double k[6];
+    int64_t x0, y0, x1, y1;
+    int cw;
+    std::string moves;
+    in >> k[0] >> k[1] >> k[2] >> k[3] >> k[4] >> k[5] >> x0 >> y0 >> x1 >> y1 >> cw >> moves;
+    const bool circle = k[0] == k[2] && k[1] == 0 && k[0] != 0;
+    const double cx = circle ? -k[3] / (2 * k[0]) : 0, cy = circle ? -k[4] / (2 * k[0]) : 0;
+    const double r = circle ? std::sqrt(cx * cx + cy * cy - k[5] / k[0]) : 0;
+    bool ok = !moves.empty() && (cw == 0 || cw == 1);
+    int64_t x = x0, y = y0;
+    for (size_t i = 0; ok && i < moves.size(); ++i) {
+      const int d = moves[i] - '0';
+      if (d < 0 || d > 8 || d == 4) { ok = false; break; }
+      x += d / 3 - 1;
+      y += d % 3 - 1;
+      double dist;
+      if (circle) {
+        dist = std::fabs(std::hypot(double(x) - cx, double(y) - cy) - r);
+      } else {
+        const double g = k[0] * x * x + k[1] * x * y + k[2] * y * y + k[3] * x + k[4] * y + k[5];
+        dist = std::fabs(g) / std::hypot(2 * k[0] * x + k[1] * y + k[3], k[1] * x + 2 * k[2] * y + k[4]);
+      }
+      ok = ok && dist <= (circle ? 0.5 : 0.7072) + 1e-9;
+      ok = ok && ((x == x1 && y == y1) == (i + 1 == moves.size()));
+    }
+    ++conics;
+    if (ok) ++passed;
+    else { ++failed; std::printf("conic.vec: wrong: %.80s...\n", line.c_str()); }
+  }
+  if (conics == 0) { ++failed; std::printf("conic.vec: no vectors\n"); }
   std::printf("%u passed, %u failed\n", passed, failed);
   return failed == 0 && passed > 0 ? 0 : 1;
 }
