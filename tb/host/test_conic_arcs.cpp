@@ -28,29 +28,21 @@ namespace {
 
 constexpr unsigned kCiw = 40;
 
+// One of the X and Y axes' sections (they differ only in the name).
+std::string xy_axis(const char* name, double spm) {
+    return fmt::format("[axes.{}]\nsteps_per_mm = {}\ntravel_min_mm = -300\ntravel_max_mm = 300\n"
+                       "max_velocity_mm_s = 150\nmax_accel_mm_s2 = 1000\nmax_jerk_mm_s3 = 20000\n"
+                       "driver = \"DM860T\"\n",
+                       name, spm);
+}
+
 Machine machine(double spm_xy = 320, double spm_z = 320, const std::string& arcs = "conic") {
     const std::string text = fmt::format(R"([card]
 clock_hz = 40e6
 [planner]
 arc_tolerance_mm = 0.005
 arcs = "{2}"
-[axes.x]
-steps_per_mm = {0}
-travel_min_mm = -300
-travel_max_mm = 300
-max_velocity_mm_s = 150
-max_accel_mm_s2 = 1000
-max_jerk_mm_s3 = 20000
-driver = "DM860T"
-[axes.y]
-steps_per_mm = {0}
-travel_min_mm = -300
-travel_max_mm = 300
-max_velocity_mm_s = 150
-max_accel_mm_s2 = 1000
-max_jerk_mm_s3 = 20000
-driver = "DM860T"
-[axes.z]
+{3}{4}[axes.z]
 steps_per_mm = {1}
 travel_min_mm = -300
 travel_max_mm = 300
@@ -58,7 +50,7 @@ max_velocity_mm_s = 50
 max_accel_mm_s2 = 500
 max_jerk_mm_s3 = 10000
 driver = "DM556"
-)", spm_xy, spm_z, arcs);
+)", spm_xy, spm_z, arcs, xy_axis("x", spm_xy), xy_axis("y", spm_xy));
     auto r = parse_machine(text, "m.toml");
     EXPECT_TRUE(r.ok()) << join(r.errors);
     Machine m = *r;
