@@ -225,6 +225,16 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
   else
     fmt::print("ran        {:.1f} s\n", wall_s);
   fmt::print("link       {}\n", link_line(r));
+  if (r.pins_observed) {
+    auto qs = [](const plan::QueueStepCost& c) {
+      return c.error.empty() ? fmt::format("{} bytes ({} messages)", c.bytes,
+                                           c.queue_step + c.set_next_step_dir + c.reset_step_clock)
+                             : fmt::format("not countable: {}", c.error);
+    };
+    fmt::print("wire       {} command bytes; Klipper's queue_step for the job's steps: {} at 25 us, {} at 1 us; "
+               "for the card's pin steps: {} at 25 us\n",
+               4 * j.words.size(), qs(m.klipper_25us), qs(m.klipper_1us), qs(m.klipper_pins_25us));
+  }
   if (r.faults.empty()) {
     fmt::print("faults     none\n");
   } else {

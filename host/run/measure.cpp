@@ -69,6 +69,22 @@ RunMeasure measure_run(const CardJob& job, const CardRun& run) {
                        am.peak.j <= ax.max_jerk + am.tolerance.j;
   }
   if (run.pins_observed) m.curve = curve_deviation(job, run);
+  if (run.pins_observed) {
+    std::vector<plan::StepperSteps> steppers;
+    for (int a = 0; a < plan::kAxes; ++a) {
+      const AxisPulses& p = run.pulses[a];
+      if (p.cycles.empty()) continue;
+      plan::StepperSteps s;
+      s.cycles.reserve(p.cycles.size());
+      for (uint64_t c : p.cycles) s.cycles.push_back(c - run.start_cycle);
+      s.dirs = p.dirs;
+      steppers.push_back(std::move(s));
+    }
+    m.klipper_pins_25us = plan::queue_step_cost(steppers, 25e-6 * job.clock_hz());
+    const std::vector<plan::StepperSteps> path = plan::path_steps(job.planned, job.clock_hz());
+    m.klipper_25us = plan::queue_step_cost(path, 25e-6 * job.clock_hz());
+    m.klipper_1us = plan::queue_step_cost(path, 1e-6 * job.clock_hz());
+  }
   return m;
 }
 

@@ -9,6 +9,7 @@
 
 #include "plan/common.h"
 #include "plan/kinematics.h"
+#include "plan/queue_step.h"
 #include "run/card_job.h"
 #include "run/sim_run.h"
 
@@ -50,6 +51,10 @@ struct RunMeasure {
   uint64_t moves_off_chunk_time = 0;
   plan::PerAxis<AxisMeasure> axes;
   CurveDeviation curve;
+  // The job's steps on Klipper's wire (plan/queue_step.h), per stepper: where
+  // Klipper places them (plan::path_steps) at its default max_error of 25 us
+  // and at 1 us, and where the card's pins put them, at 25 us (run.pins_observed only).
+  plan::QueueStepCost klipper_25us, klipper_1us, klipper_pins_25us;
 };
 
 // CurveDeviation of a run (zero positions when the job has no curves).

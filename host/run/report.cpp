@@ -110,6 +110,20 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
     link["utilisation"] = run.sim_cycles ? double(l.busy_cycles) / double(run.sim_cycles) : 0.0;
   }
   r["link"] = link;
+  if (run.pins_observed) {
+    // The same pin steps on Klipper's wire (plan/queue_step.h).
+    auto qs = [](const plan::QueueStepCost& c) {
+      json o = {{"queue_step", c.queue_step},       {"set_next_step_dir", c.set_next_step_dir},
+                {"reset_step_clock", c.reset_step_clock}, {"message_bytes", c.message_bytes},
+                {"blocks", c.blocks},               {"bytes", c.bytes}};
+      if (!c.error.empty()) o["error"] = c.error;
+      return o;
+    };
+    r["wire"] = {{"command_bytes", 4 * job.words.size()},
+                 {"klipper_25us", qs(m.klipper_25us)},
+                 {"klipper_1us", qs(m.klipper_1us)},
+                 {"klipper_pins_25us", qs(m.klipper_pins_25us)}};
+  }
 
   json axes = json::object();
   for (int a = 0; a < plan::kAxes; ++a) {

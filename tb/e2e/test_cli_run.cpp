@@ -168,6 +168,17 @@ TEST(CliRun, SmallJobOnTheSimulatedCard) {
   // rounding of an ideal time to a whole cycle.
   EXPECT_LE(rep["max_timing_error_cycles"].get<double>(), rep["clock_hz"].get<double>() * 1e-6 + 1);
   EXPECT_GT(rep["job_time_s"].get<double>(), 0.1);
+  // The wire against Klipper's: the command file's bytes; Klipper's steps as
+  // many as the pins' (every stepper that moves) and a tighter error costs more.
+  EXPECT_EQ(rep["wire"]["command_bytes"].get<uint64_t>(), fs::file_size(bin));
+  for (const char* k : {"klipper_25us", "klipper_1us", "klipper_pins_25us"}) {
+    const json& w = rep["wire"][k];
+    EXPECT_FALSE(w.contains("error")) << k;
+    EXPECT_EQ(w["reset_step_clock"].get<uint64_t>(), 3u) << k;
+    EXPECT_GE(w["queue_step"].get<uint64_t>(), 3u) << k;
+    EXPECT_GT(w["bytes"].get<uint64_t>(), w["message_bytes"].get<uint64_t>()) << k;
+  }
+  EXPECT_GT(rep["wire"]["klipper_1us"]["bytes"].get<uint64_t>(), rep["wire"]["klipper_25us"]["bytes"].get<uint64_t>());
 
   // Per axis: positions, pulse timing from the driver presets (docs/PLANNING.md,
   // TMC2209 100/100/20/20 ns on x and y, A4988 1000/1000/200/200 ns on z, ns

@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: MIT
+// What the same steps would cost on Klipper's wire: its per-stepper step
+// compression (queue_step interval, count, add: step i of a message comes
+// interval + i*add cycles after step i-1, each step in [ideal - max_error,
+// ideal]) and its message encoding, for comparing the card's command bytes
+// with it (issue 13, docs/BENCHMARKS.md "The wire against Klipper's").
+//
+// The messages are counted by plan::compress without add2 (the greedy longest
+// chunk, at least as long as Klipper's bisection finds: the count is a lower
+// bound of Klipper's), the bytes by Klipper's encoding as its docs/Protocol.md
+// states it: every integer a variable-length quantity (-32..95 one byte,
+// -4096..12287 two, -524288..1572863 three, -67108864..201326591 four, else
+// five), a message its command id and its arguments, messages packed into
+// blocks of at most 64 bytes with 5 bytes of header and trailer each.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace cpstep::plan {
+
+struct PlannedJob;
+
+// One stepper's steps: the cycle of each step and its direction (+1 / -1).
+struct StepperSteps {
+    std::vector<std::uint64_t> cycles;   // increasing
+    std::vector<std::int8_t> dirs;       // one per step
+};
+
+struct QueueStepCost {
+    std::uint64_t steps = 0;
+    std::uint64_t queue_step = 0;        // queue_step oid interval count add
+    std::uint64_t set_next_step_dir = 0; // set_next_step_dir oid dir, one per direction change
+    std::uint64_t reset_step_clock = 0;  // reset_step_clock oid clock, one per stepper that steps
+    std::uint64_t message_bytes = 0;     // the messages alone
+    std::uint64_t blocks = 0;
+    std::uint64_t bytes = 0;             // with the blocks' header and trailer
+    std::string error;                   // a step no message can time (empty: none)
+};
+
+// Every axis's steps where Klipper places them: each step at the time the
+// planned path passes the middle between its two step positions (step k of
+// an axis that moves d steps along a segment at (k - 1/2)/|d| of the
+// segment's length, timed by the segment's feed profile), in cycles of
+// `clock_hz` from the job start. Arcs the card walks as conics count as their
+// chords (Klipper cuts arcs into lines too). One entry per axis that steps.
+std::vector<StepperSteps> path_steps(const PlannedJob& job, double clock_hz);
+
+// Bytes of one integer in Klipper's variable-length encoding.
+unsigned klipper_vlq_bytes(std::int64_t v);
+
+// The cost of all `steppers`' steps at `max_error_cycles`, the step times
+// counted in cycles of the same clock (the card's: Klipper's MCU clock is then
+// taken to be the card's). Command ids and oids are one byte each.
+QueueStepCost queue_step_cost(std::span<const StepperSteps> steppers, double max_error_cycles);
+
+}  // namespace cpstep::plan
