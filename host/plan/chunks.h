@@ -12,7 +12,10 @@
 namespace cpstep::plan {
 
 // Move j (0..count-1) of a chunk happens interval + j*add + add2*j*(j-1)/2
-// cycles after the previous move event.
+// cycles after the previous move event. With F fractional bits
+// (ChunkLimits::frac_bits > 0) add and add2 count 2^-F cycles, and the delays
+// are summed exactly: move j happens floor(X_j / 2^F) cycles after the event
+// before the chunk, X_j = (j+1) interval 2^F + add j(j+1)/2 + add2 (j+1)j(j-1)/6.
 struct Chunk {
     std::uint32_t interval = 0;
     std::uint32_t count = 0;
@@ -33,6 +36,9 @@ struct ChunkLimits {
     // increments add + j*add2 (j = 0..count-2) all lie in [add_min, add_max] and
     // none has the opposite sign of another, so the delays are monotone.
     bool monotone = false;
+    // Fractional bits of add and add2 (0: whole cycles). add_min..add2_max are
+    // then in units of 2^-frac_bits cycles.
+    unsigned frac_bits = 0;
 };
 
 struct ChunkResult {
@@ -48,6 +54,6 @@ ChunkResult compress(std::span<const double> ideal, std::int64_t prev_event, dou
                      const ChunkLimits& limits);
 
 // Expand chunks back into absolute event times (the card's arithmetic).
-std::vector<std::int64_t> expand(std::span<const Chunk> chunks, std::int64_t prev_event);
+std::vector<std::int64_t> expand(std::span<const Chunk> chunks, std::int64_t prev_event, unsigned frac_bits = 0);
 
 }  // namespace cpstep::plan

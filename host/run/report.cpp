@@ -112,11 +112,11 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
   r["link"] = link;
   if (run.pins_observed) {
     // The same pin steps on Klipper's wire (plan/queue_step.h).
-    auto qs = [](const plan::QueueStepCost& c) {
-      json o = {{"queue_step", c.queue_step},       {"set_next_step_dir", c.set_next_step_dir},
-                {"reset_step_clock", c.reset_step_clock}, {"message_bytes", c.message_bytes},
-                {"blocks", c.blocks},               {"bytes", c.bytes}};
-      if (!c.error.empty()) o["error"] = c.error;
+    auto qs = [](const plan::QueueStepCost& cost) {
+      json o = {{"queue_step", cost.queue_step},       {"set_next_step_dir", cost.set_next_step_dir},
+                {"reset_step_clock", cost.reset_step_clock}, {"message_bytes", cost.message_bytes},
+                {"blocks", cost.blocks},               {"bytes", cost.bytes}};
+      if (!cost.error.empty()) o["error"] = cost.error;
       return o;
     };
     r["wire"] = {{"command_bytes", 4 * job.words.size()},

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Measurements quoted in docs/PLANNING.md (not a test).
-//   plan_figures chunks MACHINE JOB   moves per chunk with and without add2
+//   plan_figures chunks MACHINE JOB [BOARD F]  moves per chunk with and without add2 (the card's
+//                                     chunk form; on BOARD, with F fractional bits in add and add2)
 //   plan_figures split                worst split deviation, exhaustive + random
 //   plan_figures bounds MACHINE JOB   planned time beside the lower bound (whole job and its
 //                                     feed moves), groups, lookahead, windowed - whole-job time
@@ -30,11 +31,13 @@ namespace {
 
 // The machine file bound to the default board's card (rtl/builds.json), as
 // `cpstep plan` does when it asks no card.
-Result<Machine> load_bound(const char* path) {
+Result<Machine> load_bound(const char* path, const char* board = nullptr) {
     auto m = load_machine(path);
     if (!m.ok()) return m;
-    const cpstep::builds::Build& b = *cpstep::builds::find(cpstep::builds::kDefaultBoard);
-    m.errors = bind_card(*m.value, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw});
+    const cpstep::builds::Build& b = *cpstep::builds::find(board ? board : cpstep::builds::kDefaultBoard);
+    CardFacts facts{std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw};
+    if (b.conic) facts.conic_width = 40;   // the walker's width (READ 0x26)
+    m.errors = bind_card(*m.value, facts);
     return m;
 }
 
@@ -74,8 +77,8 @@ int speed(const char* mpath, const char* jpath, int reps) {
     return 0;
 }
 
-int chunks(const char* mpath, const char* jpath) {
-    auto m = load_bound(mpath);
+int chunks(const char* mpath, const char* jpath, const char* board = nullptr, unsigned frac = 0) {
+    auto m = load_bound(mpath, board);
     if (!m.ok()) { fmt::print(stderr, "{}\n", join(m.errors)); return 1; }
     auto job = load_gcode(jpath, gcode_options(*m));  // the machine's tool lengths, G28 positions
     if (!job.ok()) {
@@ -85,7 +88,19 @@ int chunks(const char* mpath, const char* jpath) {
     for (bool add2 : {false, true}) {
         PlanOptions o;
         o.add2_from_machine = false;
+        o.chunk_limits.add_min = INT16_MIN;
+        o.chunk_limits.add_max = INT16_MAX;
+        o.chunk_limits.monotone = true;
         o.chunk_limits.enable_add2 = add2;
+        if (frac) {
+            o.chunk_limits.frac_bits = frac;
+            o.chunk_limits.max_count = 4095;
+            o.chunk_limits.add_min = std::int64_t{INT16_MIN} << frac;   // the whole-cycle range
+            o.chunk_limits.add_max = std::int64_t{INT16_MAX} << frac;
+            o.chunk_limits.add2_min = -(std::int64_t{512} << frac);   // +-512 cycles
+            o.chunk_limits.add2_max = (std::int64_t{512} << frac) - 1;
+            o.chunk_limits.monotone = true;
+        }
         auto p = plan_job(*job, *m, o);
         if (!p.ok()) {
             fmt::print(stderr, "{}\n", join(p.errors));
@@ -200,6 +215,7 @@ int bounds(const char* mpath, const char* jpath) {
 int main(int argc, char** argv) {
     const std::string cmd = argc > 1 ? argv[1] : "";
     if (cmd == "chunks" && argc == 4) return chunks(argv[2], argv[3]);
+    if (cmd == "chunks" && argc == 6) return chunks(argv[2], argv[3], argv[4], unsigned(std::atoi(argv[5])));
     if (cmd == "split") return split();
     if (cmd == "bounds" && argc == 4) return bounds(argv[2], argv[3]);
     if (cmd == "speed" && argc >= 4) return speed(argv[2], argv[3], argc > 4 ? std::atoi(argv[4]) : 5);
