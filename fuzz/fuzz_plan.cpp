@@ -2,7 +2,8 @@
 // Fuzz target: the whole planner on a card with a conic walker (host/plan/pipeline.h,
 // plan_job; host/plan/conic_arc.h; card::to_wire, encode_job). The first byte picks
 // the machine and the card (arcs as conics or chords, equal or unequal steps/mm in
-// XY, a pattern capacity of 1024 or 48, a chunk queue of 64 or 3, add2 on or off);
+// XY, a pattern capacity of 1024 or 48, a chunk queue of 64 or 3, add2 on or off, G1
+// chains fitted with arcs within 0.01 mm or not);
 // the rest is the G-code. The machine's travel is ±20 mm at 80 steps/mm (Z 40), so
 // no input plans more than a few thousand moves a block.
 // Invariants: a refused job names a line of the text; an accepted one's card
@@ -35,6 +36,7 @@ plan::Machine machine(uint8_t opt) {
                            "on_limit = \"slow\"\n" +
                            std::string((opt & 1) ? "arcs = \"chords\"\n" : "") +
                            std::string((opt & 16) ? "chunk_add2 = false\n" : "") +
+                           std::string((opt & 32) ? "fit_arcs_mm = 0.01\n" : "") +
                            "[axes.x]\nsteps_per_mm = 80\ntravel_min_mm = -20\ntravel_max_mm = 20\n"
                            "max_velocity_mm_s = 100\nmax_accel_mm_s2 = 2000\nmax_jerk_mm_s3 = 50000\n"
                            "driver = \"TMC2209\"\n"

@@ -130,6 +130,7 @@ bool any_value(double) { return true; }
 bool capacity_ok(double v) { return v >= 2 && v <= 65536 && v == std::floor(v); }
 bool doubling_ok(double v) { return v >= 0 && v <= 16 && v == std::floor(v); }
 bool split_eps_ok(double v) { return v >= 0 && v < 0.5; }
+bool fit_ok(double v) { return v >= 0 && v <= 1; }
 
 std::string upper(std::string_view s) {
     std::string out(s);
@@ -333,7 +334,8 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
     if (const toml::table* pl = r.table(root, "planner", "planner", false)) {
         r.only_keys(*pl, "planner",
                     {"arc_tolerance_mm", "junction_deviation_mm", "chunk_tolerance_us",
-                     "on_limit", "chunk_add2", "split_epsilon_steps", "curvature_step_ms", "arcs"});
+                     "on_limit", "chunk_add2", "split_epsilon_steps", "curvature_step_ms", "arcs",
+                     "fit_arcs_mm"});
         auto& p = m.planner;
         p.arc_tolerance_mm = r.number(*pl, "planner", "arc_tolerance_mm", false, positive, "> 0")
                                  .value_or(p.arc_tolerance_mm);
@@ -370,6 +372,8 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
                         fmt::format("planner.arcs: must be \"conic\" or \"chords\", not \"{}\"", *s));
             }
         }
+        p.fit_arcs_mm = r.number(*pl, "planner", "fit_arcs_mm", false, fit_ok, "in [0, 1]")
+                            .value_or(p.fit_arcs_mm);
         if (auto ms = r.number(*pl, "planner", "curvature_step_ms", false, positive, "> 0"))
             p.curvature_step_s = *ms * 1e-3;
         p.chunk_add2 = r.boolean(*pl, "planner", "chunk_add2").value_or(p.chunk_add2);

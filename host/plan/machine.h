@@ -112,6 +112,9 @@ struct PlannerConfig {
     // most its max_jerk times this (planner.cpp, docs/PLANNING.md).
     double curvature_step_s = 0.02;
     ArcMode arcs = ArcMode::conic;          // planner.arcs = "conic" | "chords"
+    // Chains of G1 lines fitted with arcs (and collinear runs merged) within this
+    // distance, mm (plan/arc_fit.h); 0: off.
+    double fit_arcs_mm = 0;
 };
 
 // What the G-code reader takes from the machine file: the optional [gcode]

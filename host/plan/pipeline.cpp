@@ -8,13 +8,20 @@
 
 #include <fmt/format.h>
 
+#include "plan/arc_fit.h"
 #include "plan/chunks.h"
 #include "plan/steptime.h"
 
 namespace cpstep::plan {
 
-Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions& options) {
+Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOptions& options) {
     Result<PlannedJob> result;
+    // Chains of G1 lines as arcs where the machine file asks (plan/arc_fit.h): the
+    // rest of the plan is of the fitted job.
+    ArcFitStats fit;
+    Job fitted;
+    if (m.planner.fit_arcs_mm > 0) fitted = fit_arcs(given, m.planner.fit_arcs_mm, &fit);
+    const Job& job = m.planner.fit_arcs_mm > 0 ? fitted : given;
     if (!(m.card.clock_hz > 0)) {
         result.errors.push_back({m.file, {}, "no card clock: the machine file gives no [card] clock_hz and no "
                                              "card was asked (plan::bind_card())"});
@@ -205,6 +212,7 @@ Result<PlannedJob> plan_job(const Job& job, const Machine& m, const PlanOptions&
     pj.stats.step_segments = pj.step_segments.size();
     pj.stats.card_segments = pj.card.size();
     pj.stats.duration_s = end_s;
+    pj.stats.fit = fit;
     result.value = std::move(pj);
     return result;
 }

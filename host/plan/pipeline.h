@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "plan/arc_fit.h"
 #include "plan/chunks.h"
 #include "plan/conic_arc.h"
 #include "plan/gcode.h"
@@ -35,6 +36,7 @@ struct PlanStats {
     std::uint64_t conic_segments = 0; // their pieces
     std::uint64_t chord_arcs = 0;     // arcs sent as chords (planner.arcs, the card, or a reason)
     ConicArcStats conic;              // the walks' deviations
+    ArcFitStats fit;                  // G1 chains fitted (planner.fit_arcs_mm)
     double duration_s = 0;
     [[nodiscard]] double moves_per_chunk() const {
         return chunks ? static_cast<double>(moves) / static_cast<double>(chunks) : 0;

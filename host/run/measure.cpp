@@ -28,6 +28,32 @@ std::vector<double> edge_times(const AxisPulses& p, uint64_t start_cycle, double
 
 }  // namespace
 
+namespace {
+
+// The job's steps where Klipper would place them: from the plan, or, when the
+// machine file fits arcs to G1 chains (planner.fit_arcs_mm), from a plan of the
+// G-code as written (Klipper takes the lines as they are).
+std::vector<plan::StepperSteps> klipper_path_steps(const CardJob& job) {
+  if (!(job.machine.planner.fit_arcs_mm > 0)) return plan::path_steps(job.planned, job.clock_hz());
+  plan::Machine m = job.machine;
+  m.planner.fit_arcs_mm = 0;
+  plan::PerAxis<double> start_mm{};
+  for (int a = 0; a < plan::kAxes; ++a)
+    if (m.axes[a].present) start_mm[a] = double(job.start[a]) / m.axes[a].steps_per_mm;
+  auto parsed = plan::load_gcode(job.job_file, plan::gcode_options(m, start_mm));
+  if (!parsed.ok()) return {};
+  auto segs = plan::make_step_segments(*parsed, m);
+  if (!segs.ok()) return {};
+  auto feeds = plan::plan_feeds(*segs.value, m, job.job_file);
+  if (!feeds.ok()) return {};
+  plan::PlannedJob p;
+  p.step_segments = std::move(*segs.value);
+  p.feeds = std::move(*feeds.value);
+  return plan::path_steps(p, job.clock_hz());
+}
+
+}  // namespace
+
 RunMeasure measure_run(const CardJob& job, const CardRun& run) {
   RunMeasure m;
   m.moves = run.move_cycles.size();
@@ -81,7 +107,7 @@ RunMeasure measure_run(const CardJob& job, const CardRun& run) {
       steppers.push_back(std::move(s));
     }
     m.klipper_pins_25us = plan::queue_step_cost(steppers, 25e-6 * job.clock_hz());
-    const std::vector<plan::StepperSteps> path = plan::path_steps(job.planned, job.clock_hz());
+    const std::vector<plan::StepperSteps> path = klipper_path_steps(job);
     m.klipper_25us = plan::queue_step_cost(path, 25e-6 * job.clock_hz());
     m.klipper_1us = plan::queue_step_cost(path, 1e-6 * job.clock_hz());
   }

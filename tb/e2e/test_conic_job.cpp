@@ -53,6 +53,21 @@ fs::path write_job(const std::string& name, const std::string& text) {
   return dir / name;
 }
 
+// `cpstep check`'s verdict on a run's VCD against the job's plan (every read
+// must work: a failure throws the test's assertion).
+check::Verdict check_vcd(const run::CardJob& job, const fs::path& vcd) {
+  const auto text = check::read_text(vcd);
+  EXPECT_TRUE(text.has_value()) << vcd;
+  if (!text) return {};
+  const auto trace = check::parse_vcd(*text, vcd.string());
+  EXPECT_TRUE(trace.ok()) << plan::join(trace.errors);
+  if (!trace.ok()) return {};
+  const auto pins = check::read_pins(*trace, check::default_pin_map(), job);
+  EXPECT_TRUE(pins.ok()) << plan::join(pins.errors);
+  if (!pins.ok()) return {};
+  return check::check_trace(job, *pins);
+}
+
 plan::Result<run::CardJob> prepare(const std::string& board, bool chords) {
   std::string machine;
   {
@@ -148,6 +163,49 @@ TEST(ConicJob, TheSameJobAsChordsEndsAtTheSameSteps) {
   EXPECT_TRUE(ice->warnings.empty()) << plan::join(ice->warnings);
 }
 
+// A chain of G1 chords (a half circle of 120 lines and a quarter the other way, as
+// CAM output gives) with planner.fit_arcs_mm set: the planner fits arcs to them
+// (docs/PLANNING.md "Arcs fitted to line chains"), the HX8K card walks them as
+// conics, the trace conforms to the plan, the card ends on the last G1's steps.
+TEST(ConicJob, FittedLineChainsRunAsConics) {
+  std::string g = "G21 G90 G17\nG0 X20 Y10 Z0\nF900\n";
+  for (int i = 1; i <= 120; ++i) {
+    const double a = 3.14159265358979 * i / 120;
+    g += fmt::format("G1 X{:.4f} Y{:.4f}\n", 15 + 5 * std::cos(a), 10 + 5 * std::sin(a));
+  }
+  for (int i = 1; i <= 60; ++i) {
+    const double a = 3.14159265358979 * (1 + 0.5 * i / 60);
+    g += fmt::format("G1 X{:.4f} Y{:.4f}\n", 5 - 5 * std::cos(a), 10 - 5 * std::sin(a));
+  }
+  g += "M2\n";
+  std::string machine;
+  {
+    std::ifstream in(kSource + "/examples/machines/seed002.toml");
+    machine.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  machine.replace(machine.find("[planner]\n"), 10, "[planner]\nfit_arcs_mm = 0.002\n");
+  const fs::path m = write_job("seed002_fit.toml", machine);
+  auto job = run::prepare_job(write_job("chain.ngc", g).string(), m.string(), *card::board_caps("hx8k"));
+  ASSERT_TRUE(job.ok()) << plan::join(job.errors);
+  const plan::PlanStats& st = job->planned.stats;
+  EXPECT_EQ(st.fit.arcs, 2u);
+  EXPECT_EQ(st.fit.lines_in_arcs, 180u);
+  EXPECT_LE(st.fit.max_deviation_mm, 0.002);
+  EXPECT_EQ(st.conic_arcs, 2u);
+  const fs::path vcd = fs::path(CPSTEP_TEST_DIR) / "conic_job" / "chain.vcd";
+  run::SimRunOptions o;
+  o.board = "hx8k";
+  o.vcd = vcd.string();
+  const run::CardRun r = run::run_on_sim(*job, o);
+  ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
+  // The last G1: X = 5 - 5 cos(1.5 pi) = 5, Y = 10 - 5 sin(1.5 pi) = 15 mm at 80 steps/mm.
+  EXPECT_EQ(r.position[0], 5 * 80);
+  EXPECT_EQ(r.position[1], 15 * 80);
+  EXPECT_EQ(r.stretch_count, 0u);
+  const check::Verdict v = check_vcd(*job, vcd);
+  EXPECT_TRUE(v.conforms()) << check::verdict_summary(v);
+}
+
 // An arc whose plane's axes have different steps/mm (seed002.toml: X 80, Z 400) is an
 // ellipse in steps; the card walks it as one (docs/PLANNING.md "Arcs as conics"): the
 // fast engine runs it, the trace conforms to the plan, the card ends where the G-code
@@ -166,13 +224,7 @@ TEST(ConicJob, AnArcInXZOnUnequalStepsPerMmIsAnEllipseOnTheCard) {
   EXPECT_EQ(r.position[0], 20 * 80);
   EXPECT_EQ(r.position[2], 0);
   EXPECT_EQ(r.stretch_count, 0u);
-  const auto text = check::read_text(vcd);
-  ASSERT_TRUE(text.has_value());
-  const auto trace = check::parse_vcd(*text, vcd.string());
-  ASSERT_TRUE(trace.ok()) << plan::join(trace.errors);
-  const auto pins = check::read_pins(*trace, check::default_pin_map(), *job);
-  ASSERT_TRUE(pins.ok()) << plan::join(pins.errors);
-  const check::Verdict v = check::check_trace(*job, *pins);
+  const check::Verdict v = check_vcd(*job, vcd);
   EXPECT_TRUE(v.conforms()) << check::verdict_summary(v);
   EXPECT_LE(v.axes[0].max_deviation, 0.55);
   EXPECT_LE(v.axes[2].max_deviation, 0.55);

@@ -1,0 +1,213 @@
+// SPDX-License-Identifier: MIT
+#include "plan/arc_fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+namespace cpstep::plan {
+
+namespace {
+
+struct Pt {
+    double x = 0, y = 0;
+};
+Pt operator-(Pt a, Pt b) { return {a.x - b.x, a.y - b.y}; }
+double dot(Pt a, Pt b) { return a.x * b.x + a.y * b.y; }
+double cross(Pt a, Pt b) { return a.x * b.y - a.y * b.x; }
+double norm(Pt a) { return std::hypot(a.x, a.y); }
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A G1 that may join a run: no pause, no curve, only X and Y move.
+bool eligible(const MotionBlock& b) {
+    if (b.kind != MotionKind::linear || b.pause != PauseKind::none || b.dwell_s != 0 || b.curve) return false;
+    for (int a = 2; a < kAxes; ++a)
+        if (b.start[a] != b.end[a]) return false;
+    return true;
+}
+
+// Whether b continues a run that `first` starts: the same feed, spindle and tool,
+// the same coordinates besides X and Y, and starting where `prev` ends.
+bool continues(const MotionBlock& first, const MotionBlock& prev, const MotionBlock& b) {
+    if (!eligible(b) || b.feed != first.feed || b.spindle_on != first.spindle_on ||
+        b.spindle_ccw != first.spindle_ccw || b.tool != first.tool)
+        return false;
+    for (int a = 0; a < kAxes; ++a)
+        if (b.start[a] != prev.end[a]) return false;
+    for (int a = 2; a < kAxes; ++a)
+        if (b.start[a] != first.start[a]) return false;
+    return true;
+}
+
+// Points p[i..j] within tol of the line from p[i] to p[j], each no farther back
+// along it than the one before: the largest distance, or infinity.
+double line_fit(const std::vector<Pt>& p, std::size_t i, std::size_t j, double tol) {
+    const Pt d = p[j] - p[i];
+    const double L = norm(d);
+    if (!(L > 0)) return kInf;
+    const Pt u{d.x / L, d.y / L};
+    double along = 0, worst = 0;
+    for (std::size_t k = i + 1; k < j; ++k) {
+        const Pt w = p[k] - p[i];
+        const double s = dot(w, u), e = std::abs(cross(u, w));
+        if (e > tol || s < along || s > L) return kInf;
+        along = s;
+        worst = std::max(worst, e);
+    }
+    return worst;
+}
+
+struct ArcFit {
+    double cx = 0, cy = 0, deviation = kInf;
+    bool ccw = false;
+};
+
+// A circle through p[i] and p[j] (its centre on their bisector, placed to make
+// the largest radial distance of p[i+1..j-1] smallest) that every point and every
+// line p[k]p[k+1] stays within tol of, every line going round its centre the way
+// the path bends, by less than 1.9 pi in all. deviation = infinity when there is none.
+ArcFit arc_fit(const std::vector<Pt>& p, std::size_t i, std::size_t j, double tol) {
+    ArcFit fail;
+    if (j < i + 3) return fail;
+    // Which way the path turns, from its ends and middle (each line must then go
+    // round the centre that way, checked below).
+    const double bend = cross(p[(i + j) / 2] - p[i], p[j] - p[(i + j) / 2]);
+    if (bend == 0) return fail;
+    const int turn = bend > 0 ? 1 : -1;
+    const Pt d = p[j] - p[i];
+    const double L = norm(d);
+    if (L <= tol) return fail;  // (nearly) closed: the circle through the ends is not determined
+    const Pt m{(p[i].x + p[j].x) / 2, (p[i].y + p[j].y) / 2};
+    const Pt n{-d.y / L, d.x / L};
+    // Start at the circle through the ends and the middle point.
+    const Pt q = p[(i + j) / 2];
+    const Pt a = q - p[i], b = p[j] - p[i];
+    const double den = 2 * cross(a, b);
+    if (std::abs(den) <= 1e-15 * norm(a) * norm(b)) return fail;
+    const double a2 = dot(a, a), b2 = dot(b, b);
+    const Pt c0{p[i].x + (b.y * a2 - a.y * b2) / den, p[i].y + (a.x * b2 - b.x * a2) / den};
+    const double t0 = dot(c0 - m, n);
+    const auto worst = [&](double t) {
+        const Pt c{m.x + t * n.x, m.y + t * n.y};
+        const double r = norm(p[i] - c);
+        double w = 0;
+        for (std::size_t k = i + 1; k < j; ++k) w = std::max(w, std::abs(norm(p[k] - c) - r));
+        return w;
+    };
+    double lo = t0 - 0.5 * (std::abs(t0) + L), hi = t0 + 0.5 * (std::abs(t0) + L);
+    for (int it = 0; it < 80; ++it) {
+        const double t1 = lo + (hi - lo) / 3, t2 = hi - (hi - lo) / 3;
+        if (worst(t1) <= worst(t2)) hi = t2;
+        else lo = t1;
+    }
+    const double t = (lo + hi) / 2;
+    const Pt c{m.x + t * n.x, m.y + t * n.y};
+    const double r = norm(p[i] - c);
+    if (!(r > tol) || r > 1e6) return fail;
+    // Every vertex near the circle, every line near the arc, one way round.
+    std::vector<double> e(j - i + 1, 0.0);
+    for (std::size_t k = i + 1; k < j; ++k) e[k - i] = std::abs(norm(p[k] - c) - r);
+    double sweep = 0, dev = 0;
+    for (std::size_t k = i; k < j; ++k) {
+        const Pt u = p[k] - c, v = p[k + 1] - c;
+        const double step = std::atan2(cross(u, v), dot(u, v));
+        if (step * turn <= 0) return fail;
+        sweep += step;
+        const double half = norm(p[k + 1] - p[k]) / 2;
+        if (half >= r) return fail;
+        const double sag = r - std::sqrt(r * r - half * half);
+        const double here = std::max(e[k - i], e[k + 1 - i]) + sag;
+        if (here > tol) return fail;
+        dev = std::max(dev, here);
+    }
+    if (std::abs(sweep) >= 1.9 * std::numbers::pi) return fail;
+    return {c.x, c.y, dev, turn > 0};
+}
+
+// The longest run from p[s] (at least `least` lines, at most p.size() - 1 - s)
+// for which fits(s, s + len) holds, by doubling and then bisection: 0 for none.
+template <class Fits>
+std::size_t longest(std::size_t s, std::size_t lines, std::size_t least, Fits fits) {
+    if (lines < least || !fits(s, s + least)) return 0;
+    std::size_t good = least, bad = lines + 1;
+    for (std::size_t len = least * 2; len <= lines; len *= 2) {
+        if (!fits(s, s + len)) {
+            bad = len;
+            break;
+        }
+        good = len;
+    }
+    if (bad == lines + 1 && good < lines) {
+        if (fits(s, s + lines)) return lines;
+        bad = lines;
+    }
+    while (bad - good > 1) {
+        const std::size_t mid = good + (bad - good) / 2;
+        if (fits(s, s + mid)) good = mid;
+        else bad = mid;
+    }
+    return good;
+}
+
+}  // namespace
+
+Job fit_arcs(const Job& job, double tol_mm, ArcFitStats* stats) {
+    if (!(tol_mm > 0)) return job;
+    ArcFitStats st;
+    Job out;
+    out.file = job.file;
+    out.blocks.reserve(job.blocks.size());
+    const auto& b = job.blocks;
+    for (std::size_t i = 0; i < b.size();) {
+        if (!eligible(b[i])) {
+            out.blocks.push_back(b[i++]);
+            continue;
+        }
+        std::size_t end = i + 1;
+        while (end < b.size() && continues(b[i], b[end - 1], b[end])) ++end;
+        std::vector<Pt> p{{b[i].start[0], b[i].start[1]}};
+        for (std::size_t k = i; k < end; ++k) p.push_back({b[k].end[0], b[k].end[1]});
+        const std::size_t lines = end - i;
+        for (std::size_t s = 0; s < lines;) {
+            const std::size_t left = lines - s;
+            const std::size_t la = longest(s, left, 3, [&](std::size_t x, std::size_t y) {
+                return arc_fit(p, x, y, tol_mm).deviation <= tol_mm;
+            });
+            const std::size_t ll = longest(s, left, 2, [&](std::size_t x, std::size_t y) {
+                return line_fit(p, x, y, tol_mm) <= tol_mm;
+            });
+            if (la == 0 && ll == 0) {
+                out.blocks.push_back(b[i + s]);
+                ++s;
+                continue;
+            }
+            MotionBlock nb = b[i + s];
+            nb.end = b[i + s + std::max(la, ll) - 1].end;
+            if (ll >= la) {
+                st.max_deviation_mm = std::max(st.max_deviation_mm, line_fit(p, s, s + ll, tol_mm));
+                ++st.merged;
+                st.lines_in_merged += ll;
+                s += ll;
+            } else {
+                const ArcFit f = arc_fit(p, s, s + la, tol_mm);
+                nb.kind = f.ccw ? MotionKind::arc_ccw : MotionKind::arc_cw;
+                nb.plane = Plane::xy;
+                nb.center_x = f.cx;
+                nb.center_y = f.cy;
+                st.max_deviation_mm = std::max(st.max_deviation_mm, f.deviation);
+                ++st.arcs;
+                st.lines_in_arcs += la;
+                s += la;
+            }
+            out.blocks.push_back(nb);
+        }
+        i = end;
+    }
+    if (stats) *stats = st;
+    return out;
+}
+
+}  // namespace cpstep::plan
