@@ -12,7 +12,8 @@
 // and its plane is two distinct axes, the ideal times never go back; the wire form
 // is accepted or refused with a line, its command words split into whole commands,
 // and each CONIC's seven words, walked by the walker's own rule, reach their end on
-// the segment's last move and on no other (what the card checks, CONIC_END).
+// the segment's last move and on no other (what the card checks, CONIC_END); a CONIC
+// sent as a continuation follows a CONIC on its axes, its way (CONIC_CONTINUE).
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -134,8 +135,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   size_t w = 0;
   while (w < words.size()) w += card::command_words(words[w], plan::kAxes);
   FUZZ_CHECK(w == words.size(), "the command words end inside a command");
+  const card::WireSegment* prev = nullptr;
   for (const card::WireSegment& s : wire->segments) {
     FUZZ_CHECK(s.chunks.size() <= lim.chunk_queue, "%zu chunks for a queue of %u", s.chunks.size(), lim.chunk_queue);
+    // A continuation follows a CONIC on its axes, its way (what the card checks, CONIC_CONTINUE).
+    if (s.conic && s.conic->cont)
+      FUZZ_CHECK(prev && prev->conic && prev->conic->axis_u == s.conic->axis_u &&
+                     prev->conic->axis_v == s.conic->axis_v && prev->conic->cw == s.conic->cw,
+                 "a continuation that does not follow its CONIC");
+    prev = &s;
     if (!s.conic) continue;
     FUZZ_CHECK(s.k == 0 && s.u >= 1 && s.u <= lim.umax, "CONIC of T = %u, k = %u", s.u, s.k);
     const auto& k = s.conic->words;

@@ -30,6 +30,7 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
         d.dir = uint32_t(i.seg_head >> 24) & bits::mask(p_.n);
         d.end = (i.seg_head >> (28 + p_.n) & 1) != 0;
         d.conic = p_.conic && (i.seg_head >> (29 + p_.n) & 1) != 0;
+        d.cont = p_.conic && (i.seg_head >> (30 + p_.n) & 1) != 0;
         d.axis = 0;
         d.moving = 0;
         d.state = State::next_axis;
@@ -68,18 +69,20 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
       break;
     case State::conic_words:
       // Once the walker is free: K0 .. K6 into it, the last with its start and the
-      // segment into the run queue. K1 carries the plane axes: {cw, u, v, 9 zeros, C}.
+      // segment into the run queue. K1 carries the plane axes: {cw, u, v, 9 zeros, C};
+      // a continuation has K5, K6 only, and K5 carries them: {cw, u, v, 0, du}.
       if (i.seg_valid && i.walker_free) {
         const uint32_t word = uint32_t(i.seg_head);
         o.seg_pop = true;
         o.cw_wr = true;
-        if (q.k_index == 1) {
+        if (q.k_index == (q.cont ? 5u : 1u)) {
           d.au = word >> 28 & 7;
           d.av = word >> 25 & 7;
         }
         d.k_index = (q.k_index + 1) & 7;
         if (q.k_index == 6) {
           o.cw_start = true;
+          o.cw_cont = q.cont;
           o.run_wr = true;
           o.run_data = uint64_t(1) << (2 * p_.n + 8) | uint64_t(q.au) << (2 * p_.n + 5) |
                        uint64_t(q.av) << (2 * p_.n + 2) | uint64_t(q.build_lane) << (2 * p_.n + 1) |
@@ -94,7 +97,7 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
   o.cw_data = uint32_t(i.seg_head);
   if (cap_done) {
     if (q.axis == p_.n - 1 && q.conic) {
-      d.k_index = 0;
+      d.k_index = q.cont ? 5 : 0;
       d.state = State::conic_words;
     } else if (q.axis == p_.n - 1) {
       o.run_wr = true;

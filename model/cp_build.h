@@ -18,7 +18,7 @@ struct CpBuildParams {
 struct CpBuildIn {
   bool rst = false, flush = false, fault = false;
   bool seg_valid = false;
-  uint64_t seg_head = 0;  // 29 + N bits; with conic max(30 + N, 32)
+  uint64_t seg_head = 0;  // 29 + N bits; with conic max(31 + N, 32)
   bool seg_commit = false;
   uint32_t run_level = 0;  // 2 bits
   bool cur_valid = false;
@@ -39,6 +39,7 @@ struct CpBuildOut {
   bool cw_wr = false;
   uint32_t cw_sel = 0, cw_data = 0;
   bool cw_start = false;
+  bool cw_cont = false;  // with cw_start: the walk continues the last one (K5, K6 written)
   bool fault = false;  // the engine refused a pattern
   bool busy = false;
   uint32_t segq = 0;   // committed segments in the segment queue
@@ -74,6 +75,7 @@ class CpBuild {
     uint32_t u = 0, dir = 0, moving = 0, cap_addr = 0;
     bool end = false;
     bool conic = false;                 // the segment being built is a conic
+    bool cont = false;                  // ... that continues the last walk
     uint32_t au = 0, av = 0, k_index = 0;
     bool operator==(const Regs&) const = default;
   };

@@ -85,6 +85,7 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
           d.hdr_cw = (word >> 26 & 1) != 0;
           d.hdr_au = word >> 23 & 7;
           d.hdr_av = word >> 19 & 7;
+          d.hdr_cont = d.hdr_conic && (word >> 18 & 1) != 0;
           d.count_sum = 0;
           d.discard = i.fault;
           if (!i.fault) {
@@ -96,6 +97,9 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
               d.discard = true;
             } else if (d.hdr_conic && (d.hdr_au == d.hdr_av || d.hdr_au >= p_.n || d.hdr_av >= p_.n)) {
               refuse(CoreError::conic_axes);
+              d.discard = true;
+            } else if (d.hdr_cont && !(q.lc_valid && q.lc_au == d.hdr_au && q.lc_av == d.hdr_av && q.lc_cw == d.hdr_cw)) {
+              refuse(CoreError::conic_cont);
               d.discard = true;
             }
           }
@@ -134,7 +138,8 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
       d.seg_u = word & 0xFFFFFF;
       // The header word {end, k, dir, U} into the segment queue, uncommitted.
       o.seg_wr = keep;
-      o.seg_data = uint64_t(q.hdr_conic) << (29 + p_.n) | uint64_t(q.hdr_end) << (28 + p_.n) |
+      o.seg_data = uint64_t(q.hdr_cont) << (30 + p_.n) | uint64_t(q.hdr_conic) << (29 + p_.n) |
+                   uint64_t(q.hdr_end) << (28 + p_.n) |
                    uint64_t(q.hdr_k) << (24 + p_.n) | uint64_t(word >> 24 & bits::mask(p_.n)) << 24 | d.seg_u;
       if (keep && (d.seg_u == 0 || d.seg_u > p_.umax)) {
         refuse(CoreError::seg_u);
@@ -158,7 +163,7 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
       d.v_index = (q.v_index + 1) & 7;
       // A segment announced with no chunk was refused at its header; it ends here.
       if (q.v_index == p_.n - 1) {
-        d.v_index = 0;
+        d.v_index = q.hdr_cont ? 5 : 0;  // a continuation has K5, K6 only
         d.parse = q.hdr_conic                  ? Parse::conic_words
                   : q.chunks_left == 0 ? Parse::command
                                        : Parse::chunk_interval;
@@ -166,11 +171,14 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
       break;
     case Parse::conic_words:
       // K0 .. K6 as they come but K1: the header's plane axes and direction go with C
-      // to the builder, {cw, u, v, 9 zeros, C}.
+      // to the builder, {cw, u, v, 9 zeros, C}; a continuation's K5 .. K6, its K5 with
+      // them as {cw, u, v, 0, du}.
       if (!take) break;
       o.seg_wr = keep;
       o.seg_data = q.v_index == 1 ? (uint32_t(q.hdr_cw) << 31 | q.hdr_au << 28 | q.hdr_av << 25 | (word & 0xFFFF))
-                                  : word;
+                   : q.v_index == 5 && q.hdr_cont
+                       ? (uint32_t(q.hdr_cw) << 31 | q.hdr_au << 28 | q.hdr_av << 25 | (word & 0xFFFFFF))
+                       : word;
       d.v_index = (q.v_index + 1) & 7;
       if (q.v_index == 6) d.parse = q.chunks_left == 0 ? Parse::command : Parse::chunk_interval;
       break;
@@ -235,6 +243,10 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
         // The whole segment passed: its words and its chunks appear together.
         o.seg_commit = o.ch_commit = true;
         d.parse = Parse::command;
+        d.lc_valid = q.hdr_conic;
+        d.lc_au = q.hdr_au;
+        d.lc_av = q.hdr_av;
+        d.lc_cw = q.hdr_cw;
       }
       break;
     }
@@ -242,6 +254,8 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
       if (!q.rsp_valid || i.rsp_ready) d.parse = Parse::command;
       break;
   }
+  // A fault (E-stop among them) or an ABORT flushes the walk a continuation would go on from.
+  if (i.fault || o.fault || o.abort) d.lc_valid = false;
   o.ch_data = chunk_word(q.interval, d.add, d.count, d.add2, q.chunks_left == 1);
   return o;
 }
@@ -274,7 +288,7 @@ void CpCmd::tick() {
   eval(in, d);
   if (in.rst) {
     d.parse = Parse::command;
-    d.discard = d.rsp_valid = false;
+    d.discard = d.rsp_valid = d.lc_valid = false;
   }
   r_ = d;
 }

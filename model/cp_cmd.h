@@ -32,7 +32,7 @@ struct CpCmdOut {
   bool rsp_valid = false;
   uint32_t rsp_data = 0, rsp_addr = 0;
   bool seg_wr = false, seg_commit = false, seg_rollback = false;
-  uint64_t seg_data = 0;  // 29 + N bits; with conic max(30 + N, 32)
+  uint64_t seg_data = 0;  // 29 + N bits; with conic max(31 + N, 32)
   bool ch_wr = false, ch_commit = false, ch_rollback = false;
   FifoWord ch_data{};     // 81 bits: {last, add2, count, add, interval}
   bool start = false, abort = false, clear = false, drivers_on = false, drivers_off = false;
@@ -83,6 +83,12 @@ class CpCmd {
     bool hdr_conic = false;  // a CONIC segment: its plane axes and direction
     uint32_t hdr_au = 0, hdr_av = 0;
     bool hdr_cw = false;
+    bool hdr_cont = false;  // a CONIC that continues the last walk (H0[18])
+    // The last segment committed was a CONIC on these axes, this way (none since a
+    // fault or an ABORT): what a continuation may follow. lc_valid is reset.
+    bool lc_valid = false;
+    uint32_t lc_au = 0, lc_av = 0;
+    bool lc_cw = false;
     uint32_t chunks_left = 0, v_index = 0;
     uint32_t interval = 0, count = 0, add = 0, add2 = 0;
     uint64_t count_sum = 0;

@@ -138,7 +138,7 @@ void CpConicSerial::tick() {
   const bool cut = in.rst || (in.clear && !in.start);  // the control stops any pass
   if (in.start) {
     if (q.pass) part_turned(q.i);
-    d.mdx = d.mdy = 0;
+    if (!in.cont) d.mdx = d.mdy = 0;
     d.i = 0;
   } else if (q.pass) {
     d.i = last_bit ? 0 : q.i + 1;

@@ -30,6 +30,9 @@ struct CpConicSerialIn {
   unsigned wr_sel = 0;
   uint32_t wr_data = 0;
   bool start = false;
+  // With start: go on from where the last walk ended (its last move, kept since, is
+  // applied by the first pass): only words 5, 6 need be written.
+  bool cont = false;
   bool move_ready = false;
 };
 

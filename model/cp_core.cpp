@@ -16,7 +16,7 @@ CpCore::CpCore(Params p)
       status_({p.n, p.w, p.umax, p.kmax, p.caw, p.saw, p.tw, p.pw, p.step_high_reset, p.step_low_reset,
                p.dir_setup_reset, p.dir_hold_reset, p.step_pol_reset, p.dir_pol_reset, p.cbuf_aw,
                p.clock_hz, p.build_id, p.conic, p.ciw}),
-      seg_fifo_({p.conic ? std::max(30 + p.n, 32u) : 29 + p.n, p.saw + bits::clog2(p.n + 1)}),
+      seg_fifo_({p.conic ? std::max(31 + p.n, 32u) : 29 + p.n, p.saw + bits::clog2(p.n + 1)}),
       chunk_fifo_({81, p.caw}),
       run_fifo_({2 + 2 * p.n + (p.conic ? 7 : 0), 1}) {
   if (p_.n < 1 || p_.n > kCoreMaxAxes) throw std::invalid_argument("cp_core: N must be 1 to 8");
@@ -125,6 +125,7 @@ CpCore::Wires CpCore::settle() const {
   r.cw_sel = w.b.cw_sel;
   r.cw_data = w.b.cw_data;
   r.cw_start = w.b.cw_start;
+  r.cw_cont = w.b.cw_cont;
   w.r = run_.eval_outputs(r);
 
   s.abort = w.cmd.abort;

@@ -76,6 +76,7 @@ enum class CoreError : uint32_t {
   seg_add2 = 15,
   conic_axes = 16,  // a CONIC segment's plane axes: equal, not an axis, or a v_i of theirs not 0
   conic_end = 17,   // a conic's walk arrives at its end before its last move, or not at it
+  conic_cont = 18,  // a CONIC continuing a walk (H0[18]) that does not follow a CONIC on its axes, its way
 };
 
 }  // namespace cpstep::model

@@ -208,6 +208,7 @@ void CpRun::tick() {
     walker_.in.wr_sel = in.cw_sel & 7;
     walker_.in.wr_data = in.cw_data;
     walker_.in.start = in.cw_start;
+    walker_.in.cont = in.cw_cont;
     walker_.in.move_ready = r_.cur_conic && o.fire;
     walker_.tick();
   }

@@ -41,6 +41,7 @@ struct CpRunIn {
   bool cw_wr = false;
   uint32_t cw_sel = 0, cw_data = 0;
   bool cw_start = false;
+  bool cw_cont = false;  // with cw_start: the walk continues the last one
 };
 
 struct CpRunOut {

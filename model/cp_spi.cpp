@@ -154,7 +154,8 @@ void CpSpi::tick() {
                   d.bad_cmd = true;
                   break;
                 }
-                d.hdr_left = ((rx_word >> 28) == 0x5 ? 8 + p_.n : 1 + p_.n) & 31;
+                // A CONIC also carries K0..K6 (K5, K6 with H0[18], a continuation).
+                d.hdr_left = ((rx_word >> 28) == 0x5 ? ((rx_word >> 18 & 1) ? 3 + p_.n : 8 + p_.n) : 1 + p_.n) & 31;
                 d.chunks_left = rx_word & 0xFFFF;
                 d.seg_add2 = (rx_word >> 22 & 1) != 0;
                 d.cw = 0;

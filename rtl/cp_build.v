@@ -62,6 +62,7 @@ module cp_build #(
     output reg  [2:0]    cw_sel_o,
     output reg  [31:0]   cw_data_o,
     output reg           cw_start_o,
+    output reg           cw_cont_o,        // with cw_start_o: the walk continues the last one
 
     output reg           fault_o,          // the engine refused a pattern (too long)
     output wire          busy_o,           // a segment is being built
@@ -71,7 +72,7 @@ module cp_build #(
 localparam integer UW = $clog2(UMAX + 2);           // engine u/v width
 localparam integer AW = (W > 2) ? $clog2(W) : 1;
 localparam integer SQW = SAW + $clog2(N + 1);
-localparam integer SWW = (CONIC == 0) ? 29 + N : ((30 + N > 32) ? 30 + N : 32);
+localparam integer SWW = (CONIC == 0) ? 29 + N : ((31 + N > 32) ? 31 + N : 32);
 localparam integer RDW = 2 + 2 * N + ((CONIC == 0) ? 0 : 7);
 
 localparam [1:0] B_IDLE = 2'd0;   // waiting for a committed segment and a free lane
@@ -88,6 +89,7 @@ reg          b_end_q, b_end_d;
 reg [N-1:0]  b_dir_q, b_dir_d, b_moving_q, b_moving_d;
 reg [AW-1:0] cap_addr_q, cap_addr_d;
 reg          b_conic_q, b_conic_d;       // the segment being built is a conic
+reg          b_cont_q, b_cont_d;         // ... that continues the last walk (K5, K6 only)
 reg [2:0]    b_au_q, b_au_d, b_av_q, b_av_d, k_idx_q, k_idx_d;
 
 // Segment queue word fields.
@@ -96,6 +98,7 @@ wire [N-1:0]  head_dir = seg_head_i[24 +: N];
 wire [23:0]   head_val = seg_head_i[23:0];
 wire [39:0]   head_wide = {{(40-SWW){1'b0}}, seg_head_i};
 wire          head_conic = CONIC != 0 && head_wide[29 + N];
+wire          head_cont  = CONIC != 0 && head_wide[30 + N];
 wire unused_head = &{1'b0, head_wide[39:32]};
 
 // ---------------------------------------------------------------- the engine
@@ -135,9 +138,10 @@ always @* begin
     segq_d = segq_q + {{SQW{1'b0}}, seg_commit_i};
     b_axis_d = b_axis_q;  b_u_d = b_u_q;  b_end_d = b_end_q;
     b_dir_d = b_dir_q;  b_moving_d = b_moving_q;  cap_addr_d = cap_addr_q;
-    b_conic_d = b_conic_q;  b_au_d = b_au_q;  b_av_d = b_av_q;  k_idx_d = k_idx_q;
+    b_conic_d = b_conic_q;  b_cont_d = b_cont_q;  b_au_d = b_au_q;  b_av_d = b_av_q;  k_idx_d = k_idx_q;
     seg_pop_o = 1'b0;  run_wr_o = 1'b0;  run_wdata_o = {RDW{1'b0}};
     cw_wr_o = 1'b0;  cw_sel_o = k_idx_q;  cw_data_o = head_wide[31:0];  cw_start_o = 1'b0;
+    cw_cont_o = 1'b0;
     bank_we_o = 1'b0;  bank_waddr_o = {AW{1'b0}};  bank_wbit_o = 1'b0;
     eng_in_valid = 1'b0;  eng_move_ready = 1'b0;  cap_done = 1'b0;
     fault_o = 1'b0;
@@ -150,6 +154,7 @@ always @* begin
         b_dir_d    = head_dir;
         b_end_d    = head_end;
         b_conic_d  = head_conic;
+        b_cont_d   = head_cont;
         b_axis_d   = 3'd0;
         b_moving_d = {N{1'b0}};
         b_state_d  = B_V;
@@ -184,16 +189,18 @@ always @* begin
         end
     end
     B_K: if (CONIC != 0 && seg_valid_i && walker_free_i) begin
-        // K1 carries the plane axes: {cw, u, v, 9 zeros, C}.
+        // K1 carries the plane axes: {cw, u, v, 9 zeros, C}; a continuation has only
+        // K5 and K6, and K5 carries them: {cw, u, v, 0, du}.
         seg_pop_o = 1'b1;
         cw_wr_o   = 1'b1;
-        if (k_idx_q == 3'd1) begin
+        if (k_idx_q == (b_cont_q ? 3'd5 : 3'd1)) begin
             b_au_d = head_wide[30:28];
             b_av_d = head_wide[27:25];
         end
         k_idx_d = k_idx_q + 1'b1;
         if (k_idx_q == 3'd6) begin
             cw_start_o   = 1'b1;
+            cw_cont_o    = b_cont_q;
             run_wr_o     = 1'b1;
             run_wide     = {2'b01, b_au_q, b_av_q, build_lane_q, b_end_q, b_moving_q, b_dir_q};
             run_wdata_o  = run_wide[RDW-1:0];
@@ -205,7 +212,7 @@ always @* begin
     endcase
     if (cap_done) begin
         if ({29'd0, b_axis_q} == N - 1 && CONIC != 0 && b_conic_q) begin
-            k_idx_d   = 3'd0;
+            k_idx_d   = b_cont_q ? 3'd5 : 3'd0;
             b_state_d = B_K;
         end else if ({29'd0, b_axis_q} == N - 1) begin
             run_wr_o     = 1'b1;
@@ -242,7 +249,7 @@ always @(posedge clk) begin
     end
     b_axis_q <= b_axis_d;  b_u_q <= b_u_d;  b_end_q <= b_end_d;
     b_dir_q <= b_dir_d;  b_moving_q <= b_moving_d;  cap_addr_q <= cap_addr_d;
-    b_conic_q <= b_conic_d;  b_au_q <= b_au_d;  b_av_q <= b_av_d;  k_idx_q <= k_idx_d;
+    b_conic_q <= b_conic_d;  b_cont_q <= b_cont_d;  b_au_q <= b_au_d;  b_av_q <= b_av_d;  k_idx_q <= k_idx_d;
 end
 
 // ---------------------------------------------------------------- outputs

@@ -67,9 +67,10 @@ module cp_cmd #(
     output reg  [7:0]    fault_code_o
 );
 
-// Segment queue words: {end, k, dir[N], value[23:0]}, with CONIC the conic flag above
-// them, and a conic's seven words of 32 bits.
-localparam integer SWW = (CONIC == 0) ? 29 + N : ((30 + N > 32) ? 30 + N : 32);
+// Segment queue words: {end, k, dir[N], value[23:0]}, with CONIC the conic flag and
+// the continuation flag above them, and a conic's seven words of 32 bits (two, K5 and
+// K6, for a continuation).
+localparam integer SWW = (CONIC == 0) ? 29 + N : ((31 + N > 32) ? 31 + N : 32);
 localparam [3:0] OP_SEGMENT = 4'h1;
 localparam [3:0] OP_CONFIG  = 4'h2;
 localparam [3:0] OP_CONTROL = 4'h3;
@@ -89,6 +90,7 @@ localparam [7:0] E_CONFIG_BUSY    = 8'd13;
 localparam [7:0] E_CONFIG_VALUE   = 8'd14;
 localparam [7:0] E_SEG_ADD2       = 8'd15;
 localparam [7:0] E_CONIC_AXES     = 8'd16;
+localparam [7:0] E_CONIC_CONT     = 8'd18;
 // The bits of a 16-bit CONFIG value that a TW-bit timing field holds.
 localparam [15:0] TMASK = (TW >= 16) ? 16'hFFFF : ((16'd1 << TW) - 16'd1);
 
@@ -117,6 +119,12 @@ reg          seg_add2_q, seg_add2_d;     // its chunks carry add2 (three words)
 reg          hdr_conic_q, hdr_conic_d;   // a CONIC segment: its plane axes and direction
 reg [2:0]    hdr_au_q, hdr_au_d, hdr_av_q, hdr_av_d;
 reg          hdr_cw_q, hdr_cw_d;
+reg          hdr_cont_q, hdr_cont_d;     // a CONIC that continues the last walk (H0[18])
+// The last segment committed was a CONIC, on these axes, in this direction (none
+// since a fault or an ABORT): what a continuation may follow.
+reg          lc_valid_q, lc_valid_d;
+reg [2:0]    lc_au_q, lc_au_d, lc_av_q, lc_av_d;
+reg          lc_cw_q, lc_cw_d;
 reg [15:0]   nchunks_q, nchunks_d;       // chunks still to read
 reg [2:0]    v_idx_q, v_idx_d;
 reg [31:0]   interval_q, interval_d;
@@ -207,6 +215,8 @@ always @* begin
     interval_d = interval_q;  count_d = count_q;  add_d = add_q;  add2_d = add2_q;  sum_d = sum_q;
     seg_add2_d = seg_add2_q;
     hdr_conic_d = hdr_conic_q;  hdr_au_d = hdr_au_q;  hdr_av_d = hdr_av_q;  hdr_cw_d = hdr_cw_q;
+    hdr_cont_d = hdr_cont_q;
+    lc_valid_d = lc_valid_q;  lc_au_d = lc_au_q;  lc_av_d = lc_av_q;  lc_cw_d = lc_cw_q;
     // The serial check clocks its bits in P_CHK; each chunk word restarts it.
     ck_i_d  = ck_i_q + 1'b1;
     acc1_d  = ck_s1[16:1];  acc2_d = ck_s2[16:1];
@@ -244,6 +254,7 @@ always @* begin
             hdr_cw_d  = cmd_data_i[26];
             hdr_au_d  = cmd_data_i[25:23];
             hdr_av_d  = cmd_data_i[21:19];
+            hdr_cont_d = hdr_conic_d && cmd_data_i[18];
             sum_d     = 34'd0;
             discard_d = fault_i;
             if (!fault_i) begin
@@ -254,6 +265,9 @@ always @* begin
                 end else if (hdr_conic_d && (hdr_au_d == hdr_av_d || {29'd0, hdr_au_d} >= N ||
                                              {29'd0, hdr_av_d} >= N)) begin
                     refuse = 1'b1;  refuse_code = E_CONIC_AXES;  discard_d = 1'b1;
+                end else if (hdr_cont_d && !(lc_valid_q && lc_au_q == hdr_au_d && lc_av_q == hdr_av_d &&
+                                             lc_cw_q == hdr_cw_d)) begin
+                    refuse = 1'b1;  refuse_code = E_CONIC_CONT;  discard_d = 1'b1;
                 end
             end
             p_state_d = P_H1;
@@ -297,6 +311,7 @@ always @* begin
         seg_wr_o    = keep;
         seg_wide    = {{(40-29-N){1'b0}}, hdr_end_q, hdr_k_q, cmd_data_i[24 +: N], cmd_data_i[23:0]};
         seg_wide[29+N] = CONIC != 0 && hdr_conic_q;
+        seg_wide[30+N] = CONIC != 0 && hdr_cont_q;
         seg_wdata_o = seg_wide[SWW-1:0];
         if (keep && (cmd_data_i[23:0] == 24'd0 || {8'd0, cmd_data_i[23:0]} > UMAX)) begin
             refuse = 1'b1;  refuse_code = E_SEG_U;  discard_d = 1'b1;
@@ -318,7 +333,7 @@ always @* begin
         v_idx_d = v_idx_q + 1'b1;
         // A segment announced with no chunk was refused at its header; it ends here.
         if ({29'd0, v_idx_q} == N - 1) begin
-            v_idx_d   = 3'd0;
+            v_idx_d   = hdr_cont_q ? 3'd5 : 3'd0;   // a continuation has K5, K6 only
             p_state_d = (CONIC != 0 && hdr_conic_q) ? P_K : (nchunks_q == 16'd0) ? P_CMD : P_C0;
         end
     end
@@ -329,6 +344,7 @@ always @* begin
         seg_wr_o = keep;
         seg_wide = {8'd0, cmd_data_i};
         if (v_idx_q == 3'd1) seg_wide[31:16] = {hdr_cw_q, hdr_au_q, hdr_av_q, 9'd0};
+        if (v_idx_q == 3'd5 && hdr_cont_q) seg_wide[31:24] = {hdr_cw_q, hdr_au_q, hdr_av_q, 1'b0};
         seg_wdata_o = seg_wide[SWW-1:0];
         v_idx_d = v_idx_q + 1'b1;
         if (v_idx_q == 3'd6) p_state_d = (nchunks_q == 16'd0) ? P_CMD : P_C0;
@@ -389,6 +405,10 @@ always @* begin
                 seg_commit_o = 1'b1;
                 ch_commit_o  = 1'b1;
                 p_state_d    = P_CMD;
+                lc_valid_d   = hdr_conic_q;
+                lc_au_d      = hdr_au_q;
+                lc_av_d      = hdr_av_q;
+                lc_cw_d      = hdr_cw_q;
             end
         end
     end
@@ -398,6 +418,9 @@ always @* begin
     default: p_state_d = P_CMD;
     endcase
 
+    // A fault (E-stop among them) or an ABORT flushes the walk a continuation would
+    // go on from.
+    if (fault_i || refuse || abort_o) lc_valid_d = 1'b0;
     fault_o      = refuse;
     fault_code_o = refuse_code;
 end
@@ -408,16 +431,19 @@ always @(posedge clk) begin
         p_state_q   <= P_CMD;
         discard_q   <= 1'b0;
         rsp_valid_q <= 1'b0;
+        lc_valid_q  <= 1'b0;
     end else begin
         p_state_q   <= p_state_d;
         discard_q   <= discard_d;
         rsp_valid_q <= rsp_valid_d;
+        lc_valid_q  <= lc_valid_d;
     end
     hdr_end_q <= hdr_end_d;  hdr_k_q <= hdr_k_d;  seg_u_q <= seg_u_d;
     nchunks_q <= nchunks_d;  v_idx_q <= v_idx_d;
     interval_q <= interval_d;  count_q <= count_d;  add_q <= add_d;  add2_q <= add2_d;
     sum_q <= sum_d;  seg_add2_q <= seg_add2_d;
     hdr_conic_q <= hdr_conic_d;  hdr_au_q <= hdr_au_d;  hdr_av_q <= hdr_av_d;  hdr_cw_q <= hdr_cw_d;
+    hdr_cont_q <= hdr_cont_d;  lc_au_q <= lc_au_d;  lc_av_q <= lc_av_d;  lc_cw_q <= lc_cw_d;
     ck_i_q <= ck_i_d;  acc1_q <= acc1_d;  acc2_q <= acc2_d;
     c1_q <= c1_d;  c2_q <= c2_d;  c3_q <= c3_d;  b_q <= b_d;  li_sign_q <= li_sign_d;
     li_nz_q <= li_nz_d;  dl_nz_q <= dl_nz_d;  dl_hi_q <= dl_hi_d;  sum_ne_q <= sum_ne_d;

@@ -47,8 +47,12 @@ module cp_conic_serial #(
     input  wire [2:0]    wr_sel_i,
     input  wire [31:0]   wr_data_i,
     // Start walking from the words written (wins over clear; a move waiting is
-    // dropped). A write in the same clock is taken first.
+    // dropped). A write in the same clock is taken first. With cont_i the walk goes
+    // on from where the last one ended: its first pass applies that walk's last
+    // move (kept since), so only the new end (words 5, 6, from that end node)
+    // need be written.
     input  wire          start_i,
+    input  wire          cont_i,
 
     // Walking: a pass under way or a decided move not yet presented.
     output wire          busy_o,
@@ -247,7 +251,9 @@ always @(posedge clk) begin
         endcase
     end
     if (start_i) begin
-        mx_q <= 1'b0;  my_q <= 1'b0;  qx_q <= 1'b0;  qy_q <= 1'b0;
+        if (!cont_i) begin
+            mx_q <= 1'b0;  my_q <= 1'b0;  qx_q <= 1'b0;  qy_q <= 1'b0;
+        end
         i_q  <= {BW{1'b0}};
     end else if (pass_q) begin
         sg_q  <= {ng, sg_q[IW-1:1]};

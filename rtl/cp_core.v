@@ -92,7 +92,7 @@ module cp_core #(
 // ---------------------------------------------------------------- constants
 localparam integer AW = (W > 2) ? $clog2(W) : 1;    // pattern bank address width
 // Segment queue word: the header {end, k, dir[N], U} or a v_i in [23:0].
-localparam integer SWW = (CONIC == 0) ? 29 + N : ((30 + N > 32) ? 30 + N : 32);
+localparam integer SWW = (CONIC == 0) ? 29 + N : ((31 + N > 32) ? 31 + N : 32);
 // Segment queue address width: 2^SAW segments of N + 1 words each, at least.
 localparam integer SQW = SAW + $clog2(N + 1);
 // A built segment, waiting in the run queue: lane, end, moving[N], dir[N].
@@ -156,7 +156,7 @@ wire          build_fault, build_busy;
 wire [SQW:0]  segq;
 // Runner.
 wire          running, cur_valid, fire, seg_done, stretch, seg_active, run_fault, run_conic;
-wire          walker_free, cw_wr, cw_start;
+wire          walker_free, cw_wr, cw_start, cw_cont;
 wire [2:0]    cw_sel;
 wire [31:0]   cw_data;
 wire [N-1:0]  pulse_step, run_dir, pulse_ready, pulse_busy;
@@ -199,7 +199,7 @@ cp_build #(.N(N), .W(W), .UMAX(UMAX), .SAW(SAW), .CONIC(CONIC)) u_build (
     .bank_we_o(bank_we), .bank_axis_o(bank_axis), .bank_waddr_o(bank_waddr),
     .bank_wbit_o(bank_wbit), .build_lane_o(build_lane), .len_we_o(len_we), .len_m1_o(len_m1),
     .walker_free_i(walker_free), .cw_wr_o(cw_wr), .cw_sel_o(cw_sel), .cw_data_o(cw_data),
-    .cw_start_o(cw_start),
+    .cw_start_o(cw_start), .cw_cont_o(cw_cont),
     .fault_o(build_fault), .busy_o(build_busy), .segq_o(segq));
 
 cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
@@ -217,7 +217,7 @@ cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW)) u_run (
     .segq_empty_i(segq == {(SQW+1){1'b0}}), .build_busy_i(build_busy),
     .bank_we_i(bank_we), .bank_axis_i(bank_axis), .bank_waddr_i(bank_waddr),
     .bank_wbit_i(bank_wbit), .bank_lane_i(build_lane), .len_we_i(len_we), .len_m1_i(len_m1),
-    .cw_wr_i(cw_wr), .cw_sel_i(cw_sel), .cw_data_i(cw_data), .cw_start_i(cw_start),
+    .cw_wr_i(cw_wr), .cw_sel_i(cw_sel), .cw_data_i(cw_data), .cw_start_i(cw_start), .cw_cont_i(cw_cont),
     .walker_free_o(walker_free),
     .pulse_ready_i(pulse_ready), .step_o(pulse_step), .dir_o(run_dir),
     .running_o(running), .cur_valid_o(cur_valid), .fire_o(fire), .seg_done_o(seg_done),

@@ -68,6 +68,7 @@ module cp_run #(
     input  wire [2:0]    cw_sel_i,
     input  wire [31:0]   cw_data_i,
     input  wire          cw_start_i,
+    input  wire          cw_cont_i,        // the walk continues the last one (docs/CORE.md)
     output wire          walker_free_o,
 
     // Pulse timers: ready for a step; the steps of this move event and the
@@ -139,7 +140,7 @@ generate
     if (CONIC != 0) begin : g_walker
         cp_conic_serial #(.QW(16), .IW(CIW), .XW(24)) u_walker (
             .clk(clk), .rst(rst), .clear_i(flush_i),
-            .wr_i(cw_wr_i), .wr_sel_i(cw_sel_i), .wr_data_i(cw_data_i), .start_i(cw_start_i),
+            .wr_i(cw_wr_i), .wr_sel_i(cw_sel_i), .wr_data_i(cw_data_i), .start_i(cw_start_i), .cont_i(cw_cont_i),
             .busy_o(wk_busy), .move_valid_o(wk_valid), .move_ready_i(wk_ready),
             .move_dx_o(wk_dx), .move_dy_o(wk_dy), .move_end_o(wk_end));
     end else begin : g_no_walker
@@ -149,7 +150,7 @@ generate
         assign wk_dx    = 2'b00;
         assign wk_dy    = 2'b00;
         localparam [31:0] CIW_WORD = CIW;
-        wire unused_walker = &{1'b0, cw_wr_i, cw_sel_i, cw_data_i, cw_start_i, wk_ready, CIW_WORD};
+        wire unused_walker = &{1'b0, cw_wr_i, cw_sel_i, cw_data_i, cw_start_i, cw_cont_i, wk_ready, CIW_WORD};
     end
 endgenerate
 assign walker_free_o = !wk_busy && !wk_valid;

@@ -24,7 +24,7 @@ module cp_spi #(
     // Command buffer address width: it holds 2^CBUF_AW words.
     parameter integer CBUF_AW = 9,
     // 1: CONIC commands (opcode 5, docs/CORE.md "CONIC") are framed as whole commands
-    // of 2 + N + 7 + chunk words; 0: opcode 5 is refused (BAD_COMMAND), as the core
+    // of 2 + N + 7 + chunk words (2 + N + 2 + chunk words with H0[18], a continuation); 0: opcode 5 is refused (BAD_COMMAND), as the core
     // would refuse it.
     parameter integer CONIC = 0
 ) (
@@ -265,7 +265,8 @@ always @* begin
                 end
                 4'h5: begin
                     if (CONIC != 0) begin
-                        hdr_left_d = CON_HDR_WORDS;
+                        // H0[18]: a continuation carries K5, K6 only.
+                        hdr_left_d = rx_word[18] ? CON_HDR_WORDS - 5'd5 : CON_HDR_WORDS;
                         chunks_left_d = rx_word[15:0];
                         seg_add2_d = rx_word[22];
                         cw_d = 2'd0;
@@ -372,7 +373,7 @@ wire [15:0] f_free_now = (used >= CBUF_WORDS) ? 16'd0 : CBUF_WORDS - used;
 // Words of a command starting with this word, after it (docs/PROTOCOL.md).
 wire [17:0] f_nchunks = {2'd0, f_word[15:0]};
 wire [17:0] f_seg_len = N + (f_word[22] ? 18'd3 * f_nchunks : 18'd2 * f_nchunks) + 18'd1;
-wire [17:0] f_con_len = f_seg_len + 18'd7;
+wire [17:0] f_con_len = f_seg_len + (f_word[18] ? 18'd2 : 18'd7);
 wire        f_conic   = CONIC != 0;
 
 // The result of the frame ending now: the first failing check.

@@ -125,7 +125,8 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
           w.v.push_back(seg.v[a]);
         }
         w.chunks = take_moves(chunks, next_chunk, n);
-        w.conic = WireSegment::Conic{piece.cw, unsigned(piece.axis_u), unsigned(piece.axis_v), piece.words()};
+        w.conic = WireSegment::Conic{piece.cw, unsigned(piece.axis_u), unsigned(piece.axis_v), piece.words(),
+                                     piece.cont};
         out.segments.push_back(std::move(w));
         out.source.push_back(s);
         done += n;

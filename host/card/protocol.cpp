@@ -10,7 +10,8 @@ void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
   for (const WireChunk& c : s.chunks) add2 = add2 || c.add2 != 0;
   if (s.conic)
     out.push_back(0x5u << 28 | uint32_t(s.end) << 27 | uint32_t(s.conic->cw) << 26 | (s.conic->axis_u & 7u) << 23 |
-                  uint32_t(add2) << 22 | (s.conic->axis_v & 7u) << 19 | uint32_t(s.chunks.size() & 0xFFFF));
+                  uint32_t(add2) << 22 | (s.conic->axis_v & 7u) << 19 | uint32_t(s.conic->cont) << 18 |
+                  uint32_t(s.chunks.size() & 0xFFFF));
   else
     out.push_back(0x1u << 28 | uint32_t(s.end) << 27 | (s.k & 0xFu) << 23 | uint32_t(add2) << 22 |
                   uint32_t(s.chunks.size() & 0xFFFF));
@@ -19,7 +20,8 @@ void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
   out.push_back(dirs << 24 | (s.u & 0xFFFFFF));
   for (uint32_t v : s.v) out.push_back(v & 0xFFFFFF);
   if (s.conic)
-    for (size_t i = 0; i < 7; ++i) out.push_back(i == 1 ? s.conic->words[1] & 0xFFFF : s.conic->words[i]);
+    for (size_t i = s.conic->cont ? 5 : 0; i < 7; ++i)
+      out.push_back(i == 1 ? s.conic->words[1] & 0xFFFF : s.conic->words[i]);
   for (const WireChunk& c : s.chunks) {
     out.push_back(c.interval);
     out.push_back(uint32_t(uint16_t(c.add)) << 16 | c.count);
@@ -31,16 +33,19 @@ void encode_conic(const WireConic& s, std::vector<uint32_t>& out) {
   bool add2 = false;
   for (const WireChunk& c : s.chunks) add2 = add2 || c.add2 != 0;
   out.push_back(0x5u << 28 | uint32_t(s.end) << 27 | uint32_t(s.cw) << 26 | (s.axis_u & 7u) << 23 |
-                uint32_t(add2) << 22 | (s.axis_v & 7u) << 19 | uint32_t(s.chunks.size() & 0xFFFF));
+                uint32_t(add2) << 22 | (s.axis_v & 7u) << 19 | uint32_t(s.cont) << 18 |
+                uint32_t(s.chunks.size() & 0xFFFF));
   uint32_t dirs = 0;
   for (size_t a = 0; a < s.dir_positive.size(); ++a) dirs |= uint32_t(s.dir_positive[a]) << a;
   out.push_back(dirs << 24 | (s.t & 0xFFFFFF));
   for (uint32_t v : s.v) out.push_back(v & 0xFFFFFF);
-  out.push_back(uint32_t(uint16_t(s.b)) << 16 | uint16_t(s.a));
-  out.push_back(uint16_t(s.c));
-  out.push_back(uint32_t(s.g));
-  out.push_back(uint32_t(s.gx));
-  out.push_back(uint32_t(s.gy));
+  if (!s.cont) {
+    out.push_back(uint32_t(uint16_t(s.b)) << 16 | uint16_t(s.a));
+    out.push_back(uint16_t(s.c));
+    out.push_back(uint32_t(s.g));
+    out.push_back(uint32_t(s.gx));
+    out.push_back(uint32_t(s.gy));
+  }
   out.push_back(uint32_t(s.du) & 0xFFFFFF);
   out.push_back(uint32_t(s.dv) & 0xFFFFFF);
   for (const WireChunk& c : s.chunks) {
@@ -70,7 +75,8 @@ void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out) {
 size_t command_words(uint32_t first, unsigned axes) {
   const uint32_t op = first >> 28;
   if (op != 0x1 && op != 0x5) return 1;
-  return 2 + axes + (op == 0x5 ? 7 : 0) + ((first >> 22 & 1) ? 3 : 2) * size_t(first & 0xFFFF);
+  const size_t k_words = op != 0x5 ? 0 : (first >> 18 & 1) ? 2 : 7;   // a continuation: K5, K6
+  return 2 + axes + k_words + ((first >> 22 & 1) ? 3 : 2) * size_t(first & 0xFFFF);
 }
 
 Status decode_status(uint32_t w) {
@@ -98,6 +104,7 @@ ErrorName error_name(uint32_t code) {
       {"SEG_ADD2", "a chunk whose increment add + j*add2 changes sign"},
       {"CONIC_AXES", "a conic segment's plane axes equal or not axes, or a v of theirs not 0"},
       {"CONIC_END", "a conic's walk arrived at its end before its last move, or not on it"},
+      {"CONIC_CONTINUE", "a conic continuing a walk that does not follow a conic on its axes and way"},
   };
   if (code < std::size(names)) return names[code];
   return {"UNKNOWN", "an error code this program does not know"};

@@ -30,10 +30,14 @@ struct WireSegment {
   // Set: a CONIC segment (opcode 5) of T = U moves (k = 0) whose axes u, v step by
   // the walk these seven words load (K0..K6 of docs/CORE.md "CONIC"; K1's [31:16]
   // are sent as 0); v is 0 for those two axes.
+  // With `cont` (H0[18]) the walk goes on from where the previous segment's, a
+  // CONIC on the same axes and way, ended: only K5 and K6 (the end from there) are
+  // sent; the card refuses it after anything else (CONIC_CONTINUE, 18).
   struct Conic {
     bool cw = false;
     unsigned axis_u = 0, axis_v = 1;
     std::array<uint32_t, 7> words{};
+    bool cont = false;
   };
   std::optional<Conic> conic;
 };
@@ -51,6 +55,7 @@ struct WireConic {
   int32_t a = 0, b = 0, c = 0;    // 16 bits each
   int32_t g = 0, gx = 0, gy = 0;  // at the start node
   int32_t du = 0, dv = 0;         // 24 bits each
+  bool cont = false;              // continues the last walk (H0[18]): only du, dv sent
   std::vector<WireChunk> chunks;  // counts sum to T
 };
 

@@ -98,6 +98,7 @@ ConicWalk ConicWalk::tail(std::size_t n) const {
     t.ideal.assign(ideal.begin() + std::ptrdiff_t(n), ideal.end());
     t.du = (u0 + du) - t.u0;
     t.dv = (v0 + dv) - t.v0;
+    t.cont = true;
     return t;
 }
 

@@ -42,13 +42,17 @@ struct ConicWalk {
     std::int64_t du = 0, dv = 0;      // the end node minus the start node
     std::vector<std::uint8_t> moves;  // per move: (dx + 1) | (dy + 1) << 2
     std::vector<double> ideal;        // per move: its ideal time, card cycles from the job start
+    // The walk goes on from the one before it (a tail(): a later piece of one arc),
+    // so its CONIC may continue the previous one's (docs/CORE.md, H0[18]).
+    bool cont = false;
 
     [[nodiscard]] static std::uint8_t pack(int dx, int dy) { return std::uint8_t((dx + 1) | (dy + 1) << 2); }
     [[nodiscard]] static int dx_of(std::uint8_t m) { return int(m & 3) - 1; }
     [[nodiscard]] static int dy_of(std::uint8_t m) { return int(m >> 2 & 3) - 1; }
     // The seven words K0..K6 that load the walker for this walk (docs/CORE.md).
     [[nodiscard]] std::array<std::uint32_t, 7> words() const;
-    // The same walk's first `n` moves, and the walk from move n on (with their times).
+    // The same walk's first `n` moves, and the walk from move n on (with their times;
+    // a continuation of the head).
     [[nodiscard]] ConicWalk head(std::size_t n) const;
     [[nodiscard]] ConicWalk tail(std::size_t n) const;
 };

@@ -29,6 +29,7 @@ struct ConicSerialPort {
     r.wr_sel_i = i.wr_sel & 7;
     r.wr_data_i = i.wr_data;
     r.start_i = i.start;
+    r.cont_i = i.cont;
     r.move_ready_i = i.move_ready;
   }
 

@@ -29,26 +29,28 @@ struct SerialRun {
 
 // Loads the walk of `rq` (its start node's G and gradient, the end's offset) and
 // takes moves, each cycle with probability ready_pct %, until the one marked as
-// arriving at the end, or max_moves.
+// arriving at the end, or max_moves. With `cont` the walk goes on from where the
+// last one ended (rq.start): only the end's offset is written, the start with cont.
 template <class Stepper>
 SerialRun run_serial(Stepper& dut, const ConicRequest& rq, unsigned ready_pct, std::mt19937_64& rng,
-                     size_t max_moves) {
+                     size_t max_moves, bool cont = false) {
   const unsigned iw = dut.model().params().iw;
   const auto k = rq.coeffs();
   const auto n = model::CpConic::at(k, rq.start.x, rq.start.y);
   const auto words = Serial::words(k, n, rq.cw, rq.end.x - rq.start.x, rq.end.y - rq.start.y);
   model::CpConicSerialIn in;
   SerialRun run;
-  // The seven words, the last with the start.
-  for (unsigned w = 0; w < 7; ++w) {
+  // The seven words (a continuation: the last two), the last with the start.
+  for (unsigned w = cont ? 5 : 0; w < 7; ++w) {
     in.wr = true;
     in.wr_sel = w;
     in.wr_data = words[w];
     in.start = w == 6;
+    in.cont = cont && in.start;
     if (in.start) run.load_cycle = dut.cycle();
     dut.step(in);
   }
-  in.wr = in.start = false;
+  in.wr = in.start = in.cont = false;
   StreamContract contract("move stream");
   std::uniform_int_distribution<unsigned> pct(0, 99);
   bool fresh = true;
@@ -193,6 +195,42 @@ TEST(ConicSerial, LargeCirclesAtTheHostsScale) {
 
 // docs/CONIC.md "The walk, bit-serial": the first move is valid IW + 2 cycles after
 // the start's cycle, and with the consumer always ready every IW + 1 cycles after.
+// A walk in pieces, each after the first started with cont and only its end's
+// offset written: the moves are the whole walk's, in lockstep (H0[18] of a CONIC,
+// docs/CORE.md: the walker keeps the last walk's coefficients, node and last move).
+TEST(ConicSerial, ContinuationsWalkOnFromTheLastEnd) {
+  Lockstep<ConicSerialDefault> ls("conic_serial_cont");
+  std::mt19937_64 rng(33);
+  std::uniform_int_distribution<int> pick(0, 1 << 20);
+  for (int t = 0; t < 40; ++t) {
+    const int s = 8 + pick(rng) % 400;
+    ConicRequest rq = circle_from(pick(rng) % 64 - 32, pick(rng) % 64 - 32, s, t % 2 == 1,
+                                  (pick(rng) % 6283) / 1000.0L, 40 + pick(rng) % 900);
+    const auto want = expected_moves(rq, 100000, 40);
+    ASSERT_GE(want.size(), 3u);
+    // Two or three pieces, cut at random moves.
+    std::vector<size_t> cuts{size_t(1 + pick(rng) % (want.size() - 1))};
+    if (t % 3 == 0 && cuts[0] + 1 < want.size()) cuts.push_back(cuts[0] + 1 + pick(rng) % (want.size() - cuts[0] - 1));
+    cuts.push_back(want.size());
+    std::vector<std::pair<int, int>> got;
+    Node at = rq.start;
+    size_t from = 0;
+    for (size_t c = 0; c < cuts.size(); ++c) {
+      Node to = at;
+      for (size_t j = from; j < cuts[c]; ++j) to = {to.x + want[j].first, to.y + want[j].second};
+      ConicRequest piece = rq;
+      piece.start = at;
+      piece.end = to;
+      const SerialRun run = run_serial(ls, piece, 50 + pick(rng) % 51, rng, cuts[c] - from, c > 0);
+      EXPECT_TRUE(run.ended) << "piece " << c << " of walk " << t;
+      got.insert(got.end(), run.moves.begin(), run.moves.end());
+      at = to;
+      from = cuts[c];
+    }
+    EXPECT_EQ(got, want) << "walk " << t;
+  }
+}
+
 TEST(ConicSerial, AMoveEveryIwPlusOneCycles) {
   Lockstep<ConicSerialDefault> ls;
   ls.reset();

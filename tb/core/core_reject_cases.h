@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The bad commands of docs/CORE.md "Validation" (codes 1–8 and 12–15), one catalogue
+// The bad commands of docs/CORE.md "Validation" (codes 1–8, 12–15 and 18), one catalogue
 // for every bench that sends them (tb/core/test_core_reject.cpp on the RTL cores,
 // tb/netlist on the synthesized one), sized from the core's parameters.
 #pragma once
@@ -92,6 +92,20 @@ inline std::vector<BadInput> bad_inputs(const model::CpCoreParams& p) {
   };
   // CONIC (opcode 5) is a command only in a core built with CONIC = 1.
   if (!p.conic) cases.push_back({"opcode_5_without_conic", 12, [] { return std::vector<uint32_t>{0x50000001u}; }});
+  // A CONIC continuing a walk (H0[18]) with no CONIC before it (docs/CORE.md "CONIC").
+  if (p.conic)
+    cases.push_back({"conic_continue_first", 18, [] {
+                       card::WireConic c;
+                       c.t = 10;
+                       c.cont = true;
+                       c.dir_positive = {true, true, true, true};
+                       c.v = {0, 0, 0, 0};
+                       c.du = 10;
+                       c.chunks = {{100, 10, 0}};
+                       std::vector<uint32_t> w;
+                       card::encode_conic(c, w);
+                       return w;
+                     }});
   return cases;
 }
 

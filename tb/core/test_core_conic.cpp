@@ -144,7 +144,8 @@ struct JobResult {
   model::CpCoreOut last;
 };
 
-JobResult run_job(const std::vector<std::vector<uint32_t>>& commands, uint64_t max_cycles) {
+// must_run: a run that never starts (a command refused before START) is a failure.
+JobResult run_job(const std::vector<std::vector<uint32_t>>& commands, uint64_t max_cycles, bool must_run = true) {
   Lockstep<CoreConic> ls;
   JobResult r;
   std::array<int64_t, 2> pos{};
@@ -166,7 +167,8 @@ JobResult run_job(const std::vector<std::vector<uint32_t>>& commands, uint64_t m
     drv.run_until_stopped(max_cycles);
   } catch (const std::runtime_error& e) {
     const auto& o = drv.last();
-    ADD_FAILURE() << e.what() << ": " << o.moves_done << " moves done, " << o.segments_done
+    if (must_run || o.running || o.err_code == 0)
+      ADD_FAILURE() << e.what() << ": " << o.moves_done << " moves done, " << o.segments_done
                   << " segments, error " << o.err_code << ", running " << o.running;
   }
   drv.idle(50);
@@ -227,7 +229,9 @@ TEST(CoreConic, ArcsAndHelicesOnThePins) {
 // A whole circle of radius 40 in four conics, back to back (the next conic's words
 // wait for the walker: here its first move `gap` cycles on, docs/CORE.md), back where
 // it started.
-void whole_circle(uint32_t gap, uint64_t& stretches) {
+// With `cont` the three conics after the first continue the walk (H0[18]): K5, K6
+// only, the walker going on from where the one before ended.
+void whole_circle(uint32_t gap, uint64_t& stretches, bool cont = false) {
   Arc whole = circle_arc(0, 0, 40, 0.05, false, 0);
   // Walk until back at the start.
   for (CNode n = whole.start; whole.moves.empty() || whole.du != 0 || whole.dv != 0;) {
@@ -257,7 +261,10 @@ void whole_circle(uint32_t gap, uint64_t& stretches) {
     }
     at += n;
     want = concat(want, part.moves);
-    job.push_back(words_of(conic_segment(part, 0, q == 3, 45, q == 0 ? 300 : gap)));
+    card::WireConic seg = conic_segment(part, 0, q == 3, 45, q == 0 ? 300 : gap);
+    seg.cont = cont && q > 0;
+    job.push_back(words_of(seg));
+    EXPECT_EQ(job.back().size(), 2 + 4 + (seg.cont ? 2 : 7) + 2 * seg.chunks.size());
   }
   const JobResult r = run_job(job, 200000);
   EXPECT_EQ(r.last.err_code, 0u);
@@ -272,6 +279,60 @@ TEST(CoreConic, AWholeCircleInFourConicsBackToBack) {
   uint64_t stretches = 0;
   whole_circle(100, stretches);
   EXPECT_EQ(stretches, 0u);
+}
+
+// The same circle with the three later conics continuing the walk: the same moves.
+TEST(CoreConic, AWholeCircleInAConicAndThreeContinuations) {
+  uint64_t stretches = 0;
+  whole_circle(100, stretches, true);
+  EXPECT_EQ(stretches, 0u);
+}
+
+// A continuation is refused whole (CONIC_CONTINUE, 18) unless it follows a CONIC on
+// its axes and way: after a line, first after reset, on other axes, the other way.
+TEST(CoreConic, AContinuationAfterAnythingButItsConicIsRefused) {
+  const Arc arc = circle_arc(0, 0, 30, 0.4, false, 50);
+  Arc rest = circle_arc(0, 0, 30, 0.4, false, 80);
+  // rest: the 30 moves after arc's 50, from arc's end node.
+  rest.start = arc.start;
+  for (const Move& m : arc.moves) rest.start = model::CpConic::advance(arc.k, rest.start, m.first, m.second);
+  rest.moves.erase(rest.moves.begin(), rest.moves.begin() + 50);
+  rest.du = rest.dv = 0;
+  for (const Move& m : rest.moves) rest.du += m.first, rest.dv += m.second;
+  const auto cont_of = [&](bool end) {
+    card::WireConic c = conic_segment(rest, 0, end, 50, 300);
+    c.cont = true;
+    return c;
+  };
+  {  // after its conic: taken, the walk goes on
+    const JobResult r = run_job({words_of(conic_segment(arc, 0, false, 50, 300)), words_of(cont_of(true))}, 200000);
+    EXPECT_EQ(r.last.err_code, 0u);
+    EXPECT_EQ(r.xy_moves, concat(arc.moves, rest.moves));
+  }
+  {  // after a line
+    const JobResult r = run_job({words_of(line_segment(10, 3, false, 40)), words_of(cont_of(true))}, 20000, false);
+    EXPECT_EQ(r.last.err_code, uint32_t(model::CoreError::conic_cont));
+    EXPECT_LE(r.xy_moves.size(), 10u) << "nothing of the continuation moved";
+  }
+  {  // first after reset
+    const JobResult r = run_job({words_of(cont_of(true))}, 20000, false);
+    EXPECT_EQ(r.last.err_code, uint32_t(model::CoreError::conic_cont));
+    EXPECT_TRUE(r.xy_moves.empty());
+  }
+  {  // on other axes, the other way
+    card::WireConic other_axes = cont_of(true), other_way = cont_of(true);
+    other_axes.axis_v = 2;
+    other_axes.v = {0, 0, 0, 0};
+    other_way.cw = !other_way.cw;
+    for (const card::WireConic& c : {other_axes, other_way}) {
+      const JobResult r = run_job({words_of(conic_segment(arc, 0, false, 50, 300)), words_of(c)}, 20000, false);
+      EXPECT_EQ(r.last.err_code, uint32_t(model::CoreError::conic_cont));
+      // The conic may run (the fault flushes after the segment under way), the
+      // continuation does not.
+      ASSERT_LE(r.xy_moves.size(), arc.moves.size());
+      EXPECT_EQ(r.xy_moves, std::vector<Move>(arc.moves.begin(), arc.moves.begin() + long(r.xy_moves.size())));
+    }
+  }
 }
 
 // The same with the next conic's first move 20 cycles after the last (less than the

@@ -390,7 +390,17 @@ TEST(ConicArcs, WireWordsWalkThePlannedMovesAndCutsRestartAtTheirNode) {
         std::vector<std::uint8_t> walked, planned;
         for (const PlannedCardSegment& c : pj.card)
             if (c.conic) planned.insert(planned.end(), c.conic->moves.begin(), c.conic->moves.end());
+        const card::WireSegment* prev = nullptr;
         for (const card::WireSegment& w : wire->segments) {
+            // A cut piece continues the walk of the one before it (H0[18]): that one is
+            // a CONIC on the same axes, the same way; each arc's first piece is not.
+            if (w.conic && w.conic->cont) {
+                ASSERT_TRUE(prev && prev->conic) << "a continuation after no CONIC";
+                EXPECT_EQ(prev->conic->axis_u, w.conic->axis_u);
+                EXPECT_EQ(prev->conic->axis_v, w.conic->axis_v);
+                EXPECT_EQ(prev->conic->cw, w.conic->cw);
+            }
+            prev = &w;
             if (!w.conic) continue;
             ++conics;
             EXPECT_LE(w.chunks.size(), queue);
@@ -412,6 +422,15 @@ TEST(ConicArcs, WireWordsWalkThePlannedMovesAndCutsRestartAtTheirNode) {
             }
         }
         EXPECT_EQ(walked, planned) << "chunk queue " << queue;
+        // Two arcs: two whole CONICs, the rest continuations (5 words shorter each).
+        std::size_t whole = 0;
+        for (const card::WireSegment& w : wire->segments) whole += w.conic && !w.conic->cont;
+        EXPECT_EQ(whole, 2u) << "chunk queue " << queue;
+        const auto words = card::encode_job(m, *wire);
+        std::size_t k_words = 0;
+        for (std::size_t i = 0; i < words.size(); i += card::command_words(words[i], kAxes))
+            if (words[i] >> 28 == 0x5) k_words += (words[i] >> 18 & 1) ? 2 : 7;
+        EXPECT_EQ(k_words, 2 * 7 + (conics - 2) * 2) << "chunk queue " << queue;
         EXPECT_GE(conics, 2u);
         if (queue == 64) conics_at_64 = conics;
         else EXPECT_GT(conics, conics_at_64) << "cut at the chunk queue";

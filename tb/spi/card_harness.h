@@ -133,7 +133,7 @@ inline uint8_t expected_result(std::span<const uint8_t> b, size_t bits, size_t f
     const uint32_t w = uint32_t(b[at]) << 24 | uint32_t(b[at + 1]) << 16 | uint32_t(b[at + 2]) << 8 | b[at + 3];
     const unsigned op = w >> 28;
     if (op == 1) i += 2 + axes + ((w >> 22 & 1) ? 3 : 2) * (w & 0xFFFF);
-    else if (op == 5 && conic) i += 2 + axes + 7 + ((w >> 22 & 1) ? 3 : 2) * (w & 0xFFFF);
+    else if (op == 5 && conic) i += 2 + axes + ((w >> 18 & 1) ? 2 : 7) + ((w >> 22 & 1) ? 3 : 2) * (w & 0xFFFF);
     else if (op >= 2 && op <= 4) i += 1;
     else return 5;
   }
