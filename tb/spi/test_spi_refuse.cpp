@@ -172,7 +172,8 @@ TYPED_TEST(SpiRefuse, SplitCommand) {
 }
 
 // CONIC (opcode 5, docs/CORE.md): a card whose core takes conics frames one whole,
-// 2 + N + 7 + its chunks' words, and refuses one cut anywhere (SPLIT); a card without
+// 2 + N + 7 + its chunks' words (2 + N + 2 + … for a continuation, H0[18]), and
+// refuses one cut anywhere (SPLIT); a card without
 // refuses the opcode where a command starts (BAD_COMMAND).
 TYPED_TEST(SpiRefuse, ConicCommandsWholeOrRefused) {
   const unsigned n = TestFixture::N;
@@ -223,6 +224,29 @@ TYPED_TEST(SpiRefuse, ConicCommandsWholeOrRefused) {
   const card::Reply r = h.poll();
   ASSERT_TRUE(r.ok()) << r.error;
   EXPECT_EQ(unsigned(r.last_result), 0u) << card::frame_result_name(r.last_result).name;
+  // A continuation (H0[18]) is 2 + N + 2 + its chunks' words: cut one word short it is
+  // SPLIT; whole, a bad opcode after it is where a command starts; framed as a whole
+  // CONIC's length (five words more), its frame would end inside it.
+  c.cont = true;
+  c.chunks = {{20, 3, 0, 0}, {30, 1, 2, 0}};
+  std::vector<uint32_t> cont;
+  card::encode_conic(c, cont);
+  ASSERT_EQ(cont.size(), 2 + n + 2 + 2 * 2);
+  for (size_t keep : {size_t(2 + n + 1), size_t(2 + n + 2), cont.size() - 1}) {
+    std::vector<uint32_t> cut(cont.begin(), cont.begin() + ptrdiff_t(keep));
+    this->refused("continuation cut after " + std::to_string(keep) + " words",
+                  card::encode_frame(card::FrameType::commands, 0x50, cut), 6);
+  }
+  std::vector<uint32_t> then_bad = cont;
+  then_bad.push_back(0x60000000);
+  this->refused("continuation, then a bad opcode", card::encode_frame(card::FrameType::commands, 0x51, then_bad), 5);
+  // Whole, after its CONIC: the frame is taken (the core's own checks come after).
+  std::vector<uint32_t> both = conic;
+  both.insert(both.end(), cont.begin(), cont.end());
+  h.commands(both);
+  const card::Reply r2 = h.poll();
+  ASSERT_TRUE(r2.ok()) << r2.error;
+  EXPECT_EQ(unsigned(r2.last_result), 0u) << card::frame_result_name(r2.last_result).name;
 }
 
 // Random damage to the good frame: flipped bits, cut frames, other types, other
