@@ -183,6 +183,13 @@ std::string link_line(const run::CardRun& r) {
                      s.transfers, s.command_frames, s.polls, s.bytes, busy, s.resent, s.bad_replies);
 }
 
+// A Klipper queue_step cost as the `wire` line states it.
+std::string klipper_text(const plan::QueueStepCost& c) {
+  return c.error.empty() ? fmt::format("{} bytes ({} messages)", c.bytes,
+                                       c.queue_step + c.set_next_step_dir + c.reset_step_clock)
+                         : fmt::format("not countable: {}", c.error);
+}
+
 // The summary on stdout and the faults and warnings on stderr; returns the exit code.
 int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r, const run::RunMeasure& m,
               double wall_s, std::ofstream& report_file) {
@@ -230,16 +237,11 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
   else
     fmt::print("ran        {:.1f} s\n", wall_s);
   fmt::print("link       {}\n", link_line(r));
-  if (r.pins_observed) {
-    auto qs = [](const plan::QueueStepCost& c) {
-      return c.error.empty() ? fmt::format("{} bytes ({} messages)", c.bytes,
-                                           c.queue_step + c.set_next_step_dir + c.reset_step_clock)
-                             : fmt::format("not countable: {}", c.error);
-    };
+  if (r.pins_observed)
     fmt::print("wire       {} command bytes; Klipper's queue_step for the job's steps: {} at 25 us, {} at 1 us; "
                "for the card's pin steps: {} at 25 us\n",
-               4 * j.words.size(), qs(m.klipper_25us), qs(m.klipper_1us), qs(m.klipper_pins_25us));
-  }
+               4 * j.words.size(), klipper_text(m.klipper_25us), klipper_text(m.klipper_1us),
+               klipper_text(m.klipper_pins_25us));
   if (r.faults.empty()) {
     fmt::print("faults     none\n");
   } else {
@@ -483,6 +485,11 @@ int plan_only(const PlanOptions& o) {
   }
   print_plan_summary(*j);
   fmt::print("planned    {:.6f} s\n", j->planned.stats.duration_s);
+  // The plan's bytes beside Klipper's for the same steps (no pins here: the plan's).
+  const std::vector<plan::StepperSteps> ks = run::klipper_path_steps(*j);
+  fmt::print("wire       {} command bytes; Klipper's queue_step for the job's steps: {} at 25 us, {} at 1 us\n",
+             4 * j->words.size(), klipper_text(plan::queue_step_cost(ks, 25e-6 * j->clock_hz())),
+             klipper_text(plan::queue_step_cost(ks, 1e-6 * j->clock_hz())));
   if (!o.out.empty())
     fmt::print("wrote      {} command words ({} bytes, little-endian) to {}\n", j->words.size(),
                4 * j->words.size(), o.out);

@@ -28,11 +28,6 @@ std::vector<double> edge_times(const AxisPulses& p, uint64_t start_cycle, double
 
 }  // namespace
 
-namespace {
-
-// The job's steps where Klipper would place them: from the plan, or, when the
-// machine file fits arcs to G1 chains (planner.fit_arcs_mm), from a plan of the
-// G-code as written (Klipper takes the lines as they are).
 std::vector<plan::StepperSteps> klipper_path_steps(const CardJob& job) {
   if (!(job.machine.planner.fit_arcs_mm > 0)) return plan::path_steps(job.planned, job.clock_hz());
   plan::Machine m = job.machine;
@@ -51,8 +46,6 @@ std::vector<plan::StepperSteps> klipper_path_steps(const CardJob& job) {
   p.feeds = std::move(*feeds.value);
   return plan::path_steps(p, job.clock_hz());
 }
-
-}  // namespace
 
 RunMeasure measure_run(const CardJob& job, const CardRun& run) {
   RunMeasure m;

@@ -70,6 +70,11 @@ inline constexpr int kEvaluationsPerWindow = 8;
 
 RunMeasure measure_run(const CardJob& job, const CardRun& run);
 
+// The job's steps where Klipper would place them (plan::path_steps): from the
+// plan, or, when the machine file fits arcs to G1 chains (planner.fit_arcs_mm),
+// from a plan of the G-code as written (Klipper takes the lines as they are).
+std::vector<plan::StepperSteps> klipper_path_steps(const CardJob& job);
+
 // Time series for the plots, on a common grid of times from START (s).
 struct KinematicSeries {
   Windows window;                               // difference spacing h per quantity
