@@ -184,7 +184,7 @@ std::string link_line(const run::CardRun& r) {
 }
 
 // A Klipper queue_step cost as the `wire` line states it.
-std::string klipper_text(const plan::QueueStepCost& c) {
+static std::string klipper_text(const plan::QueueStepCost& c) {
   return c.error.empty() ? fmt::format("{} bytes ({} messages)", c.bytes,
                                        c.queue_step + c.set_next_step_dir + c.reset_step_clock)
                          : fmt::format("not countable: {}", c.error);

@@ -68,6 +68,14 @@ check::Verdict check_vcd(const run::CardJob& job, const fs::path& vcd) {
   return check::check_trace(job, *pins);
 }
 
+// The job on the simulated HX8K card (the fast engine), its pins into `vcd`.
+run::CardRun run_hx8k(const run::CardJob& job, const fs::path& vcd) {
+  run::SimRunOptions o;
+  o.board = "hx8k";
+  o.vcd = vcd.string();
+  return run::run_on_sim(job, o);
+}
+
 plan::Result<run::CardJob> prepare(const std::string& board, bool chords) {
   std::string machine;
   {
@@ -193,10 +201,7 @@ TEST(ConicJob, FittedLineChainsRunAsConics) {
   EXPECT_LE(st.fit.max_deviation_mm, 0.002);
   EXPECT_EQ(st.conic_arcs, 2u);
   const fs::path vcd = fs::path(CPSTEP_TEST_DIR) / "conic_job" / "chain.vcd";
-  run::SimRunOptions o;
-  o.board = "hx8k";
-  o.vcd = vcd.string();
-  const run::CardRun r = run::run_on_sim(*job, o);
+  const run::CardRun r = run_hx8k(*job, vcd);
   ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
   // The last G1: X = 5 - 5 cos(1.5 pi) = 5, Y = 10 - 5 sin(1.5 pi) = 15 mm at 80 steps/mm.
   EXPECT_EQ(r.position[0], 5 * 80);
@@ -216,10 +221,7 @@ TEST(ConicJob, AnArcInXZOnUnequalStepsPerMmIsAnEllipseOnTheCard) {
   ASSERT_TRUE(job.ok()) << plan::join(job.errors);
   EXPECT_EQ(job->planned.stats.conic_arcs, 2u) << plan::join(job->warnings);
   const fs::path vcd = fs::path(CPSTEP_TEST_DIR) / "conic_job" / "xz.vcd";
-  run::SimRunOptions o;
-  o.board = "hx8k";
-  o.vcd = vcd.string();
-  const run::CardRun r = run::run_on_sim(*job, o);
+  const run::CardRun r = run_hx8k(*job, vcd);
   ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
   EXPECT_EQ(r.position[0], 20 * 80);
   EXPECT_EQ(r.position[2], 0);
