@@ -29,8 +29,9 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
         d.u = val_u;
         d.dir = uint32_t(i.seg_head >> 24) & bits::mask(p_.n);
         d.end = (i.seg_head >> (28 + p_.n) & 1) != 0;
-        d.conic = p_.conic && (i.seg_head >> (29 + p_.n) & 1) != 0;
-        d.cont = p_.conic && (i.seg_head >> (30 + p_.n) & 1) != 0;
+        d.out = (i.seg_head >> (29 + p_.n) & 1) != 0;
+        d.conic = p_.conic && (i.seg_head >> (30 + p_.n) & 1) != 0;
+        d.cont = p_.conic && (i.seg_head >> (31 + p_.n) & 1) != 0;
         d.axis = 0;
         d.moving = 0;
         d.state = State::next_axis;
@@ -84,8 +85,9 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
           o.cw_start = true;
           o.cw_cont = q.cont;
           o.run_wr = true;
-          o.run_data = uint64_t(1) << (2 * p_.n + 8) | uint64_t(q.au) << (2 * p_.n + 5) |
-                       uint64_t(q.av) << (2 * p_.n + 2) | uint64_t(q.build_lane) << (2 * p_.n + 1) |
+          o.run_data = uint64_t(1) << (2 * p_.n + 9) | uint64_t(q.au) << (2 * p_.n + 6) |
+                       uint64_t(q.av) << (2 * p_.n + 3) | uint64_t(q.out) << (2 * p_.n + 2) |
+                       uint64_t(q.build_lane) << (2 * p_.n + 1) |
                        uint64_t(q.end) << (2 * p_.n) | uint64_t(q.moving) << p_.n | q.dir;
           d.build_lane = !q.build_lane;
           d.state = State::idle;
@@ -101,7 +103,8 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
       d.state = State::conic_words;
     } else if (q.axis == p_.n - 1) {
       o.run_wr = true;
-      o.run_data = uint64_t(q.build_lane) << (2 * p_.n + 1) | uint64_t(q.end) << (2 * p_.n) |
+      o.run_data = uint64_t(q.out) << (2 * p_.n + 2) | uint64_t(q.build_lane) << (2 * p_.n + 1) |
+                   uint64_t(q.end) << (2 * p_.n) |
                    uint64_t(d.moving) << p_.n | q.dir;
       d.build_lane = !q.build_lane;
       d.state = State::idle;

@@ -74,6 +74,7 @@ class CpBuild {
     unsigned axis = 0;
     uint32_t u = 0, dir = 0, moving = 0, cap_addr = 0;
     bool end = false;
+    bool out = false;  // the torch output while the segment runs
     bool conic = false;                 // the segment being built is a conic
     bool cont = false;                  // ... that continues the last walk
     uint32_t au = 0, av = 0, k_index = 0;

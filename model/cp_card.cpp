@@ -39,6 +39,7 @@ CpCard::Out CpCard::outputs() const {
   o.miso_oe = !in.cs_n;
   o.step = c.step;
   o.dir = c.dir;
+  o.torch = c.torch;
   o.enable = c.enable;
   o.running = c.running;
   o.fault = c.fault;

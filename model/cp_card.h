@@ -47,6 +47,7 @@ struct CpPinPhase {
 struct CpCardOut {
   bool miso = false, miso_oe = false;
   uint32_t step = 0, dir = 0;  // bit i: axis i's pin
+  bool torch = false;          // the torch output (docs/CORE.md "Torch")
   bool enable = false, running = false, fault = false, stretched = false;
   uint32_t err_code = 0;
   std::array<int32_t, kCoreMaxAxes> position{};

@@ -79,6 +79,7 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
           // A CONIC header: [26] clockwise, [25:23] axis u, [21:19] axis v; no k.
           d.hdr_conic = (word >> 28) == kOpConic;
           d.hdr_end = (word >> 27 & 1) != 0;
+          d.hdr_out = (word >> 16 & 1) != 0;
           d.hdr_k = d.hdr_conic ? 0 : word >> 23 & 0xF;
           d.chunks_left = word & 0xFFFF;
           d.seg_add2 = (word >> 22 & 1) != 0;
@@ -136,10 +137,11 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
     case Parse::seg_h1:
       if (!take) break;
       d.seg_u = word & 0xFFFFFF;
-      // The header word {end, k, dir, U} into the segment queue, uncommitted.
+      // The header word {[cont, conic,] out, end, k, dir, U} into the segment queue,
+      // uncommitted.
       o.seg_wr = keep;
-      o.seg_data = uint64_t(q.hdr_cont) << (30 + p_.n) | uint64_t(q.hdr_conic) << (29 + p_.n) |
-                   uint64_t(q.hdr_end) << (28 + p_.n) |
+      o.seg_data = uint64_t(q.hdr_cont) << (31 + p_.n) | uint64_t(q.hdr_conic) << (30 + p_.n) |
+                   uint64_t(q.hdr_out) << (29 + p_.n) | uint64_t(q.hdr_end) << (28 + p_.n) |
                    uint64_t(q.hdr_k) << (24 + p_.n) | uint64_t(word >> 24 & bits::mask(p_.n)) << 24 | d.seg_u;
       if (keep && (d.seg_u == 0 || d.seg_u > p_.umax)) {
         refuse(CoreError::seg_u);

@@ -78,6 +78,7 @@ class CpCmd {
     bool rsp_valid = false;
     // Datapath.
     bool hdr_end = false;  // the segment being read: end flag, k, U
+    bool hdr_out = false;  // ... the torch output while it runs (H0[16])
     uint32_t hdr_k = 0, seg_u = 0;
     bool seg_add2 = false;  // its chunks carry add2 (three words)
     bool hdr_conic = false;  // a CONIC segment: its plane axes and direction

@@ -16,9 +16,9 @@ CpCore::CpCore(Params p)
       status_({p.n, p.w, p.umax, p.kmax, p.caw, p.saw, p.tw, p.pw, p.step_high_reset, p.step_low_reset,
                p.dir_setup_reset, p.dir_hold_reset, p.step_pol_reset, p.dir_pol_reset, p.cbuf_aw,
                p.clock_hz, p.build_id, p.conic, p.ciw}),
-      seg_fifo_({p.conic ? std::max(31 + p.n, 32u) : 29 + p.n, p.saw + bits::clog2(p.n + 1)}),
+      seg_fifo_({p.conic ? 32 + p.n : 30 + p.n, p.saw + bits::clog2(p.n + 1)}),
       chunk_fifo_({81, p.caw}),
-      run_fifo_({2 + 2 * p.n + (p.conic ? 7 : 0), 1}) {
+      run_fifo_({3 + 2 * p.n + (p.conic ? 7 : 0), 1}) {
   if (p_.n < 1 || p_.n > kCoreMaxAxes) throw std::invalid_argument("cp_core: N must be 1 to 8");
   if (p_.umax < p_.w || p_.umax > 16777214)
     throw std::invalid_argument("cp_core: UMAX must be W to 2^24-2");
@@ -67,6 +67,7 @@ CpCore::Wires CpCore::settle() const {
   s.rst = in.rst;
   s.estop = in.estop;
   s.running = run_.running();
+  s.torch = run_.torch();
   s.cur_valid = run_.cur_valid();
   s.segq = build_.segq();
   s.build_busy = build_.busy();
@@ -209,6 +210,7 @@ CpCore::Out CpCore::outputs(const Wires& w) const {
     o.position[a] = int64_t(w.pulse[a].position << shift) >> shift;
   }
   o.running = w.r.running;
+  o.torch = w.r.torch;
   o.fault = w.st.fault;
   o.stretched = w.st.stretched;
   o.err_code = w.st.err;

@@ -48,6 +48,7 @@ struct CpCoreOut {
   uint32_t rsp_addr = 0;  // the register the reply names
   uint32_t rd_data = 0;   // the read port: register rd_addr, now
   uint32_t step = 0, dir = 0;  // bit i: axis i's pin
+  bool torch = false;          // the torch output (docs/CORE.md "Torch")
   bool running = false, fault = false, stretched = false;
   uint32_t err_code = 0;
   std::array<int64_t, kCoreMaxAxes> position{};  // sign-extended from PW bits

@@ -44,6 +44,7 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   o.step = o.fire ? move_steps : 0;
   o.dir = (q.dir & ~plane_step) | (plane_dir & plane_step);
   o.running = q.running;
+  o.torch = q.torch;
   o.cur_valid = q.cur_valid;
   if (o.stretch) d.late = true;
   if (o.fire) d.late = false;
@@ -108,9 +109,10 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
     d.cur_valid = true;
     d.cur_lane = unsigned(i.run_head >> (2 * n + 1) & 1);
     d.cur_end = (i.run_head >> (2 * n) & 1) != 0;
-    d.cur_conic = p_.conic && (i.run_head >> (2 * n + 8) & 1) != 0;
-    d.cur_au = uint32_t(i.run_head >> (2 * n + 5)) & 7;
-    d.cur_av = uint32_t(i.run_head >> (2 * n + 2)) & 7;
+    d.out = (i.run_head >> (2 * n + 2) & 1) != 0;
+    d.cur_conic = p_.conic && (i.run_head >> (2 * n + 9) & 1) != 0;
+    d.cur_au = uint32_t(i.run_head >> (2 * n + 6)) & 7;
+    d.cur_av = uint32_t(i.run_head >> (2 * n + 3)) & 7;
     d.dir = (d.dir & ~moving) | (dir & moving);
     // The replay registers fetch each pattern's first move.
     rp.re = true;
@@ -129,7 +131,11 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
     d.cur_lane = 0;
     d.late = false;
     d.rp_valid = false;
+    d.out = false;
   }
+  // The torch: on while the run is on and the segment last loaded says so; off from
+  // the cycle after an E-stop or an abort is seen.
+  d.torch = d.running && d.out && !stopping;
   return o;
 }
 
@@ -218,6 +224,7 @@ void CpRun::tick() {
     d.chunk_loaded = d.late = d.rp_valid = false;
     d.dir = 0;
     d.cur_conic = false;
+    d.out = d.torch = false;
   }
   r_ = d;
 }

@@ -27,7 +27,7 @@ struct CpRunIn {
   bool ch_valid = false;
   FifoWord ch_head{};      // 81 bits: {last, add2, count, add, interval}
   bool run_valid = false;
-  uint64_t run_head = 0;   // {[conic, u, v,] lane, end, moving[N], dir[N]}
+  uint64_t run_head = 0;   // {[conic, u, v,] out, lane, end, moving[N], dir[N]}
   uint32_t run_level = 0;  // 2 bits
   bool segq_empty = false, build_busy = false;
   // The banks' write port (cp_build).
@@ -48,6 +48,7 @@ struct CpRunOut {
   bool ch_pop = false, run_pop = false;
   uint32_t step = 0, dir = 0;  // bit a: axis a
   bool running = false, cur_valid = false;
+  bool torch = false;          // the torch output (a register)
   bool fire = false, seg_done = false, stretch = false, seg_active = false;
   bool fault = false;        // underrun, or a conic's walk not ending on its last move
   bool fault_conic = false;  // the fault is the conic's (CONIC_END)
@@ -78,6 +79,7 @@ class CpRun {
 
   // Registered outputs, for the core's other parts.
   bool running() const { return r_.running; }
+  bool torch() const { return r_.torch; }
   bool cur_valid() const { return r_.cur_valid; }
   // DIR as the pulse timers see it: the registers, but a plane axis of a conic shows
   // the presented move's direction before the move fires (rtl/cp_run.v dir_o).
@@ -97,6 +99,8 @@ class CpRun {
     uint32_t dir = 0;
     // Datapath.
     bool cur_end = false;
+    bool out = false;    // reset: the out bit of the segment last loaded
+    bool torch = false;  // reset: the torch pin
     uint32_t delay = 0, moves_left = 0, elapsed = 0;
     uint32_t timer_inc = 0;   // the running increment, 32 bits (signed, mod 2^32)
     uint32_t timer_add2 = 0;  // 16 bits

@@ -46,7 +46,7 @@ uint32_t CpStatus::status_word(const In& i) const {
   const uint32_t segments =
       ((i.segq & bits::mask(sqw + 1)) + uint32_t(i.build_busy) + (i.run_level & 3) + uint32_t(i.cur_valid)) &
       0xFF;
-  return chunks << 24 | segments << 16 | (q.err & 0xFF) << 8 | uint32_t(q.enable) << 4 |
+  return chunks << 24 | segments << 16 | (q.err & 0xFF) << 8 | uint32_t(i.torch) << 5 | uint32_t(q.enable) << 4 |
          uint32_t(i.estop) << 3 | uint32_t(q.stretched) << 2 | uint32_t(q.fault) << 1 |
          uint32_t(i.running);
 }

@@ -35,6 +35,7 @@ struct CpStatusIn {
   bool run_conic = false;  // the runner's fault is CONIC_END, not UNDERRUN
   bool stretch = false, fire = false, seg_done = false, seg_active = false;
   bool running = false, cur_valid = false;
+  bool torch = false;  // the torch output (status bit 5)
   uint32_t segq = 0;
   bool build_busy = false;
   uint32_t run_level = 0, ch_level = 0;

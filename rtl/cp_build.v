@@ -6,7 +6,7 @@
 // into the build lane of that axis's bank (in cp_run): a constant pattern
 // (v = 0 or v = U) is one move; any other is built by the one Castle–Pitteway
 // engine from the unreduced (U, v_i), whose first period M2·reverse(M1) is
-// copied one move a clock. When the last axis is written, the segment (lane,
+// copied one move a clock. When the last axis is written, the segment (torch output, lane,
 // end flag, moving axes, directions) goes into the run queue and the build lane
 // flips. It also counts the committed segments waiting in the segment queue.
 //
@@ -44,7 +44,7 @@ module cp_build #(
     input  wire [1:0]    run_level_i,
     input  wire          cur_valid_i,
     output reg           run_wr_o,
-    output reg  [RDW-1:0] run_wdata_o,     // {[conic, u, v,] lane, end, moving[N], dir[N]}
+    output reg  [RDW-1:0] run_wdata_o,     // {[conic, u, v,] out, lane, end, moving[N], dir[N]}
 
     // Write port of the pattern banks (cp_run): axis, address, bit, in the build
     // lane; and the pattern's length - 1 when an axis is done.
@@ -72,8 +72,8 @@ module cp_build #(
 localparam integer UW = $clog2(UMAX + 2);           // engine u/v width
 localparam integer AW = (W > 2) ? $clog2(W) : 1;
 localparam integer SQW = SAW + $clog2(N + 1);
-localparam integer SWW = (CONIC == 0) ? 29 + N : ((31 + N > 32) ? 31 + N : 32);
-localparam integer RDW = 2 + 2 * N + ((CONIC == 0) ? 0 : 7);
+localparam integer SWW = (CONIC == 0) ? 30 + N : 32 + N;
+localparam integer RDW = 3 + 2 * N + ((CONIC == 0) ? 0 : 7);
 
 localparam [1:0] B_IDLE = 2'd0;   // waiting for a committed segment and a free lane
 localparam [1:0] B_V    = 2'd1;   // next axis: its v_i at the segment queue's head
@@ -86,6 +86,7 @@ reg [SQW:0]  segq_q, segq_d;             // reset
 reg [2:0]    b_axis_q, b_axis_d;
 reg [UW-1:0] b_u_q, b_u_d;
 reg          b_end_q, b_end_d;
+reg          b_out_q, b_out_d;           // the torch output while the segment runs
 reg [N-1:0]  b_dir_q, b_dir_d, b_moving_q, b_moving_d;
 reg [AW-1:0] cap_addr_q, cap_addr_d;
 reg          b_conic_q, b_conic_d;       // the segment being built is a conic
@@ -94,12 +95,13 @@ reg [2:0]    b_au_q, b_au_d, b_av_q, b_av_d, k_idx_q, k_idx_d;
 
 // Segment queue word fields.
 wire          head_end = seg_head_i[28 + N];
+wire          head_out = seg_head_i[29 + N];
 wire [N-1:0]  head_dir = seg_head_i[24 +: N];
 wire [23:0]   head_val = seg_head_i[23:0];
-wire [39:0]   head_wide = {{(40-SWW){1'b0}}, seg_head_i};
-wire          head_conic = CONIC != 0 && head_wide[29 + N];
-wire          head_cont  = CONIC != 0 && head_wide[30 + N];
-wire unused_head = &{1'b0, head_wide[39:32]};
+wire [40:0]   head_wide = {{(41-SWW){1'b0}}, seg_head_i};
+wire          head_conic = CONIC != 0 && head_wide[30 + N];
+wire          head_cont  = CONIC != 0 && head_wide[31 + N];
+wire unused_head = &{1'b0, head_wide[40:32]};
 
 // ---------------------------------------------------------------- the engine
 reg            eng_in_valid, eng_move_ready, eng_rst, cap_done;
@@ -129,14 +131,14 @@ wire unused = &{1'b0, dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter,
 // ---------------------------------------------------------------- next state
 // A run queue word with the conic fields, before it is cut to RDW bits (and one
 // spare bit, so that the part a build without conics drops is never empty).
-localparam integer RFW = 9 + 2 * N;
+localparam integer RFW = 10 + 2 * N;
 reg [RFW:0] run_wide;
 wire unused_run = &{1'b0, run_wide[RFW:RDW]};
 always @* begin
     run_wide = {(RFW+1){1'b0}};
     b_state_d = b_state_q;  build_lane_d = build_lane_q;
     segq_d = segq_q + {{SQW{1'b0}}, seg_commit_i};
-    b_axis_d = b_axis_q;  b_u_d = b_u_q;  b_end_d = b_end_q;
+    b_axis_d = b_axis_q;  b_u_d = b_u_q;  b_end_d = b_end_q;  b_out_d = b_out_q;
     b_dir_d = b_dir_q;  b_moving_d = b_moving_q;  cap_addr_d = cap_addr_q;
     b_conic_d = b_conic_q;  b_cont_d = b_cont_q;  b_au_d = b_au_q;  b_av_d = b_av_q;  k_idx_d = k_idx_q;
     seg_pop_o = 1'b0;  run_wr_o = 1'b0;  run_wdata_o = {RDW{1'b0}};
@@ -153,6 +155,7 @@ always @* begin
         b_u_d      = head_val[UW-1:0];
         b_dir_d    = head_dir;
         b_end_d    = head_end;
+        b_out_d    = head_out;
         b_conic_d  = head_conic;
         b_cont_d   = head_cont;
         b_axis_d   = 3'd0;
@@ -202,7 +205,7 @@ always @* begin
             cw_start_o   = 1'b1;
             cw_cont_o    = b_cont_q;
             run_wr_o     = 1'b1;
-            run_wide     = {2'b01, b_au_q, b_av_q, build_lane_q, b_end_q, b_moving_q, b_dir_q};
+            run_wide     = {2'b01, b_au_q, b_av_q, b_out_q, build_lane_q, b_end_q, b_moving_q, b_dir_q};
             run_wdata_o  = run_wide[RDW-1:0];
             build_lane_d = !build_lane_q;
             b_state_d    = B_IDLE;
@@ -216,7 +219,7 @@ always @* begin
             b_state_d = B_K;
         end else if ({29'd0, b_axis_q} == N - 1) begin
             run_wr_o     = 1'b1;
-            run_wide     = {8'd0, build_lane_q, b_end_q, b_moving_d, b_dir_q};
+            run_wide     = {8'd0, b_out_q, build_lane_q, b_end_q, b_moving_d, b_dir_q};
             run_wdata_o  = run_wide[RDW-1:0];
             build_lane_d = !build_lane_q;
             b_state_d    = B_IDLE;
@@ -247,7 +250,7 @@ always @(posedge clk) begin
         build_lane_q <= build_lane_d;
         segq_q       <= segq_d;
     end
-    b_axis_q <= b_axis_d;  b_u_q <= b_u_d;  b_end_q <= b_end_d;
+    b_axis_q <= b_axis_d;  b_u_q <= b_u_d;  b_end_q <= b_end_d;  b_out_q <= b_out_d;
     b_dir_q <= b_dir_d;  b_moving_q <= b_moving_d;  cap_addr_q <= cap_addr_d;
     b_conic_q <= b_conic_d;  b_cont_q <= b_cont_d;  b_au_q <= b_au_d;  b_av_q <= b_av_d;  k_idx_q <= k_idx_d;
 end

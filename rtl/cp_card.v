@@ -58,6 +58,7 @@ module cp_card #(
     // Pins.
     output wire [N-1:0]  step_o,
     output wire [N-1:0]  dir_o,
+    output wire          torch_o,          // the torch (docs/CORE.md "Torch")
     output wire          enable_o,
     output wire          running_o,
     output wire          fault_o,
@@ -99,7 +100,7 @@ cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
     .rsp_valid_o(rsp_valid), .rsp_ready_i(rsp_ready), .rsp_data_o(rsp_data),
     .rsp_addr_o(rsp_addr), .rd_addr_i(rd_addr), .rd_data_o(rd_data),
     .estop_i(estop),
-    .step_o(step_o), .dir_o(dir_o),
+    .step_o(step_o), .dir_o(dir_o), .torch_o(torch_o),
     .running_o(running_o), .fault_o(fault_o), .err_code_o(err_code_o),
     .stretched_o(stretched_o), .position_o(position_o),
     .enable_o(enable_o), .status_o(status), .stretch_cnt_o(stretch_cnt),

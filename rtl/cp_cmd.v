@@ -67,10 +67,10 @@ module cp_cmd #(
     output reg  [7:0]    fault_code_o
 );
 
-// Segment queue words: {end, k, dir[N], value[23:0]}, with CONIC the conic flag and
-// the continuation flag above them, and a conic's seven words of 32 bits (two, K5 and
-// K6, for a continuation).
-localparam integer SWW = (CONIC == 0) ? 29 + N : ((31 + N > 32) ? 31 + N : 32);
+// Segment queue words: {out, end, k, dir[N], value[23:0]} (out: the torch output
+// while the segment runs, H0[16]), with CONIC the conic flag and the continuation flag
+// above them, and a conic's seven words of 32 bits (two, K5 and K6, for a continuation).
+localparam integer SWW = (CONIC == 0) ? 30 + N : 32 + N;
 localparam [3:0] OP_SEGMENT = 4'h1;
 localparam [3:0] OP_CONFIG  = 4'h2;
 localparam [3:0] OP_CONTROL = 4'h3;
@@ -113,6 +113,7 @@ reg [3:0]    p_state_q, p_state_d;       // reset
 reg          discard_q, discard_d;       // the segment being read is dropped (reset)
 reg          rsp_valid_q, rsp_valid_d;   // reset
 reg          hdr_end_q, hdr_end_d;       // the segment being read: end flag, k, U
+reg          hdr_out_q, hdr_out_d;       // ... the torch output while it runs (H0[16])
 reg [3:0]    hdr_k_q, hdr_k_d;
 reg [23:0]   seg_u_q, seg_u_d;
 reg          seg_add2_q, seg_add2_d;     // its chunks carry add2 (three words)
@@ -201,8 +202,8 @@ assign ch_wdata_o = {nchunks_q == 16'd1, add2_d, count_d, add_d, interval_q};
 // ---------------------------------------------------------------- next state
 reg refuse;          // a refusal of the parser's own this cycle
 reg [7:0] refuse_code;
-reg [39:0] seg_wide; // a segment queue word before it is cut to SWW bits
-wire unused_wide = &{1'b0, seg_wide[39:SWW]};  // what a narrower queue does not keep
+reg [40:0] seg_wide; // a segment queue word before it is cut to SWW bits
+wire unused_wide = &{1'b0, seg_wide[40:SWW]};  // what a narrower queue does not keep
 
 always @* begin
     p_state_d   = p_state_q;
@@ -210,7 +211,7 @@ always @* begin
     rsp_valid_d = rsp_valid_q && !rsp_ready_i;
     rsp_data_d  = rsp_data_q;
     rsp_addr_d  = rsp_addr_q;
-    hdr_end_d = hdr_end_q;  hdr_k_d = hdr_k_q;  seg_u_d = seg_u_q;
+    hdr_end_d = hdr_end_q;  hdr_out_d = hdr_out_q;  hdr_k_d = hdr_k_q;  seg_u_d = seg_u_q;
     nchunks_d = nchunks_q;  v_idx_d = v_idx_q;
     interval_d = interval_q;  count_d = count_q;  add_d = add_q;  add2_d = add2_q;  sum_d = sum_q;
     seg_add2_d = seg_add2_q;
@@ -235,7 +236,7 @@ always @* begin
         li_nz_d = 1'b0;  dl_nz_d = 1'b0;  dl_hi_d = 1'b0;  sum_ne_d = 1'b0;
     end
 
-    seg_wr_o = 1'b0;  seg_wdata_o = {SWW{1'b0}};  seg_wide = 40'd0;  seg_commit_o = 1'b0;  seg_rollback_o = 1'b0;
+    seg_wr_o = 1'b0;  seg_wdata_o = {SWW{1'b0}};  seg_wide = 41'd0;  seg_commit_o = 1'b0;  seg_rollback_o = 1'b0;
     ch_wr_o = 1'b0;  ch_commit_o = 1'b0;  ch_rollback_o = 1'b0;
     start_o = 1'b0;  abort_o = 1'b0;  clear_o = 1'b0;  drivers_on_o = 1'b0;  drivers_off_o = 1'b0;
     cfg_write_o = 1'b0;
@@ -248,6 +249,7 @@ always @* begin
             // A CONIC header: [26] clockwise, [25:23] axis u, [21:19] axis v; no k.
             hdr_conic_d = CONIC != 0 && op == OP_CONIC;
             hdr_end_d = cmd_data_i[27];
+            hdr_out_d = cmd_data_i[16];
             hdr_k_d   = hdr_conic_d ? 4'd0 : cmd_data_i[26:23];
             nchunks_d = cmd_data_i[15:0];
             seg_add2_d = cmd_data_i[22];
@@ -309,9 +311,9 @@ always @* begin
     P_H1: if (take) begin
         seg_u_d     = cmd_data_i[23:0];
         seg_wr_o    = keep;
-        seg_wide    = {{(40-29-N){1'b0}}, hdr_end_q, hdr_k_q, cmd_data_i[24 +: N], cmd_data_i[23:0]};
-        seg_wide[29+N] = CONIC != 0 && hdr_conic_q;
-        seg_wide[30+N] = CONIC != 0 && hdr_cont_q;
+        seg_wide    = {{(41-30-N){1'b0}}, hdr_out_q, hdr_end_q, hdr_k_q, cmd_data_i[24 +: N], cmd_data_i[23:0]};
+        seg_wide[30+N] = CONIC != 0 && hdr_conic_q;
+        seg_wide[31+N] = CONIC != 0 && hdr_cont_q;
         seg_wdata_o = seg_wide[SWW-1:0];
         if (keep && (cmd_data_i[23:0] == 24'd0 || {8'd0, cmd_data_i[23:0]} > UMAX)) begin
             refuse = 1'b1;  refuse_code = E_SEG_U;  discard_d = 1'b1;
@@ -342,7 +344,7 @@ always @* begin
     // direction go with C to the builder, {cw, u, v, 9'b0, C}.
     P_K: if (CONIC != 0 && take) begin
         seg_wr_o = keep;
-        seg_wide = {8'd0, cmd_data_i};
+        seg_wide = {9'd0, cmd_data_i};
         if (v_idx_q == 3'd1) seg_wide[31:16] = {hdr_cw_q, hdr_au_q, hdr_av_q, 9'd0};
         if (v_idx_q == 3'd5 && hdr_cont_q) seg_wide[31:24] = {hdr_cw_q, hdr_au_q, hdr_av_q, 1'b0};
         seg_wdata_o = seg_wide[SWW-1:0];
@@ -438,7 +440,7 @@ always @(posedge clk) begin
         rsp_valid_q <= rsp_valid_d;
         lc_valid_q  <= lc_valid_d;
     end
-    hdr_end_q <= hdr_end_d;  hdr_k_q <= hdr_k_d;  seg_u_q <= seg_u_d;
+    hdr_end_q <= hdr_end_d;  hdr_out_q <= hdr_out_d;  hdr_k_q <= hdr_k_d;  seg_u_q <= seg_u_d;
     nchunks_q <= nchunks_d;  v_idx_q <= v_idx_d;
     interval_q <= interval_d;  count_q <= count_d;  add_q <= add_d;  add2_q <= add2_d;
     sum_q <= sum_d;  seg_add2_q <= seg_add2_d;

@@ -73,6 +73,9 @@ module cp_core #(
     // Pins.
     output wire [N-1:0]  step_o,
     output wire [N-1:0]  dir_o,
+    // The torch (a digital output): the out bit (H0[16]) of the segment under way,
+    // while the run is on (docs/CORE.md "Torch").
+    output wire          torch_o,
 
     // Status, also readable over the command port.
     output wire          running_o,
@@ -92,11 +95,11 @@ module cp_core #(
 // ---------------------------------------------------------------- constants
 localparam integer AW = (W > 2) ? $clog2(W) : 1;    // pattern bank address width
 // Segment queue word: the header {end, k, dir[N], U} or a v_i in [23:0].
-localparam integer SWW = (CONIC == 0) ? 29 + N : ((31 + N > 32) ? 31 + N : 32);
+localparam integer SWW = (CONIC == 0) ? 30 + N : 32 + N;
 // Segment queue address width: 2^SAW segments of N + 1 words each, at least.
 localparam integer SQW = SAW + $clog2(N + 1);
 // A built segment, waiting in the run queue: lane, end, moving[N], dir[N].
-localparam integer RDW = 2 + 2 * N + ((CONIC == 0) ? 0 : 7);
+localparam integer RDW = 3 + 2 * N + ((CONIC == 0) ? 0 : 7);
 // Chunk queue word: last chunk of its segment, add2, count, add, interval.
 localparam integer CDW = 81;
 
@@ -155,7 +158,7 @@ wire [AW-1:0] bank_waddr, len_m1;
 wire          build_fault, build_busy;
 wire [SQW:0]  segq;
 // Runner.
-wire          running, cur_valid, fire, seg_done, stretch, seg_active, run_fault, run_conic;
+wire          running, torch, cur_valid, fire, seg_done, stretch, seg_active, run_fault, run_conic;
 wire          walker_free, cw_wr, cw_start, cw_cont;
 wire [2:0]    cw_sel;
 wire [31:0]   cw_data;
@@ -220,7 +223,7 @@ cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW)) u_run (
     .cw_wr_i(cw_wr), .cw_sel_i(cw_sel), .cw_data_i(cw_data), .cw_start_i(cw_start), .cw_cont_i(cw_cont),
     .walker_free_o(walker_free),
     .pulse_ready_i(pulse_ready), .step_o(pulse_step), .dir_o(run_dir),
-    .running_o(running), .cur_valid_o(cur_valid), .fire_o(fire), .seg_done_o(seg_done),
+    .running_o(running), .torch_o(torch), .cur_valid_o(cur_valid), .fire_o(fire), .seg_done_o(seg_done),
     .stretch_o(stretch), .seg_active_o(seg_active), .fault_o(run_fault),
     .fault_conic_o(run_conic));
 
@@ -236,7 +239,7 @@ cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW
     .cmd_fault_i(cmd_fault), .cmd_code_i(cmd_code), .build_fault_i(build_fault),
     .run_fault_i(run_fault), .run_conic_i(run_conic),
     .stretch_i(stretch), .fire_i(fire), .seg_done_i(seg_done), .seg_active_i(seg_active),
-    .running_i(running), .cur_valid_i(cur_valid), .segq_i(segq), .build_busy_i(build_busy),
+    .running_i(running), .torch_i(torch), .cur_valid_i(cur_valid), .segq_i(segq), .build_busy_i(build_busy),
     .run_level_i(run_level), .ch_level_i(ch_level), .position_i(position_o),
     .rd_addr0_i(cmd_data_i[7:0]), .rd_data0_o(read_cmd_data),
     .rd_addr1_i(rd_addr_i), .rd_data1_o(rd_data_o),
@@ -265,6 +268,7 @@ generate
 endgenerate
 
 assign running_o = running;
+assign torch_o   = torch;
 assign fault_o   = fault;
 
 endmodule

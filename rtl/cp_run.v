@@ -12,6 +12,10 @@
 // loaded from the run queue (its moving axes take their directions); with none
 // built and none coming, the run underruns.
 //
+// The torch output (docs/CORE.md "Torch") is a register: while the run is on, it
+// holds the out bit of the last segment loaded; it drops when the run stops, at
+// E-stop and at abort.
+//
 // With CONIC = 1 it holds the conic walker (rtl/cp_conic_serial.v), which cp_build
 // loads: in a conic segment the plane axes u, v step by the walker's moves (each
 // move's direction on their DIR, and in the move's own directions), the others by
@@ -44,7 +48,7 @@ module cp_run #(
     input  wire          ch_valid_i,
     input  wire [80:0]   ch_head_i,
     output reg           ch_pop_o,
-    // Run queue head: {[conic, u, v,] lane, end, moving[N], dir[N]}.
+    // Run queue head: {[conic, u, v,] out, lane, end, moving[N], dir[N]}.
     input  wire          run_valid_i,
     input  wire [RDW-1:0] run_head_i,
     input  wire [1:0]    run_level_i,
@@ -78,6 +82,7 @@ module cp_run #(
     output wire [N-1:0]  dir_o,
 
     output wire          running_o,
+    output wire          torch_o,          // the torch output (a register)
     output wire          cur_valid_o,      // a segment is loaded
     output wire          fire_o,           // a move event now
     output wire          seg_done_o,       // the loaded segment's last move fires now
@@ -88,7 +93,7 @@ module cp_run #(
 );
 
 localparam integer AW = (W > 2) ? $clog2(W) : 1;
-localparam integer RDW = 2 + 2 * N + ((CONIC == 0) ? 0 : 7);
+localparam integer RDW = 3 + 2 * N + ((CONIC == 0) ? 0 : 7);
 
 reg          running_q, running_d;       // reset
 reg          cur_valid_q, cur_valid_d;   // reset: a segment is loaded for running
@@ -98,6 +103,8 @@ reg          late_q, late_d;             // reset: the pending move has been cou
 reg          rp_valid_q, rp_valid_d;     // reset: the replay registers hold the next move
 reg [N-1:0]  dir_q, dir_d;               // reset
 reg          cur_end_q, cur_end_d;
+reg          out_q, out_d;               // reset: the out bit of the segment last loaded
+reg          torch_q, torch_d;           // reset: the torch pin
 reg [31:0]   delay_q, delay_d;
 reg [15:0]   left_q, left_d;
 reg [31:0]   tinc_q, tinc_d;             // the running increment (signed)
@@ -188,7 +195,7 @@ assign seg_done_o = fire_o && seg_last;
 // ---------------------------------------------------------------- next state
 integer i;
 // A run queue word with the conic fields (and a spare bit; see cp_build).
-localparam integer RFW = 9 + 2 * N;
+localparam integer RFW = 10 + 2 * N;
 reg [RFW:0] run_wide;
 wire unused_run = &{1'b0, run_wide[RFW]};
 
@@ -207,7 +214,7 @@ wire        le1_sum      = delay_sum <= 32'd1;
 always @* begin
     running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
     ch_loaded_d = ch_loaded_q;  late_d = late_q;  rp_valid_d = rp_valid_q;  dir_d = dir_q;
-    cur_end_d = cur_end_q;  delay_d = delay_q;  left_d = left_q;  tinc_d = tinc_q;
+    cur_end_d = cur_end_q;  out_d = out_q;  delay_d = delay_q;  left_d = left_q;  tinc_d = tinc_q;
     tadd2_d = tadd2_q;  tlast_d = tlast_q;
     cur_conic_d = cur_conic_q;  cur_au_d = cur_au_q;  cur_av_d = cur_av_q;
     elapsed_d = elapsed_inc;
@@ -273,6 +280,7 @@ always @* begin
         cur_valid_d = 1'b1;
         cur_lane_d  = run_head_i[1+2*N];
         cur_end_d   = run_head_i[2*N];
+        out_d       = run_head_i[2+2*N];
         run_wide    = {{(RFW+1-RDW){1'b0}}, run_head_i};
         cur_conic_d = CONIC != 0 && run_wide[RFW-1];
         cur_au_d    = run_wide[RFW-2 -: 3];
@@ -296,7 +304,11 @@ always @* begin
         cur_lane_d  = 1'b0;
         late_d      = 1'b0;
         rp_valid_d  = 1'b0;
+        out_d       = 1'b0;
     end
+    // The torch: on while the run is on and the segment last loaded says so; off from
+    // the cycle after an E-stop or an abort is seen (the flush follows them).
+    torch_d = running_d && out_d && !estop_i && !abort_i;
     // due_d = ch_loaded_d && elapsed_d >= delay_d, case by case. A move that fires
     // sets elapsed to 1 and either steps to its chunk's next interval or takes the
     // head chunk (or none); otherwise elapsed counts on (or starts at 1) against the
@@ -324,6 +336,8 @@ always @(posedge clk) begin
         dir_q       <= {N{1'b0}};
         due_q       <= 1'b0;
         cur_conic_q <= 1'b0;
+        out_q       <= 1'b0;
+        torch_q     <= 1'b0;
     end else begin
         running_q   <= running_d;
         cur_valid_q <= cur_valid_d;
@@ -334,6 +348,8 @@ always @(posedge clk) begin
         dir_q       <= dir_d;
         due_q       <= due_d;
         cur_conic_q <= cur_conic_d;
+        out_q       <= out_d;
+        torch_q     <= torch_d;
     end
     cur_au_q <= cur_au_d;  cur_av_q <= cur_av_d;
     cur_end_q <= cur_end_d;  delay_q <= delay_d;  left_q <= left_d;  tinc_q <= tinc_d;
@@ -348,6 +364,7 @@ end
 // so that its pulse timer keeps DIR setup (its readiness waits for the pin).
 assign dir_o        = (dir_q & ~plane_step) | (plane_dir & plane_step);
 assign running_o    = running_q;
+assign torch_o      = torch_q;
 assign cur_valid_o  = cur_valid_q;
 assign seg_active_o = running_q && cur_valid_q && !seg_done_o;
 

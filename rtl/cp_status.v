@@ -65,6 +65,7 @@ module cp_status #(
     input  wire          seg_active_i,
     // What the status word counts.
     input  wire          running_i,
+    input  wire          torch_i,          // the torch output (status bit 5)
     input  wire          cur_valid_i,
     input  wire [SQW:0]  segq_i,
     input  wire          build_busy_i,
@@ -220,7 +221,7 @@ wire [7:0]  segs_queued = {{(7 - SQW){1'b0}}, segq_i} + {7'd0, build_busy_i} +
                           {6'd0, run_level_i} + {7'd0, cur_valid_i};
 wire [31:0] status_word = {ch_level32 > 32'd255 ? 8'd255 : ch_level32[7:0],
                            segs_queued,
-                           err_q, 3'd0, enable_q, estop_i, stretched_q, fault_q, running_i};
+                           err_q, 2'd0, torch_i, enable_q, estop_i, stretched_q, fault_q, running_i};
 // Capabilities (READ 0x20..0x25): what the host must know of this build.
 localparam [31:0] CAPS = {3'd0, TW[4:0], SAW[3:0], CAW[3:0], KMAX[7:0], N[7:0]};
 localparam [31:0] W_WORD = W;

@@ -77,6 +77,11 @@ uint64_t moves_in_chunks(const std::vector<plan::Chunk>& chunks, size_t next, si
   return moves;
 }
 
+// The torch's level while a card segment runs: its step segment's (none known: off).
+bool torch_of(const plan::PlannedJob& job, const plan::CardSegment& seg) {
+  return seg.step_segment < job.step_segments.size() && job.step_segments[seg.step_segment].torch;
+}
+
 }  // namespace
 
 plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& file,
@@ -124,6 +129,7 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
           w.dir_positive.push_back(seg.delta[a] >= 0);
           w.v.push_back(seg.v[a]);
         }
+        w.torch = torch_of(job, seg);
         w.chunks = take_moves(chunks, next_chunk, n);
         w.conic = WireSegment::Conic{piece.cw, unsigned(piece.axis_u), unsigned(piece.axis_v), piece.words(),
                                      piece.cont};
@@ -180,6 +186,7 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
         w.dir_positive.push_back(seg.delta[a] >= 0);
         w.v.push_back(uint32_t(d[a] >> k));
       }
+      w.torch = torch_of(job, seg);
       w.chunks = take_moves(chunks, next_chunk, n);
       out.segments.push_back(std::move(w));
       out.source.push_back(s);

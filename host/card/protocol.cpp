@@ -11,10 +11,10 @@ void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
   if (s.conic)
     out.push_back(0x5u << 28 | uint32_t(s.end) << 27 | uint32_t(s.conic->cw) << 26 | (s.conic->axis_u & 7u) << 23 |
                   uint32_t(add2) << 22 | (s.conic->axis_v & 7u) << 19 | uint32_t(s.conic->cont) << 18 |
-                  uint32_t(s.chunks.size() & 0xFFFF));
+                  uint32_t(s.torch) << 16 | uint32_t(s.chunks.size() & 0xFFFF));
   else
     out.push_back(0x1u << 28 | uint32_t(s.end) << 27 | (s.k & 0xFu) << 23 | uint32_t(add2) << 22 |
-                  uint32_t(s.chunks.size() & 0xFFFF));
+                  uint32_t(s.torch) << 16 | uint32_t(s.chunks.size() & 0xFFFF));
   uint32_t dirs = 0;
   for (size_t a = 0; a < s.dir_positive.size(); ++a) dirs |= uint32_t(s.dir_positive[a]) << a;
   out.push_back(dirs << 24 | (s.u & 0xFFFFFF));
@@ -34,7 +34,7 @@ void encode_conic(const WireConic& s, std::vector<uint32_t>& out) {
   for (const WireChunk& c : s.chunks) add2 = add2 || c.add2 != 0;
   out.push_back(0x5u << 28 | uint32_t(s.end) << 27 | uint32_t(s.cw) << 26 | (s.axis_u & 7u) << 23 |
                 uint32_t(add2) << 22 | (s.axis_v & 7u) << 19 | uint32_t(s.cont) << 18 |
-                uint32_t(s.chunks.size() & 0xFFFF));
+                uint32_t(s.torch) << 16 | uint32_t(s.chunks.size() & 0xFFFF));
   uint32_t dirs = 0;
   for (size_t a = 0; a < s.dir_positive.size(); ++a) dirs |= uint32_t(s.dir_positive[a]) << a;
   out.push_back(dirs << 24 | (s.t & 0xFFFFFF));

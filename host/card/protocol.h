@@ -24,6 +24,7 @@ struct WireSegment {
   uint32_t u = 0;                 // U: moves before doubling (1..UMAX)
   unsigned k = 0;                 // doubling exponent: U * 2^k moves
   bool end = false;               // the run ends cleanly after this segment
+  bool torch = false;             // H0[16]: the torch output while it runs (docs/CORE.md "Torch")
   std::vector<bool> dir_positive; // per axis
   std::vector<uint32_t> v;        // per axis, v_i <= U (U on the major axis)
   std::vector<WireChunk> chunks;  // counts sum to U * 2^k
@@ -48,6 +49,7 @@ struct WireSegment {
 struct WireConic {
   uint32_t t = 0;                 // moves (1..UMAX)
   bool end = false;
+  bool torch = false;             // H0[16]: the torch output while it runs
   bool cw = false;                // clockwise: G > 0 on the left of travel
   unsigned axis_u = 0, axis_v = 1;
   std::vector<bool> dir_positive; // per axis (those of u and v are not used)

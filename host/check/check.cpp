@@ -12,6 +12,7 @@
 
 #include "model/oracle.h"
 #include "plan/reduce.h"
+#include "run/torch.h"
 
 namespace cpstep::check {
 
@@ -151,6 +152,7 @@ class Checker {
           fmt::format("{} move events in the trace, {} planned", events_.size(), job_.moves()));
     path();
     timing();
+    torch();
     for (int a = 0; a < plan::kAxes; ++a) pulses(a);
     summarize();
     return std::move(v_);
@@ -426,6 +428,31 @@ class Checker {
     }
   }
 
+  // The torch pin's changes against the plan's switches, START placed as timing() did
+  // (a move's STEP edge is its chunk time + 1 from START, as the card shows it).
+  void torch() {
+    const size_t planned = run::torch_switches(job_).size();
+    if (!trace_.torch_present) {
+      if (planned)
+        v_.warnings.push_back(fmt::format("no signal named 'torch' in {}: the plan's {} torch switches are not checked",
+                                          trace_.file, planned));
+      return;
+    }
+    const double from_start = 1 - v_.time_offset_cycles;
+    std::vector<run::TorchEdge> edges;
+    for (size_t k = 0; k < trace_.torch_changes.size(); ++k)
+      edges.push_back({trace_.torch_changes[k] + from_start, k % 2 == 0});
+    std::vector<double> moves;
+    for (const Event& e : events_) moves.push_back(e.t + from_start);
+    const run::TorchVerdict t =
+        run::check_torch(job_, edges, moves, v_.time_tol_cycles + trace_.resolution_cycles + kEps);
+    v_.torch_checked = true;
+    v_.torch_planned = t.planned;
+    v_.torch_edges = t.edges;
+    v_.torch_max_delay_cycles = t.max_delay_cycles;
+    for (const std::string& e : t.errors) add(FindingKind::torch, 0, -1, std::nullopt, -1, 0, 0, e);
+  }
+
   // Pulse widths and DIR setup/hold of one axis against its driver's minimums.
   void pulses(int a) {
     const AxisPinTrace& p = trace_.axes[a];
@@ -527,6 +554,7 @@ const char* finding_name(FindingKind k) {
     case FindingKind::step_low: return "step_low";
     case FindingKind::dir_setup: return "dir_setup";
     case FindingKind::dir_hold: return "dir_hold";
+    case FindingKind::torch: return "torch";
   }
   return "unknown";
 }
@@ -563,6 +591,16 @@ plan::Result<PinTrace> read_pins(const VcdTrace& vcd, const PinMap& map, const r
     ax.step_active_high = pins.step_active_high.value_or(!cfg.present || cfg.step_active_high);
     ax.dir_positive_high = pins.dir_positive_high.value_or(!cfg.present || cfg.dir_positive_high);
     extract(vcd, *step.var, *dir.var, cycles_per_unit, ax);
+  }
+  if (const auto torch = vcd.find("torch"); torch.size() == 1 && torch[0]->width == 1) {
+    t.torch_present = true;
+    t.torch_name = torch[0]->path;
+    bool level = false;
+    for (const VcdChange& c : vcd.changes[torch[0]->code]) {
+      if (!c.known || bool(c.bits & 1) == level) continue;
+      level = !level;
+      t.torch_changes.push_back(double(c.time) * cycles_per_unit);
+    }
   }
   if (r.errors.empty()) r.value = std::move(t);
   return r;

@@ -42,6 +42,11 @@ struct PinTrace {
   double unit_s = 0;                   // one trace time unit
   double resolution_cycles = 0;        // what one time step of the trace can hide
   double end_cycles = 0;               // the trace's last time
+  // The torch pin (a signal named `torch`, docs/CORE.md "Torch"), when the trace
+  // has one: every change of its level, in cycles (it starts off).
+  bool torch_present = false;
+  std::string torch_name;
+  std::vector<double> torch_changes;
 };
 
 // Finds each axis's pins by the map (default: step_<axis>, dir_<axis>) and
@@ -68,6 +73,7 @@ enum class FindingKind {
   step_low,     // a STEP space (trailing to next leading edge) shorter than the step low time
   dir_setup,    // a DIR change closer before a leading edge than the DIR setup time
   dir_hold,     // a DIR change closer after a leading edge than the DIR hold time
+  torch,        // the torch pin switched other than at its planned move boundary
 };
 const char* finding_name(FindingKind k);
 
@@ -114,6 +120,10 @@ struct Verdict {
   double max_early_cycles = 0, max_late_cycles = 0;
   uint64_t max_early_move = 0, max_late_move = 0, moves_off_time = 0;
   plan::PerAxis<AxisSummary> axes;
+  // The torch pin against the plan's switches (run::check_torch), when the trace has one.
+  bool torch_checked = false;
+  uint64_t torch_planned = 0, torch_edges = 0;
+  double torch_max_delay_cycles = 0;
   std::vector<Finding> findings;
   std::vector<std::string> warnings;  // the planner's
 

@@ -67,6 +67,10 @@ nlohmann::ordered_json verdict_json(const Verdict& v) {
             {"move_events", v.move_events},
             {"segments_on_endpoint", v.segments_on_endpoint},
             {"segments_bit_exact", v.segments_bit_exact}};
+  if (v.torch_checked)
+    j["torch"] = {{"planned_switches", v.torch_planned},
+                  {"edges", v.torch_edges},
+                  {"max_delay_cycles", v.torch_max_delay_cycles}};
   j["timing"] = {{"start_offset_cycles", v.time_offset_cycles}, {"max_early_cycles", v.max_early_cycles},
                  {"max_early_move", v.max_early_move},          {"max_late_cycles", v.max_late_cycles},
                  {"max_late_move", v.max_late_move},            {"moves_off_time", v.moves_off_time}};

@@ -14,6 +14,7 @@
 #include "card/caps.h"
 #include "card/card_client.h"
 #include "card/spidev.h"
+#include "cli/run_contours.h"
 #include "cpstep/builds.h"
 #include "run/card_job.h"
 #include "run/link_run.h"
@@ -53,15 +54,17 @@ std::optional<card::CardCaps> board_caps(const char* command, const std::string&
   return caps;
 }
 
-// Plans the job for the card with these capabilities; prints every diagnostic.
-// nullopt when it is refused.
+// Plans the job for the card with these capabilities (by contours when
+// `contours` is active); prints every diagnostic. nullopt when it is refused
+// or, by contours, nothing is left to run.
 std::optional<run::CardJob> prepare(const std::string& job, const std::string& machine,
-                                    const card::CardCaps& caps, const plan::PerAxis<int64_t>& start = {}) {
+                                    const card::CardCaps& caps, const plan::PerAxis<int64_t>& start = {},
+                                    ContourRun* contours = nullptr) {
   if (const std::string why = card::unusable(caps, plan::kAxes); !why.empty()) {
     fmt::print(stderr, "cpstep: {}: cannot plan for this card\n", why);
     return std::nullopt;
   }
-  auto r = run::prepare_job(job, machine, caps, start);
+  auto r = contours && contours->active() ? contours->plan(caps, start) : run::prepare_job(job, machine, caps, start);
   print_diagnostics(r);
   if (!r.ok()) return std::nullopt;
   return std::move(*r.value);
@@ -242,6 +245,14 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
                "for the card's pin steps: {} at 25 us\n",
                4 * j.words.size(), klipper_text(m.klipper_25us), klipper_text(m.klipper_1us),
                klipper_text(m.klipper_pins_25us));
+  if (r.pins_observed && r.torch_verdict.planned > 0) {
+    const run::TorchVerdict& t = r.torch_verdict;
+    fmt::print("torch      {} switches planned, {} on the pin{}; on {:.3f} s{}\n", t.planned, t.edges,
+               t.ok() ? ", each at its move boundary" : " (not as planned: see faults)", t.on_cycles / j.clock_hz(),
+               t.min_pierce_cycles ? fmt::format("; shortest pierce (torch on to the first step) {:.3f} s",
+                                                 *t.min_pierce_cycles / j.clock_hz())
+                                   : "");
+  }
   if (r.faults.empty()) {
     fmt::print("faults     none\n");
   } else {
@@ -306,8 +317,10 @@ int run_sim_transport(const RunOptions& o) {
     fmt::print(stderr, "cpstep run: --fst traces the Verilated card: it needs --engine rtl or lockstep\n");
     return kExitRefused;
   }
-  const auto job = prepare(o.job, o.machine, run::connect_sim(board, *engine));
-  if (!job) return kExitRefused;
+  ContourRun contours(o);  // --state, --resume, --stop-after-contours
+  if (const auto rc = contours.open()) return *rc;
+  const auto job = prepare(o.job, o.machine, run::connect_sim(board, *engine), {}, &contours);
+  if (!job) return contours.nothing_left() ? 0 : kExitRefused;
   const run::CardJob& j = *job;
   std::ofstream report_file;
   if (const int rc = open_outputs(o, report_file)) return rc;
@@ -321,16 +334,18 @@ int run_sim_transport(const RunOptions& o) {
   so.fst = o.fst;
   so.progress = [&progress](uint64_t done, uint64_t total) { progress.update(done, total); };
   const auto began = std::chrono::steady_clock::now();
-  const run::CardRun r = run::run_on_sim(j, so);
+  const run::CardRun r = contours.run_sim(j, so);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   progress.clear();
-  return print_run(o, j, r, run::measure_run(j, r), wall_s, report_file);
+  return contours.finish(r, print_run(o, j, r, run::measure_run(j, r), wall_s, report_file));
 }
 
 int run_spidev_transport(const RunOptions& o) {
   // Connect at the rate asked for, or at a rate every card takes (its clock is
   // not known yet), read what the card is, plan for it, then run at the rate.
   const std::string device = o.device.empty() ? "/dev/spidev0.0" : o.device;
+  ContourRun contours(o);  // --state, --resume: the state is read before the device is opened
+  if (const auto rc = contours.open()) return *rc;
   std::unique_ptr<card::SpidevLink> link;
   std::optional<card::CardCaps> caps;
   plan::PerAxis<int64_t> at{};  // the card's position counters: the job is planned from there
@@ -346,8 +361,9 @@ int run_spidev_transport(const RunOptions& o) {
     fmt::print(stderr, "cpstep run: {}; nothing was sent\n", e.what());
     return kExitRefused;
   }
-  const auto job = prepare(o.job, o.machine, *caps, at);
-  if (!job) return kExitRefused;
+  if (!contours.card_matches(at)) return kExitRefused;
+  const auto job = prepare(o.job, o.machine, *caps, at, &contours);
+  if (!job) return contours.nothing_left() ? 0 : kExitRefused;
   const run::CardJob& j = *job;
   const uint64_t limit = uint64_t(j.clock_hz() / 8);
   const uint64_t hz = o.spi_hz ? o.spi_hz : limit;
@@ -383,7 +399,7 @@ int run_spidev_transport(const RunOptions& o) {
   }
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   progress.clear();
-  return print_run(o, j, r, run::measure_run(j, r), wall_s, report_file);
+  return contours.finish(r, print_run(o, j, r, run::measure_run(j, r), wall_s, report_file));
 }
 
 }  // namespace
@@ -420,6 +436,15 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& o) {
   c->add_option("--spi-hz", o.spi_hz, "spidev: the SCK rate in Hz (default and limit: the card's clock / 8)")
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
   c->add_flag("--no-progress", o.no_progress, "no progress display on stderr");
+  c->add_option("--state", o.state,
+                "sim, spidev: after the run write its state here (JSON: contours completed, the card's "
+                "position; docs/PLASMA.md \"Resume\")");
+  c->add_option("--resume", o.resume,
+                "sim, spidev: continue the run this state file records, from the next contour with a fresh "
+                "pierce");
+  c->add_option("--stop-after-contours", o.stop_after_contours,
+                "sim: end the run after this contour of the job (its M5), as an operator stops between cuts")
+      ->check(CLI::Range(size_t(1), size_t(1) << 40));
   return c;
 }
 
@@ -463,6 +488,15 @@ int run_job(const RunOptions& o) {
   }
   if (o.transport == "spidev" && !o.board.empty()) {
     fmt::print(stderr, "cpstep run: --board is for --transport sim and file (spidev asks the card what it is)\n");
+    return kExitRefused;
+  }
+  if (o.transport == "file" && (!o.state.empty() || !o.resume.empty())) {
+    fmt::print(stderr, "cpstep run: --state and --resume need a card: --transport sim or spidev\n");
+    return kExitRefused;
+  }
+  if (o.transport != "sim" && o.stop_after_contours > 0) {
+    fmt::print(stderr, "cpstep run: --stop-after-contours is for --transport sim (on a real card, stop between "
+                       "contours with its controls; --state records where)\n");
     return kExitRefused;
   }
   if (o.transport == "spidev") return run_spidev_transport(o);

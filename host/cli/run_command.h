@@ -25,6 +25,10 @@ struct RunOptions {
   std::string device;              // spidev: the device ("": /dev/spidev0.0)
   uint64_t spi_hz = 0;             // spidev: SCK rate; 0: the card's clock / 8
   bool no_progress = false;
+  // A cut job by contours (docs/PLASMA.md "Resume"): sim and spidev.
+  std::string state;               // write the run's state here (contours completed, position)
+  std::string resume;              // continue the run this state file records
+  size_t stop_after_contours = 0;  // sim: end the run after this contour; 0: at the job's end
 };
 
 struct PlanOptions {

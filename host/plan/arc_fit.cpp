@@ -32,7 +32,7 @@ bool eligible(const MotionBlock& b) {
 // Whether b continues a run that `first` starts: the same feed, spindle and tool,
 // the same coordinates besides X and Y, and starting where `prev` ends.
 bool continues(const MotionBlock& first, const MotionBlock& prev, const MotionBlock& b) {
-    if (!eligible(b) || b.feed != first.feed || b.spindle_on != first.spindle_on ||
+    if (!eligible(b) || b.feed != first.feed || b.spindle_on != first.spindle_on || b.output0 != first.output0 ||
         b.spindle_ccw != first.spindle_ccw || b.tool != first.tool)
         return false;
     for (int a = 0; a < kAxes; ++a)

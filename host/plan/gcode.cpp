@@ -70,6 +70,11 @@ struct State {
     bool spindle_on = false;
     bool spindle_ccw = false;
     double spindle_speed = 0;
+    // Digital output P0 (the card's torch output, with the spindle): M64/M65 set it
+    // for the blocks after them; M62/M63 from the next motion on (LinuxCNC's "at the
+    // beginning of the next motion command"), held here until then.
+    bool output0 = false;
+    std::optional<bool> output0_sync;
     int tool = 0, selected_tool = 0;
     PerAxis<double> g28{}, g30{};
     // Canned cycle values, sticky while a cycle mode is active (program units).
@@ -151,6 +156,7 @@ public:
         auto err = [&](const Word& w, std::string msg) { error(line, w.col, std::move(msg)); };
         const SourceLoc first{line, words.front().col};
         loc_ = first;
+        const std::size_t blocks_before = job_.blocks.size();
 
         std::map<char, const Word*> by;
         std::vector<const Word*> gs, ms;
@@ -268,6 +274,7 @@ public:
         const Word* stop_w = nullptr;
         const Word* spindle_w = nullptr;
         const Word* toolchange_w = nullptr;
+        const Word* output_w = nullptr;
         for (const Word* w : ms) {
             if (!w->known) continue;
             const int code = static_cast<int>(std::lround(w->value));
@@ -279,6 +286,7 @@ public:
                 case 0: case 1: case 2: case 30: set_group(stop_w, w, "stopping"); break;
                 case 3: case 4: case 5: set_group(spindle_w, w, "spindle"); break;
                 case 6: toolchange_w = w; break;
+                case 62: case 63: case 64: case 65: set_group(output_w, w, "digital output"); break;
                 case 7: case 8: case 9: case 48: case 49: break;  // ignore list
                 case 60: err(*w, "M60 (pallet change) is not supported"); break;
                 case 98: case 99:
@@ -298,7 +306,27 @@ public:
             const bool used = g4_w || g64_w || nonmodal == g(10) || motion_now == g(5) || motion_now == g(5, 2) ||
                               (cycle_mode_after && (motion_now == g(82) || motion_now == g(86) || motion_now == g(89))) ||
                               arc_now;
-            if (!used) err(*p, "P is only used by G4 (dwell seconds), G10, G64, G2/G3 turns and G82/G86/G89");
+            if (output_w && used) {
+                err(*p, fmt::format("P is wanted by {} and by another code of the block: write them on separate lines",
+                                    output_w->text));
+            } else if (!used && !output_w) {
+                err(*p, "P is only used by G4 (dwell seconds), G10, G64, G2/G3 turns, G82/G86/G89 and M62-M65");
+            }
+        }
+        if (output_w) {
+            const Word* p = word('P');
+            const int c = static_cast<int>(std::lround(output_w->value));
+            if (p == nullptr) {
+                err(*output_w, fmt::format("{} needs P<output>: P0, the card's torch output", output_w->text));
+            } else if (p->known && p->value != 0) {
+                err(*p, fmt::format("{}: the card has one digital output, P0 (the torch); P{} is not one",
+                                    output_w->text, p->text.substr(1)));
+            } else if (p->known && (c == 62 || c == 63)) {
+                st_.output0_sync = c == 62;
+            } else if (p->known) {
+                st_.output0 = c == 64;
+                st_.output0_sync.reset();
+            }
         }
         if (const Word* q = word('Q')) {
             if (!g64_w && motion_now != g(5) && !(cycle_mode_after && (motion_now == g(73) || motion_now == g(83))))
@@ -469,6 +497,15 @@ public:
                 job_.blocks.push_back(b);
             } else {
                 ended_ = true;
+            }
+        }
+        // M62/M63 took effect with the first motion of this block, if it had one.
+        if (st_.output0_sync) {
+            for (std::size_t i = blocks_before; i < job_.blocks.size(); ++i) {
+                if (job_.blocks[i].kind == MotionKind::dwell) continue;
+                st_.output0 = *st_.output0_sync;
+                st_.output0_sync.reset();
+                break;
             }
         }
     }
@@ -650,6 +687,7 @@ public:
         b.start = st_.pos;
         b.end = st_.pos;
         b.spindle_on = st_.spindle_on;
+        b.output0 = kind != MotionKind::dwell && st_.output0_sync ? *st_.output0_sync : st_.output0;
         b.spindle_ccw = st_.spindle_ccw;
         b.spindle_speed = st_.spindle_speed;
         b.plane = st_.plane;

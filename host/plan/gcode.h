@@ -46,6 +46,7 @@ struct MotionBlock {
     double feed = 0;             // mm/s (G1/G2/G3); 0 for G0 and G4
     double dwell_s = 0;          // G4 only
     bool spindle_on = false;     // M3/M4 ... M5 state while this block runs
+    bool output0 = false;        // digital output P0 (M62/M63 with the next motion, M64/M65 at once)
     double spindle_speed = 0;    // last S word (recorded, not interpreted)
     // Added with RS274NGC coverage (all default to the old meaning):
     Plane plane = Plane::xy;     // arcs: G17 / G18 / G19

@@ -283,6 +283,7 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
         proto.block = bi;
         proto.feed = b.feed;
         proto.spindle_on = b.spindle_on;
+        proto.torch = b.spindle_on || b.output0;
         if (b.kind == MotionKind::dwell) {
             proto.start = proto.end = pos;
             proto.dwell_s = b.dwell_s;

@@ -22,6 +22,9 @@ struct StepSegment {
     double feed = 0;                 // requested mm/s; 0 = as fast as the machine allows
     double dwell_s = 0;              // dwell segments: the pause, no motion
     bool spindle_on = false;
+    // The card's torch output while it runs (docs/CORE.md "Torch"): the spindle on
+    // (M3/M4) or digital output P0 on (M62-M65).
+    bool torch = false;
     // The unrounded geometry (machine mm) the segment was rounded from: its
     // start and end points, and the smallest path radius at the polyline
     // points merged into it and, when both its ends are on a curve, at its

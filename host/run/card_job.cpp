@@ -40,53 +40,78 @@ plan::CardFacts card_facts(const card::CardCaps& caps) {
   return {card::card_name(caps), double(caps.clock_hz), caps.w, caps.kmax, caps.tw, caps.umax, caps.ciw};
 }
 
-plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std::filesystem::path& machine_file,
-                                  const card::CardCaps& caps, const plan::PerAxis<int64_t>& start) {
-  plan::Result<CardJob> r;
+plan::Result<plan::Machine> load_card_machine(const std::filesystem::path& machine_file,
+                                              const card::CardCaps& caps) {
   auto machine = plan::load_machine(machine_file);
-  r.warnings = machine.warnings;
-  if (!machine.ok()) {
-    r.errors = machine.errors;
-    return r;
-  }
-  r.errors = plan::bind_card(*machine.value, card_facts(caps));
-  if (!r.errors.empty()) return r;
+  if (machine.ok()) machine.errors = plan::bind_card(*machine.value, card_facts(caps));
+  if (!machine.errors.empty()) machine.value.reset();
+  return machine;
+}
+
+plan::Result<plan::Job> read_card_gcode(const std::filesystem::path& gcode, const plan::Machine& machine,
+                                        const plan::PerAxis<int64_t>& start) {
   plan::PerAxis<double> start_mm{};
   for (int a = 0; a < plan::kAxes; ++a) {
-    const plan::AxisConfig& ax = machine.value->axes[a];
+    const plan::AxisConfig& ax = machine.axes[a];
     if (start[a] == 0) continue;
     if (!ax.present) {
-      r.errors.push_back({machine_file.string(), {},
+      plan::Result<plan::Job> r;
+      r.errors.push_back({machine.file, {},
                           fmt::format("the card's axis {} is at {} steps, but the machine has no such axis",
                                       plan::kAxisLetters[a], start[a])});
       return r;
     }
     start_mm[a] = double(start[a]) / ax.steps_per_mm;
   }
-  auto job = plan::load_gcode(gcode, plan::gcode_options(*machine, start_mm));
+  return plan::load_gcode(gcode, plan::gcode_options(machine, start_mm));
+}
+
+plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std::filesystem::path& machine_file,
+                                  const card::CardCaps& caps, const plan::PerAxis<int64_t>& start) {
+  plan::Result<CardJob> r;
+  auto machine = load_card_machine(machine_file, caps);
+  r.warnings = machine.warnings;
+  if (!machine.ok()) {
+    r.errors = machine.errors;
+    return r;
+  }
+  auto job = read_card_gcode(gcode, *machine, start);
   r.warnings.insert(r.warnings.end(), job.warnings.begin(), job.warnings.end());
   if (!job.ok()) {
     r.errors = job.errors;
     return r;
   }
-  plan::PlanOptions options;
-  options.chunk_limits = card::chunk_limits();  // add2 as the machine's planner.chunk_add2 says
-  auto planned = plan::plan_job(*job, *machine, options);
+  auto planned = plan_card_job(*job, *machine, caps, start);
   r.warnings.insert(r.warnings.end(), planned.warnings.begin(), planned.warnings.end());
   r.warnings = plan::summarize_repeats(std::move(r.warnings));  // e.g. "feed lowered" once, with a count
+  r.errors = std::move(planned.errors);
+  if (planned.value) {
+    r.value = std::move(planned.value);
+    r.value->warnings = r.warnings;
+  }
+  return r;
+}
+
+plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& machine, const card::CardCaps& caps,
+                                    const plan::PerAxis<int64_t>& start) {
+  plan::Result<CardJob> r;
+  plan::PlanOptions options;
+  options.chunk_limits = card::chunk_limits();  // add2 as the machine's planner.chunk_add2 says
+  auto planned = plan::plan_job(job, machine, options);
+  r.warnings = planned.warnings;
   if (!planned.ok()) {
     r.errors = planned.errors;
     return r;
   }
-  auto wire = card::to_wire(*planned, job->file, card::limits(caps));
+  auto wire = card::to_wire(*planned, job.file, card::limits(caps));
   if (!wire.ok()) {
     r.errors = wire.errors;
     return r;
   }
 
   CardJob& cj = r.value.emplace();
-  cj.job_file = job->file;
-  cj.machine = *machine;
+  cj.job_file = job.file;
+  cj.machine = machine;
   cj.caps = caps;
   cj.planned = std::move(*planned.value);
   cj.wire = std::move(*wire.value);

@@ -61,18 +61,27 @@ double buffered_seconds(const CardJob& job, uint64_t segments_done, uint64_t mov
 plan::CardFacts card_facts(const card::CardCaps& caps);
 
 // Loads the machine and binds it to the card (plan::bind_card(): its clock, W,
-// KMAX, pulse timing in its cycles), loads the G-code, plans the job in the card's chunk form
-// (card::chunk_limits(): add2 unless the machine's planner.chunk_add2 is false)
-// and encodes it. Every error refuses the job;
-// warnings travel with the result.
-// and encodes it for that card (its UMAX, KMAX, chunk queue). Every error
-// refuses the job; warnings travel with the result.
-// Plans the job for a card with these capabilities whose position counters read
-// `start` (absolute steps; a freshly reset card: all 0): the first move starts
-// there, and the checkpoints are absolute positions from it.
+// KMAX, pulse timing in its cycles), loads the G-code, plans the job in the card's
+// chunk form (card::chunk_limits(): add2 unless the machine's planner.chunk_add2
+// is false) and encodes it for that card (its UMAX, KMAX, chunk queue). The card's
+// position counters read `start` (absolute steps; a freshly reset card: all 0):
+// the first move starts there, and the checkpoints are absolute positions from
+// it. Every error refuses the job; warnings travel with the result.
 plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std::filesystem::path& machine,
                                   const card::CardCaps& caps = card::default_caps(),
                                   const plan::PerAxis<int64_t>& start = {});
+
+// The steps prepare_job() takes, for callers that change the G-code's blocks
+// between reading and planning (run/resume.h):
+// the machine file loaded and bound to the card;
+plan::Result<plan::Machine> load_card_machine(const std::filesystem::path& machine, const card::CardCaps& caps);
+// the G-code read for that machine from a card at `start` (absolute steps);
+plan::Result<plan::Job> read_card_gcode(const std::filesystem::path& gcode, const plan::Machine& machine,
+                                        const plan::PerAxis<int64_t>& start = {});
+// a job's blocks planned and encoded for the card (`start`: where the card is
+// when the job has no motion). The warnings are the planner's.
+plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& machine, const card::CardCaps& caps,
+                                    const plan::PerAxis<int64_t>& start = {});
 
 // The command stream as little-endian 32-bit words (the `file` transport and
 // `cpstep plan -o`). Returns false when the file cannot be written.

@@ -263,7 +263,7 @@ KinematicSeries kinematic_series(const CardJob& job, const CardRun& run, const R
 std::vector<plan::PerAxis<double>> card_path(const CardJob& job, const CardRun& run) {
   std::vector<plan::PerAxis<double>> out;
   out.reserve(run.move_cycles.size() + 1);
-  plan::PerAxis<int64_t> steps{};
+  plan::PerAxis<int64_t> steps = run.start_position;  // where the card stood (a resumed run: not 0)
   plan::PerAxis<size_t> next{};
   auto mm = [&] {
     plan::PerAxis<double> p{};

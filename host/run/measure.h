@@ -85,7 +85,8 @@ struct KinematicSeries {
 };
 KinematicSeries kinematic_series(const CardJob& job, const CardRun& run, const RunMeasure& m);
 
-// The card's position in mm after every move event (x, y for the path plot).
+// The card's position in mm after every move event (x, y for the path plot),
+// from run.start_position.
 std::vector<plan::PerAxis<double>> card_path(const CardJob& job, const CardRun& run);
 
 }  // namespace cpstep::run

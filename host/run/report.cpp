@@ -74,6 +74,17 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
   }
   r["stretches"] = run.stretch_count;
   r["stretched"] = run.status.stretched;
+  if (run.pins_observed) {
+    // The torch pin against the plan's switches (docs/CORE.md "Torch").
+    const TorchVerdict& t = run.torch_verdict;
+    json torch = {{"planned_switches", t.planned},
+                  {"edges", t.edges},
+                  {"as_planned", t.ok()},
+                  {"max_delay_cycles", t.max_delay_cycles},
+                  {"on_s", t.on_cycles / job.clock_hz()}};
+    if (t.min_pierce_cycles) torch["min_pierce_s"] = *t.min_pierce_cycles / job.clock_hz();
+    r["torch"] = torch;
+  }
   json faults = json::array();
   for (const Fault& f : run.faults) faults.push_back({{"code", f.code}, {"name", f.name}, {"message", f.message}});
   r["faults"] = faults;

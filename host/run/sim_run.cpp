@@ -29,6 +29,7 @@ const char* host_fault_name(HostFault f) {
     case HostFault::link: return "LINK";
     case HostFault::late: return "LATE";
     case HostFault::engine: return "ENGINE";
+    case HostFault::torch: return "TORCH";
   }
   return "UNKNOWN";
 }
@@ -103,6 +104,19 @@ void add_card_faults(const CardJob& job, CardRun& run) {
                                         job.moves(), paused)));
 }
 
+// The torch pin against the plan: exact cycles from START (tolerance 0).
+void check_torch_pin(const CardJob& job, CardRun& run, const std::vector<uint64_t>& cycles) {
+  const auto from_start = [&](uint64_t c) { return double(c) - double(run.start_cycle); };
+  for (size_t k = 0; k < cycles.size(); ++k) run.torch.push_back({from_start(cycles[k]), k % 2 == 0});
+  std::vector<double> moves;
+  moves.reserve(run.move_cycles.size());
+  for (uint64_t c : run.move_cycles) moves.push_back(from_start(c + 1));  // the pin's edge
+  run.torch_verdict = check_torch(job, run.torch, moves, 0);
+  // A run already failed ends early: its torch follows where it stopped, not the plan.
+  if (!run.faults.empty()) return;
+  for (const std::string& e : run.torch_verdict.errors) run.faults.push_back(host_fault(HostFault::torch, e));
+}
+
 namespace {
 
 // Watches every cycle: START, leading STEP edges (one cycle after their move
@@ -122,6 +136,7 @@ class Recorder {
       for (const char* pin : {"step", "dir"})
         for (int a = 0; a < plan::kAxes; ++a)
           signals_.push_back(vcd_->add_signal(fmt::format("{}_{}", pin, plan::kAxisLetters[a])));
+      signals_.push_back(vcd_->add_signal("torch"));
     }
     run_.move_cycles.reserve(job.moves());
   }
@@ -135,6 +150,7 @@ class Recorder {
         vcd_->set(signals_[a], out.step >> a & 1);
         vcd_->set(signals_[plan::kAxes + a], out.dir >> a & 1);
       }
+      vcd_->set(signals_[2 * plan::kAxes], out.torch);
       vcd_->sample(sim::cycle_start_ps(cycle, uint64_t(job_.clock_hz())));
     }
     if (options_.pins)
@@ -154,6 +170,10 @@ class Recorder {
       run_.start_cycle = cycle - 1;
     }
     if (started_ && !end_cycle_ && !out.running) end_cycle_ = cycle + 1;
+    if (out.torch != torch_) {
+      torch_ = out.torch;
+      torch_cycles_.push_back(cycle);
+    }
     const uint32_t active = ~(out.step ^ step_active_high_) & kAxisMask;
     const uint32_t leading = primed_ ? active & ~active_ : 0;
     active_ = active;
@@ -174,6 +194,8 @@ class Recorder {
   }
 
   const plan::PerAxis<int64_t>& pin_position() const { return pins_; }
+  // The torch pin's changes (absolute cycles; the first is on).
+  const std::vector<uint64_t>& torch_cycles() const { return torch_cycles_; }
   // One past the first cycle running_o was low after START; 0 while it runs or never ran.
   uint64_t end_cycle() const { return end_cycle_; }
 
@@ -208,7 +230,8 @@ class Recorder {
   std::vector<int> signals_;
   uint32_t step_active_high_ = 0, dir_positive_high_ = 0;
   uint32_t active_ = 0;
-  bool primed_ = false, started_ = false;
+  bool primed_ = false, started_ = false, torch_ = false;
+  std::vector<uint64_t> torch_cycles_;
   uint64_t end_cycle_ = 0;
   size_t next_ = 0;
   plan::PerAxis<int64_t> pins_{};
@@ -313,6 +336,7 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   if (o.progress) o.progress(run.move_cycles.size(), job.moves());
 
   add_card_faults(job, run);
+  check_torch_pin(job, run, rec.torch_cycles());
   if (run.position_mismatches > kListedMismatches)
     run.faults.push_back(host_fault(HostFault::position,
                                     fmt::format("{} more card segments ended off the plan",

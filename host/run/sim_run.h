@@ -18,6 +18,7 @@
 #include "card/protocol.h"
 #include "plan/common.h"
 #include "run/card_job.h"
+#include "run/torch.h"
 
 namespace cpstep::run {
 
@@ -32,6 +33,7 @@ enum class HostFault : uint32_t {
   link = 106,        // the card refused a frame the host does not repair, or stopped answering
   late = 107,        // the card stretched moves: they fired after their planned cycle
   engine = 108,      // --engine lockstep: the fast engine and the Verilated card differed
+  torch = 109,       // the torch pin switched other than the plan says (docs/CORE.md "Torch")
 };
 
 // What simulates the card (docs/SIM.md "Engines"): the fast engine (the golden
@@ -81,6 +83,8 @@ struct CardRun {
   bool pins_observed = true;             // false on a real card: pulses, move_cycles, checks empty
   plan::PerAxis<int64_t> start_position{};  // the card's position before the job (0 after a reset)
   LinkReport link;
+  std::vector<TorchEdge> torch;          // the torch pin's changes, cycles from START (pin time)
+  TorchVerdict torch_verdict;            // the torch pin against the plan
   std::vector<Fault> faults;             // the card's, then the host's
 
   [[nodiscard]] bool ok() const { return faults.empty(); }

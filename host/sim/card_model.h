@@ -26,6 +26,7 @@ class CardModel {
     o.miso_oe = m.miso_oe;
     o.step = m.step;
     o.dir = m.dir;
+    o.torch = m.torch;
     o.enable = m.enable;
     o.running = m.running;
     o.fault = m.fault;

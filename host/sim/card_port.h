@@ -27,6 +27,7 @@ struct CardOut {
   bool miso = false;
   bool miso_oe = false;  // the card drives MISO
   uint32_t step = 0, dir = 0;  // bit i: axis i's pin
+  bool torch = false;          // the torch output
   bool enable = false;         // drivers enabled
   bool running = false, fault = false, stretched = false;
   uint32_t err_code = 0;
@@ -54,6 +55,7 @@ struct CardPortBase {
     o.miso_oe = r.spi_miso_oe_o;
     o.step = r.step_o;
     o.dir = r.dir_o;
+    o.torch = r.torch_o;
     o.enable = r.enable_o;
     o.running = r.running_o;
     o.fault = r.fault_o;
@@ -69,6 +71,7 @@ struct CardPortBase {
           {"spi_miso_oe_o", [](const Out& o) { return uint64_t(o.miso_oe); }},
           {"step_o", [](const Out& o) { return uint64_t(o.step); }},
           {"dir_o", [](const Out& o) { return uint64_t(o.dir); }},
+          {"torch_o", [](const Out& o) { return uint64_t(o.torch); }},
           {"enable_o", [](const Out& o) { return uint64_t(o.enable); }},
           {"running_o", [](const Out& o) { return uint64_t(o.running); }},
           {"fault_o", [](const Out& o) { return uint64_t(o.fault); }},

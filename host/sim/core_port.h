@@ -36,6 +36,7 @@ struct CorePortBase {
     o.rd_data = r.rd_data_o;
     o.step = r.step_o;
     o.dir = r.dir_o;
+    o.torch = r.torch_o;
     o.running = r.running_o;
     o.fault = r.fault_o;
     o.stretched = r.stretched_o;
@@ -58,6 +59,7 @@ struct CorePortBase {
           {"rd_data_o", [](const Out& o) { return uint64_t(o.rd_data); }},
           {"step_o", [](const Out& o) { return uint64_t(o.step); }},
           {"dir_o", [](const Out& o) { return uint64_t(o.dir); }},
+          {"torch_o", [](const Out& o) { return uint64_t(o.torch); }},
           {"running_o", [](const Out& o) { return uint64_t(o.running); }},
           {"fault_o", [](const Out& o) { return uint64_t(o.fault); }},
           {"stretched_o", [](const Out& o) { return uint64_t(o.stretched); }},

@@ -52,6 +52,7 @@ module cp_board #(
     output wire [N-1:0] step_o,
     output wire [N-1:0] dir_o,
     output wire [N-1:0] enable_o,
+    output wire         torch_o,        // the torch (or spindle) output, active high
     output wire         led_run_n_o,    // on (low) while running
     output wire         led_fault_n_o   // on while a fault is latched, blinking at E-stop
 );
@@ -110,7 +111,13 @@ generate
             .D_IN_0(pin_in[2*gp+1]));
     end
 endgenerate
-wire unused_pads = &{1'b0, miso_in, pin_in};
+// The torch leaves through an IO register too, so that it keeps its place among
+// the STEP edges (a clock after cp_core's pin); it powers up 0: off.
+wire core_torch, torch_in;
+SB_IO #(.PIN_TYPE(6'b0101_01)) u_torch (
+    .PACKAGE_PIN(torch_o), .CLOCK_ENABLE(1'b1), .OUTPUT_CLK(clk),
+    .OUTPUT_ENABLE(1'b1), .D_OUT_0(core_torch), .D_IN_0(torch_in));
+wire unused_pads = &{1'b0, miso_in, pin_in, torch_in};
 
 // ---------------------------------------------------------------- reset
 // Reset for 2^8 clocks after the PLL locks and while the button is held.
@@ -134,7 +141,7 @@ cp_card #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
     .spi_miso_o(miso), .spi_miso_oe_o(miso_oe),
     .estop_i(estop),
-    .step_o(core_step), .dir_o(core_dir), .enable_o(enable),
+    .step_o(core_step), .dir_o(core_dir), .torch_o(core_torch), .enable_o(enable),
     .running_o(running), .fault_o(fault),
     .err_code_o(err_code), .stretched_o(stretched), .position_o(position));
 wire unused = &{1'b0, err_code, stretched, position};

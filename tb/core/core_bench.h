@@ -94,6 +94,9 @@ class JobGen {
       if (!from_deltas(d, s)) continue;
       s.end = end;
       s.chunks = chunks(uint64_t(s.u) << s.k, shape, chance(shape.add2));
+      // The torch output (docs/CORE.md "Torch") on a quarter of the segments, from
+      // what was drawn (so the random streams of the benches stay as they were).
+      s.torch = ((s.u ^ uint32_t(s.chunks.size())) & 3) == 1;
       return s;
     }
   }

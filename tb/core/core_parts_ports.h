@@ -190,6 +190,7 @@ struct RunPortT {
     o.step = r.step_o;
     o.dir = r.dir_o;
     o.running = r.running_o;
+    o.torch = r.torch_o;
     o.cur_valid = r.cur_valid_o;
     o.fire = r.fire_o;
     o.seg_done = r.seg_done_o;
@@ -208,7 +209,7 @@ struct RunPortT {
         CPSTEP_FIELD("running_o", o.running),       CPSTEP_FIELD("cur_valid_o", o.cur_valid),
         CPSTEP_FIELD("fire_o", o.fire),             CPSTEP_FIELD("seg_done_o", o.seg_done),
         CPSTEP_FIELD("stretch_o", o.stretch),       CPSTEP_FIELD("seg_active_o", o.seg_active),
-        CPSTEP_FIELD("fault_o", o.fault),
+        CPSTEP_FIELD("fault_o", o.fault),           CPSTEP_FIELD("torch_o", o.torch),
     };
     return f;
   }
@@ -264,6 +265,7 @@ struct StatusPort {
     r.seg_done_i = i.seg_done;
     r.seg_active_i = i.seg_active;
     r.running_i = i.running;
+    r.torch_i = i.torch;
     r.cur_valid_i = i.cur_valid;
     r.segq_i = i.segq;
     r.build_busy_i = i.build_busy;

@@ -48,8 +48,9 @@ std::vector<uint32_t> segment_words(Rng& rng, bool legal) {
   const bool with_add2 = chance(rng, 40);
   const std::vector<uint32_t> counts = split_counts(rng, u << k, nch);
   std::vector<uint32_t> w;
+  // H0[16], the torch, from what was drawn (the random stream stays as it was).
   w.push_back(0x1u << 28 | uint32_t(chance(rng, 20)) << 27 | k << 23 | uint32_t(with_add2) << 22 |
-              uint32_t(counts.size()));
+              ((u ^ nch) & 1) << 16 | uint32_t(counts.size()));
   w.push_back(pick(rng, 0, 7) << 24 | u);
   for (int a = 0; a < 3; ++a) w.push_back(chance(rng, 20) ? 0 : chance(rng, 20) ? u : pick(rng, 0, u));
   for (uint32_t c : counts) {
@@ -82,7 +83,7 @@ std::vector<uint32_t> conic_words(Rng& rng, bool legal) {
   const std::vector<uint32_t> counts = split_counts(rng, t, nch);
   std::vector<uint32_t> w;
   w.push_back(0x5u << 28 | uint32_t(chance(rng, 20)) << 27 | uint32_t(chance(rng, 50)) << 26 | au << 23 |
-              uint32_t(with_add2) << 22 | av << 19 | uint32_t(counts.size()));
+              uint32_t(with_add2) << 22 | av << 19 | ((t ^ nch) & 1) << 16 | uint32_t(counts.size()));
   w.push_back(pick(rng, 0, 7) << 24 | t);
   for (uint32_t a = 0; a < 3; ++a) w.push_back(a == au || a == av ? 0 : chance(rng, 30) ? 0 : pick(rng, 0, t));
   for (int k = 0; k < 7; ++k) w.push_back(uint32_t(rng()));  // A B, C, G, Gx, Gy, du, dv: any bits
@@ -148,9 +149,9 @@ void cmd_traffic(uint64_t seed, int cycles, bool conic = false) {
     in.ch_full = chance(rng, 10);
     const model::CpCmdOut o = ls.step(in);
     if (in.cmd_valid && o.cmd_ready) words.pop_front();
-    // A conic's header goes into the segment queue with the conic flag (bit 29 + N)
-    // above {end, k, dir, U}; its other words have 32 bits.
-    if (o.seg_wr && (o.seg_data >> 32 & 1)) in_conic = true;
+    // A conic's header goes into the segment queue with the conic flag (bit 30 + N)
+    // above {out, end, k, dir, U}; its other words have 32 bits.
+    if (o.seg_wr && (o.seg_data >> 33 & 1)) in_conic = true;
     conic_commits += o.seg_commit && in_conic;
     if (o.seg_commit || o.seg_rollback) in_conic = false;
     commits += o.seg_commit;
@@ -178,19 +179,19 @@ TEST(CorePartCmd, RandomWordsMatchTheModel) { cmd_traffic<CmdPort>(11, 300000); 
 TEST(CorePartCmd, ConicSegmentsMatchTheModel) { cmd_traffic<CmdConicPort>(12, 300000, true); }
 
 // ---------------------------------------------------------------- cp_build
-// Segment queue words as the parser commits them (N = 3): header {end, k, dir, U},
+// Segment queue words as the parser commits them (N = 3): header {out, end, k, dir, U},
 // then v_0..v_2, 1 <= U <= UMAX = 200 and v <= U (cp_build's contract: its engine
 // runs in one-period mode, which checks nothing but the pattern's length); U up to
 // 200 against W = 32, so some patterns are too long.
 // With conic: CONIC segments too, as the parser writes them (docs/CORE.md): the
-// header with the conic flag (bit 29 + N = 32), k = 0, v = 0 on the plane axes, then
+// header with the conic flag (bit 30 + N = 33), k = 0, v = 0 on the plane axes, then
 // K0 .. K6 with K1 = {cw, u, v, 9 zeros, C}.
 std::vector<uint64_t> build_words(Rng& rng, bool conic = false) {
   const uint32_t u = chance(rng, 30) ? pick(rng, 1, 8) : pick(rng, 1, 200);
   const bool is_conic = conic && chance(rng, 35);
   const uint32_t au = pick(rng, 0, 2), av = (au + pick(rng, 1, 2)) % 3;
   std::vector<uint64_t> w;
-  w.push_back(uint64_t(is_conic) << 32 | uint64_t(chance(rng, 10)) << 31 |
+  w.push_back(uint64_t(is_conic) << 33 | uint64_t(chance(rng, 50)) << 32 | uint64_t(chance(rng, 10)) << 31 |
               uint64_t(is_conic ? 0 : pick(rng, 0, 3)) << 27 | uint64_t(pick(rng, 0, 7)) << 24 | u);
   for (uint32_t a = 0; a < 3; ++a) {
     const uint32_t r = pick(rng, 0, 9);
@@ -249,7 +250,7 @@ TEST(CorePartBuild, RandomSegmentsMatchTheModel) { build_traffic<BuildPort>(21, 
 TEST(CorePartBuild, ConicSegmentsMatchTheModel) { build_traffic<BuildConicPort>(22, true); }
 
 // ---------------------------------------------------------------- cp_run
-// With conic: conic run entries (bit 2N + 8, plane axes, some not axes), and the
+// With conic: conic run entries (bit 2N + 9, plane axes, some not axes), and the
 // walker loaded with words of any bits (its walks are junk, so conic moves often meet
 // a wrong end mark: CONIC_END). Whole conics that end right: the core's benches.
 template <class P>
@@ -259,6 +260,8 @@ void run_traffic(uint64_t seed, bool conic) {
   ls.reset();
   model::CpRunIn in;
   uint64_t fires = 0, seg_done = 0, stretches = 0, underruns = 0, conic_faults = 0;
+  uint64_t torch_edges = 0;
+  bool torch = false;
   for (int c = 0; c < 400000; ++c) {
     in.rst = pick(rng, 0, 9999) == 0;
     in.flush = pick(rng, 0, 999) < 5;
@@ -271,7 +274,7 @@ void run_traffic(uint64_t seed, bool conic) {
     in.ch_head = {uint64_t(pick(rng, 1, 6)) << 48 | uint64_t(add & 0xFFFF) << 32 | pick(rng, 1, 12),
                   uint64_t(chance(rng, 30)) << 16 | (chance(rng, 70) ? 0 : pick(rng, 0, 0xFFFF)), 0, 0};
     in.run_valid = chance(rng, 60);
-    in.run_head = pick(rng, 0, 255);
+    in.run_head = pick(rng, 0, 511);  // {out, lane, end, moving, dir}
     in.run_level = pick(rng, 0, 2);
     in.segq_empty = chance(rng, 50);
     in.build_busy = chance(rng, 30);
@@ -285,7 +288,7 @@ void run_traffic(uint64_t seed, bool conic) {
     in.pulse_ready = chance(rng, 70) ? 7 : pick(rng, 0, 7);
     if (conic) {
       const uint32_t au = pick(rng, 0, 3), av = pick(rng, 0, 3);
-      if (chance(rng, 50)) in.run_head |= uint64_t(1) << 14 | uint64_t(au) << 11 | uint64_t(av) << 8;
+      if (chance(rng, 50)) in.run_head |= uint64_t(1) << 15 | uint64_t(au) << 12 | uint64_t(av) << 9;
       in.cw_wr = chance(rng, 20);
       in.cw_sel = pick(rng, 0, 7);
       in.cw_data = uint32_t(rng());
@@ -298,8 +301,11 @@ void run_traffic(uint64_t seed, bool conic) {
     seg_done += o.seg_done;
     stretches += o.stretch;
     underruns += o.fault;
+    torch_edges += o.torch != torch;
+    torch = o.torch;
   }
   EXPECT_GT(fires, 5000u);
+  EXPECT_GT(torch_edges, 1000u) << "the torch output should follow the segments' out bits";
   EXPECT_GT(seg_done, conic ? 200u : 500u);
   EXPECT_GT(stretches, 1000u);
   EXPECT_GT(underruns, 10u);
@@ -338,6 +344,7 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
     in.seg_done = chance(rng, 5);
     in.seg_active = chance(rng, 70);
     in.running = chance(rng, 50);
+    in.torch = chance(rng, 50);
     in.cur_valid = chance(rng, 50);
     in.segq = pick(rng, 0, 7);
     in.build_busy = chance(rng, 50);

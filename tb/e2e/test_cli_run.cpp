@@ -226,7 +226,7 @@ TEST(CliRun, SmallJobOnTheSimulatedCard) {
   // - so its DIR stays low; a is not on this machine.
   const Outcome v = run(VCD_COUNT_BIN, {vcd.string()}, "small_vcd");
   ASSERT_EQ(v.rc, 0) << v.err;
-  EXPECT_NE(v.out.find("signals step_x step_y step_z step_a dir_x dir_y dir_z dir_a\n"), std::string::npos)
+  EXPECT_NE(v.out.find("signals step_x step_y step_z step_a dir_x dir_y dir_z dir_a torch\n"), std::string::npos)
       << v.out;
   for (int a = 0; a < 3; ++a) {
     const int64_t n = std::abs(steps(kFinalMm[a], kSpm[a]));
@@ -286,6 +286,87 @@ void expect_refused(const std::string& name, const std::string& text, const std:
                            name + "_file");
   EXPECT_EQ(f.rc, 2);
   for (const fs::path& out : {report, vcd, plots, bin}) EXPECT_FALSE(fs::exists(out)) << out;
+}
+
+// A plasma job from `cpstep cam` (M3, G4 pierce, cut, M5 per contour) on the
+// simulated card: the torch pin (VCD signal `torch`) goes on once and off once per
+// contour, each at its move boundary (the report's check), with at least the
+// G-code's pierce delay before the cut's first step; `cpstep check` holds the VCD's
+// torch to the plan, and a trace that lost one contour's torch is a finding.
+TEST(CliRun, PlasmaTorchSwitchesAtItsMoveBoundaries) {
+  const std::string src = CPSTEP_SOURCE_DIR;
+  const fs::path job = kDir / "tabs.ngc", report = kDir / "tabs.json", vcd = kDir / "tabs.vcd";
+  fs::create_directories(kDir);
+  const Outcome cam = cpstep({"cam", src + "/examples/plasma/tab.dxf", "--sheet", src + "/examples/plasma/small.toml",
+                              "-o", job.string()},
+                             "torch_cam");
+  ASSERT_EQ(cam.rc, 0) << cam.err;
+  // The G-code's own contours and pierce: M3 lines, and the G4 P after each.
+  const std::string text = slurp(job);
+  size_t contours = 0;
+  double pierce = 1e9;
+  std::istringstream lines(text);
+  bool after_m3 = false;
+  for (std::string line; std::getline(lines, line);) {
+    if (std::regex_search(line, std::regex(R"(^M0*3(\s|$))"))) ++contours, after_m3 = true;  // not M30
+    else if (after_m3 && line.rfind("G4 P", 0) == 0) pierce = std::min(pierce, std::stod(line.substr(4))), after_m3 = false;
+  }
+  ASSERT_GE(contours, 2u);
+  ASSERT_LT(pierce, 1e9);
+  const std::string machine = src + "/examples/machines/router.toml";
+  const Outcome run = cpstep({"run", job.string(), "--machine", machine, "--report", report.string(), "--vcd",
+                              vcd.string(), "--no-progress"},
+                             "torch_run");
+  ASSERT_EQ(run.rc, 0) << run.out << run.err;
+  const json r = json::parse(slurp(report));
+  ASSERT_TRUE(r.contains("torch")) << r.dump();
+  EXPECT_EQ(r["torch"]["planned_switches"].get<uint64_t>(), 2 * contours);
+  EXPECT_EQ(r["torch"]["edges"].get<uint64_t>(), 2 * contours);
+  EXPECT_TRUE(r["torch"]["as_planned"].get<bool>());
+  EXPECT_EQ(r["torch"]["max_delay_cycles"].get<double>(), 0);
+  EXPECT_GE(r["torch"]["min_pierce_s"].get<double>(), pierce - 1e-6);
+  EXPECT_NE(run.out.find("torch      " + std::to_string(2 * contours) + " switches planned"), std::string::npos)
+      << run.out;
+
+  const Outcome check = cpstep({"check", "--vcd", vcd.string(), "--job", job.string(), "--machine", machine, "--json",
+                                (kDir / "tabs_check.json").string()},
+                               "torch_check");
+  EXPECT_EQ(check.rc, 0) << check.out << check.err;
+  const json v = json::parse(slurp(kDir / "tabs_check.json"));
+  EXPECT_TRUE(v["conforms"].get<bool>());
+  EXPECT_EQ(v["torch"]["edges"].get<uint64_t>(), 2 * contours);
+
+  // The same trace without the first contour's torch: drop its first two changes.
+  std::string code;
+  {
+    const std::regex var(R"(\$var wire 1 (\S+) torch \$end)");
+    std::smatch m;
+    const std::string vtext = slurp(vcd);
+    ASSERT_TRUE(std::regex_search(vtext, m, var));
+    code = m[1];
+    std::istringstream in(vtext);
+    std::ostringstream out;
+    int dropped = 0;
+    bool in_body = false;
+    for (std::string line; std::getline(in, line);) {
+      in_body = in_body || line.rfind("$enddefinitions", 0) == 0;
+      if (in_body && dropped < 2 && line.size() == code.size() + 1 && line.substr(1) == code && line[0] != 'x' &&
+          !(dropped == 0 && line[0] == '0')) {
+        ++dropped;
+        continue;
+      }
+      out << line << '\n';
+    }
+    ASSERT_EQ(dropped, 2);
+    std::ofstream(kDir / "tabs_lost.vcd") << out.str();
+  }
+  const Outcome lost = cpstep({"check", "--vcd", (kDir / "tabs_lost.vcd").string(), "--job", job.string(), "--machine",
+                               machine, "--json", (kDir / "tabs_lost.json").string()},
+                              "torch_lost");
+  EXPECT_NE(lost.rc, 0);
+  const json lv = json::parse(slurp(kDir / "tabs_lost.json"));
+  EXPECT_FALSE(lv["conforms"].get<bool>());
+  EXPECT_EQ(lv["counts"].value("torch", 0), 1) << lv.dump();
 }
 
 TEST(CliRun, MalformedGcodeIsRefusedWithItsPosition) {

@@ -159,7 +159,7 @@ TEST(Gcode, AllErrorsWithLineAndColumn) {
         {"G38.2 Z-5 F10\n", "job.ngc:1:1: G38.2: probing is not supported (the card has no probe input)"},
         {"G84 Z-5 R1 F10\n", "job.ngc:1:1: G84: spindle-synchronized motion (threading, tapping) is not supported"},
         {"M98 P100\n", "job.ngc:1:1: M98: subprograms are not supported; expand them before planning\n"
-                       "job.ngc:1:5: P is only used by G4 (dwell seconds), G10, G64, G2/G3 turns and G82/G86/G89"},
+                       "job.ngc:1:5: P is only used by G4 (dwell seconds), G10, G64, G2/G3 turns, G82/G86/G89 and M62-M65"},
         {"G1 X1 F0\n", "job.ngc:1:7: feed rate F must be > 0"},
         {"S-1\n", "job.ngc:1:1: spindle speed S must be >= 0"},
         {"G0 X1 (unclosed\n", "job.ngc:1:7: comment '(' is not closed on this line"},
@@ -170,7 +170,7 @@ TEST(Gcode, AllErrorsWithLineAndColumn) {
         {"G4 P-1\n", "job.ngc:1:4: dwell P must be >= 0 seconds"},
         {"G92\n", "job.ngc:1:1: G92 needs at least one axis word"},
         {"G92 G0 X1\n", "job.ngc:1:5: G92 and G0 cannot share the axis words of one block"},
-        {"G0 X1 P2\n", "job.ngc:1:7: P is only used by G4 (dwell seconds), G10, G64, G2/G3 turns and G82/G86/G89"},
+        {"G0 X1 P2\n", "job.ngc:1:7: P is only used by G4 (dwell seconds), G10, G64, G2/G3 turns, G82/G86/G89 and M62-M65"},
         {"G0 X1 Q2\n", "job.ngc:1:7: Q is only used by G64 and the peck cycles G73/G83"},
         {"G1 X1 I2 F5\n", "job.ngc:1:7: I is only used by G2/G3 arcs and canned cycles"},
         {"G2 X1 Y1 K1 F5\n", "job.ngc:1:10: K is not an offset in the XY plane (G17 arcs use I and J)"},
@@ -590,6 +590,35 @@ TEST(Gcode, SpindleM3M4M5WithS) {
     EXPECT_TRUE(j.blocks[1].spindle_ccw);
     EXPECT_EQ(j.blocks[1].spindle_speed, 500);
     EXPECT_FALSE(j.blocks[2].spindle_on);
+}
+
+// M62/M63 P0: digital output 0 from the next motion on (a dwell between keeps the
+// old level); M64/M65 P0: from the next block on, dwells included (docs/PLANNING.md).
+TEST(Gcode, DigitalOutputM62ToM65) {
+    const Job& j = ok(parse("G21 G0 X1\nM62 P0\nG4 P0.5\nG1 X2 F600\nG1 X3\nM63 P0\nG1 X4 M64 P0\n"
+                            "M65 P0\nG4 P1\nG0 X5\n"));
+    ASSERT_EQ(j.blocks.size(), 7u);
+    EXPECT_FALSE(j.blocks[0].output0);              // G0 X1
+    EXPECT_EQ(j.blocks[1].kind, MotionKind::dwell); // G4 after M62: not yet
+    EXPECT_FALSE(j.blocks[1].output0);
+    EXPECT_TRUE(j.blocks[2].output0);               // the next motion
+    EXPECT_TRUE(j.blocks[3].output0);
+    EXPECT_TRUE(j.blocks[4].output0);               // M64 in the block: at once, and the M63 pending dropped
+    EXPECT_EQ(j.blocks[5].kind, MotionKind::dwell); // after M65: off for the dwell
+    EXPECT_FALSE(j.blocks[5].output0);
+    EXPECT_FALSE(j.blocks[6].output0);
+    EXPECT_FALSE(j.blocks[2].spindle_on);           // the spindle is another thing
+}
+
+TEST(Gcode, DigitalOutputRefusals) {
+    const auto r = parse("M62 P1\nM64\nG4 P1 M62\nM63 P0 M65 P0\n");
+    ASSERT_FALSE(r.ok());
+    const std::string e = join(r.errors);
+    EXPECT_NE(e.find("job.ngc:1:5: M62: the card has one digital output, P0 (the torch); P1 is not one"),
+              std::string::npos) << e;
+    EXPECT_NE(e.find("job.ngc:2:1: M64 needs P<output>"), std::string::npos) << e;
+    EXPECT_NE(e.find("job.ngc:3:4: P is wanted by M62 and by another code"), std::string::npos) << e;
+    EXPECT_NE(e.find("job.ngc:4:"), std::string::npos) << e;  // two codes of the output group
 }
 
 TEST(Gcode, DwellInABlockWithG0) {

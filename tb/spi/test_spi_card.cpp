@@ -62,8 +62,8 @@ TYPED_TEST(SpiCard, PollGivesAWellFormedReply) {
 
   // The adaptor names every output, positions last.
   const auto& fields = TypeParam::fields();
-  ASSERT_EQ(fields.size(), 9 + N);
-  EXPECT_STREQ(fields[9 + N - 1].name, ("position_o[" + std::to_string(N - 1) + "]").c_str());
+  ASSERT_EQ(fields.size(), 10 + N);
+  EXPECT_STREQ(fields[10 + N - 1].name, ("position_o[" + std::to_string(N - 1) + "]").c_str());
 
   // MISO is driven exactly while CS is low.
   for (const PinCycle& c : h.trace()) ASSERT_EQ(c.out.miso_oe, !c.in.cs_n);

@@ -39,6 +39,7 @@ module cp_hx8k #(
     output wire [N-1:0] STEP,
     output wire [N-1:0] DIR,
     output wire [N-1:0] ENABLE,
+    output wire         TORCH,      // J3, T7: the torch (or spindle) output, active high
     input  wire         SPI_SCK,
     input  wire         SPI_CS_N,
     input  wire         SPI_MOSI,
@@ -56,7 +57,7 @@ cp_board #(.PLL_PAD(1'b0), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(P
     .osc_i(CLK), .btn_n(1'b1),
     .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
     .estop_loop_i(ESTOP_LOOP),
-    .step_o(STEP), .dir_o(DIR), .enable_o(ENABLE),
+    .step_o(STEP), .dir_o(DIR), .enable_o(ENABLE), .torch_o(TORCH),
     .led_run_n_o(led_run_n), .led_fault_n_o(led_fault_n));
 
 // The breakout's LEDs light when their pin is high.

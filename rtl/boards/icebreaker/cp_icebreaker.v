@@ -48,6 +48,8 @@ module cp_icebreaker #(
     output wire [N-1:0] DIR,
     // PMOD 1B lower row: ENABLE per axis.
     output wire [N-1:0] ENABLE,
+    // PMOD 2 pin 1: the torch (or spindle) output, active high.
+    output wire         TORCH,
     // PMOD 1B upper row: the host's SPI.
     input  wire         SPI_SCK,
     input  wire         SPI_CS_N,
@@ -67,7 +69,7 @@ cp_board #(.PLL_PAD(1'b1), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(P
     .osc_i(CLK), .btn_n(BTN_N),
     .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
     .estop_loop_i(ESTOP_LOOP),
-    .step_o(STEP), .dir_o(DIR), .enable_o(ENABLE),
+    .step_o(STEP), .dir_o(DIR), .enable_o(ENABLE), .torch_o(TORCH),
     .led_run_n_o(LEDG_N), .led_fault_n_o(LEDR_N));
 
 endmodule
