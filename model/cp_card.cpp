@@ -25,6 +25,9 @@ const CpCoreOut& CpCard::core_outputs() const {
   c.cmd_data = spi_.cmd_data();
   c.rsp_ready = true;  // cp_spi takes every READ reply
   c.estop = estop_synced();
+  const uint32_t ctl = spi_.ctl();  // an URGENT frame's START / STOP, at its CS rise
+  c.ctl_start = (ctl & 1) != 0;
+  c.ctl_stop = (ctl & 2) != 0;
   c.rd_addr = spi_.rd_addr();
   core_out_ = core_.outputs();
   core_valid_ = true;

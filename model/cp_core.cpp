@@ -104,7 +104,8 @@ CpCore::Wires CpCore::settle() const {
   CpRunIn& r = w.r_in;
   r.rst = in.rst;
   r.estop = in.estop;
-  r.start = w.cmd.start;
+  r.start = w.cmd.start || in.ctl_start;
+  r.stop = in.ctl_stop;
   r.abort = w.cmd.abort;
   r.fault = status_.fault();
   r.ch_valid = w.chunk.out_valid;
@@ -161,7 +162,8 @@ const CpCore::Wires& CpCore::wires() const {
 
 bool CpCore::lazy_holds() const {
   return lazy_left_ > 0 && in.rst == lazy_in_.rst && in.cmd_valid == lazy_in_.cmd_valid &&
-         in.cmd_data == lazy_in_.cmd_data && in.rsp_ready == lazy_in_.rsp_ready && in.estop == lazy_in_.estop;
+         in.cmd_data == lazy_in_.cmd_data && in.rsp_ready == lazy_in_.rsp_ready && in.estop == lazy_in_.estop &&
+         in.ctl_start == lazy_in_.ctl_start && in.ctl_stop == lazy_in_.ctl_stop;
 }
 
 void CpCore::catch_up() {

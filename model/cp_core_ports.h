@@ -38,6 +38,8 @@ struct CpCoreIn {
   bool rsp_ready = false;
   bool estop = false;
   uint32_t rd_addr = 0;  // the read port's register (8 bits)
+  // Out of band (rtl/cp_spi.v URGENT frames): START, STOP.
+  bool ctl_start = false, ctl_stop = false;
   bool operator==(const CpCoreIn&) const = default;
 };
 

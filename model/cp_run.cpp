@@ -22,7 +22,7 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   // counted late once: in the first cycle it is due and does not fire, or when it
   // fires after its time without having waited due (its chunk came late).
   const bool due = q.chunk_loaded && q.elapsed >= q.delay;
-  const bool stopping = i.estop || i.abort;
+  const bool stopping = i.estop || i.abort || i.stop;
   // In a conic, the plane axes step by the walker's presented move, in its directions;
   // its end mark must agree with the segment's last move.
   const CpConicSerialOut wo = p_.conic ? walker_.outputs() : CpConicSerialOut{};
@@ -124,6 +124,9 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
     d.running = true;
     d.elapsed = 1;
   }
+  // STOP: the run is off; what is loaded and queued stays (a START goes on, the
+  // pending move timed from it).
+  if (i.stop) d.running = false;
   if (i.flush) {
     d.running = false;
     d.cur_valid = false;

@@ -24,6 +24,7 @@ struct CpRunParams {
 
 struct CpRunIn {
   bool rst = false, flush = false, estop = false, start = false, abort = false, fault = false;
+  bool stop = false;  // STOP (out of band): the run off, what is loaded stays
   bool ch_valid = false;
   FifoWord ch_head{};      // 81 bits: {last, add2, count, add, interval}
   bool run_valid = false;

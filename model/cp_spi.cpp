@@ -7,7 +7,7 @@ namespace cpstep::model {
 namespace {
 
 constexpr uint32_t kMagic = 0xC5;
-constexpr uint32_t kTypePoll = 0x00, kTypeCommands = 0x01;
+constexpr uint32_t kTypePoll = 0x00, kTypeCommands = 0x01, kTypeUrgent = 0x02;
 
 // Result codes (docs/PROTOCOL.md).
 constexpr uint32_t kOk = 0, kTruncated = 1, kBadCrc = 2, kBadType = 3, kNoRoom = 4, kBadCmd = 5, kSplit = 6;
@@ -41,7 +41,19 @@ CpSpi::Out CpSpi::outputs() const {
   o.cmd_data = uint32_t(b.out_data[0]);
   o.rsp_ready = true;
   o.rd_addr = rd_addr();
+  const uint32_t c = ctl();
+  o.ctl_start = (c & 1) != 0;
+  o.ctl_stop = (c & 2) != 0;
   return o;
+}
+
+uint32_t CpSpi::ctl() const {
+  const Regs& q = r_;
+  const bool cs_rise = (q.cs >> 1 & 1) && !(q.cs >> 2 & 1);
+  if (!cs_rise || !q.urg) return 0;
+  const bool in_cmd = q.hdr_left != 0 || q.chunks_left != 0;
+  const bool ok = q.ph == kPhaseDone && q.crc_rx == 0 && !q.bad_type && !q.no_room && !q.bad_cmd && !in_cmd;
+  return ok ? q.uw & 3 : 0;
 }
 
 bool CpSpi::tick_synchronizers_only() {
@@ -114,6 +126,7 @@ void CpSpi::tick() {
     d.hdr_left = 0;
     d.chunks_left = 0;
     d.cw = 0;
+    d.urg = false;
   } else if (shift) {
     d.bit = (q.bit + 1) & 31;
     if (q.ph != kPhaseDone) d.crc_rx = crc_bit(q.crc_rx, bit_in);
@@ -133,7 +146,9 @@ void CpSpi::tick() {
           // {type, seq, nwords}; room is judged against reply word 1's free words.
           const uint32_t type = rx_word >> 24, nwords = rx_word & 0xFFFF;
           d.left = nwords;
-          d.bad_type = !(type == kTypeCommands || (type == kTypePoll && nwords == 0));
+          d.bad_type = !(type == kTypeCommands || (type == kTypePoll && nwords == 0) ||
+                         (type == kTypeUrgent && nwords == 1));
+          d.urg = type == kTypeUrgent;
           d.no_room = type == kTypeCommands && nwords > free16;
           d.wr_ok = type == kTypeCommands && nwords <= free16;
           d.ph = nwords == 0 ? kPhaseCrc : kPhaseWords;
@@ -144,7 +159,10 @@ void CpSpi::tick() {
           buf_wr = q.wr_ok;
           d.left = (q.left - 1) & 0xFFFF;
           if (q.left == 1) d.ph = kPhaseCrc;
-          if (!in_cmd) {
+          if (q.urg) {
+            // An URGENT frame's word: not a command, kept for its CS rise.
+            d.uw = rx_word & 3;
+          } else if (!in_cmd) {
             // A command starts: a SEGMENT has H1, N v words and its chunks to come,
             // a CONIC also K0..K6 before its chunks.
             switch (rx_word >> 28) {

@@ -69,6 +69,11 @@ module cp_core #(
 
     // E-stop, synchronous to clk, active high.
     input  wire          estop_i,
+    // Out of band (the SPI front end's URGENT frames, docs/PROTOCOL.md): START as
+    // CONTROL's, and STOP: no move fires from this cycle on, the run is off, the
+    // segment under way and the queues stay for a START to go on with.
+    input  wire          ctl_start_i,
+    input  wire          ctl_stop_i,
 
     // Pins.
     output wire [N-1:0]  step_o,
@@ -213,7 +218,7 @@ cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
 
 cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW)) u_run (
     .clk(clk), .rst(rst), .flush_i(flush), .estop_i(estop_i),
-    .start_i(start_req), .abort_i(abort_req), .fault_i(fault),
+    .start_i(start_req || ctl_start_i), .stop_i(ctl_stop_i), .abort_i(abort_req), .fault_i(fault),
     .ch_valid_i(ch_head_valid), .ch_head_i(ch_head), .ch_pop_o(ch_pop),
     .run_valid_i(run_head_valid), .run_head_i(run_head), .run_level_i(run_level),
     .run_pop_o(run_pop),

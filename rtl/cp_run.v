@@ -41,6 +41,7 @@ module cp_run #(
     input  wire          flush_i,          // stop and empty (cp_status)
     input  wire          estop_i,
     input  wire          start_i,          // CONTROL start, this cycle
+    input  wire          stop_i,           // STOP (out of band), this cycle
     input  wire          abort_i,          // CONTROL abort, this cycle
     input  wire          fault_i,          // a fault is latched
 
@@ -183,12 +184,12 @@ wire          conic_ok = !conic_on || (wk_valid && wk_end == seg_last);
 // due is ch_loaded_q && elapsed_q >= delay_q, registered: its next value is compared
 // beside the fire decision (below), not after it.
 wire due = due_q;
-assign fire_o = running_q && cur_valid_q && !estop_i && !abort_i && due && rp_valid_q && conic_ok &&
+assign fire_o = running_q && cur_valid_q && !estop_i && !abort_i && !stop_i && due && rp_valid_q && conic_ok &&
                 &(pulse_ready_i | ~move_steps);
 assign wk_ready = fire_o && conic_on;
-assign fault_conic_o = running_q && cur_valid_q && !estop_i && !abort_i && due && rp_valid_q &&
+assign fault_conic_o = running_q && cur_valid_q && !estop_i && !abort_i && !stop_i && due && rp_valid_q &&
                        conic_on && wk_valid && wk_end != seg_last;
-assign stretch_o = running_q && due && !late_q && !estop_i && !abort_i &&
+assign stretch_o = running_q && due && !late_q && !estop_i && !abort_i && !stop_i &&
                    (!fire_o || elapsed_q != delay_q);
 assign seg_done_o = fire_o && seg_last;
 
@@ -297,6 +298,9 @@ always @* begin
         running_d = 1'b1;
         elapsed_d = 32'd1;
     end
+    // STOP: the run is off; what is loaded and queued stays (a START goes on, the
+    // pending move timed from it).
+    if (stop_i) running_d = 1'b0;
     if (flush_i) begin
         running_d   = 1'b0;
         cur_valid_d = 1'b0;

@@ -51,7 +51,13 @@ module cp_spi #(
 
     // What the reply reports (estop_i already synchronized).
     input  wire          estop_i,
-    input  wire          enable_i
+    input  wire          enable_i,
+
+    // An URGENT frame (type 0x02, one word) accepted at this CS rise: its word's
+    // [0] START and [1] STOP go to the core at once, past the command buffer
+    // (docs/PROTOCOL.md "Out of band").
+    output reg           ctl_start_o,
+    output reg           ctl_stop_o
 );
 
 generate
@@ -70,6 +76,7 @@ endgenerate
 localparam [7:0] MAGIC = 8'hC5;
 localparam [7:0] T_POLL = 8'h00;
 localparam [7:0] T_COMMANDS = 8'h01;
+localparam [7:0] T_URGENT = 8'h02;
 
 localparam [2:0] R_OK        = 3'd0;
 localparam [2:0] R_TRUNCATED = 3'd1;
@@ -168,6 +175,8 @@ reg           wr_ok_q, wr_ok_d;          // the frame's words go into the buffer
 reg           bad_type_q, bad_type_d;
 reg           no_room_q, no_room_d;
 reg           bad_cmd_q, bad_cmd_d;
+reg           urg_q, urg_d;              // an URGENT frame: its one word is not a command
+reg [1:0]     uw_q, uw_d;                // its word's [1:0]
 // Whole-command tracking: a segment's header words, then its chunks' words.
 reg [4:0]     hdr_left_q, hdr_left_d;
 reg [15:0]    chunks_left_q, chunks_left_d;
@@ -212,9 +221,10 @@ always @* begin
     ph_d = ph_q;  bit_d = bit_q;  txn_d = txn_q;  crc_rx_d = crc_rx_q;  crc_tx_d = crc_tx_q;
     left_d = left_q;  wr_ok_d = wr_ok_q;  bad_type_d = bad_type_q;  no_room_d = no_room_q;
     bad_cmd_d = bad_cmd_q;  hdr_left_d = hdr_left_q;  chunks_left_d = chunks_left_q;
-    cw_d = cw_q;  seg_add2_d = seg_add2_q;
+    cw_d = cw_q;  seg_add2_d = seg_add2_q;  urg_d = urg_q;  uw_d = uw_q;
     sr_d = sr_q;
     buf_wr = 1'b0;  buf_commit = 1'b0;  buf_rollback = 1'b0;
+    ctl_start_o = 1'b0;  ctl_stop_o = 1'b0;
 
     if (cs_fall) begin
         // A frame begins: the reply's word 0 goes out at once.
@@ -222,7 +232,7 @@ always @* begin
         ph_d = PH_HDR;  bit_d = 5'd0;  txn_d = 5'd1;
         crc_rx_d = 16'hFFFF;  crc_tx_d = 16'hFFFF;
         wr_ok_d = 1'b0;  bad_type_d = 1'b0;  no_room_d = 1'b0;  bad_cmd_d = 1'b0;
-        hdr_left_d = 5'd0;  chunks_left_d = 16'd0;  cw_d = 2'd0;
+        hdr_left_d = 5'd0;  chunks_left_d = 16'd0;  cw_d = 2'd0;  urg_d = 1'b0;
     end else if (shift) begin
         bit_d = bit_q + 1'b1;
         if (ph_q != PH_DONE) crc_rx_d = crc_bit(crc_rx_q, bit_in);
@@ -243,7 +253,9 @@ always @* begin
                 // words that go out in reply word 1, loaded in this same cycle.
                 left_d = rx_word[15:0];
                 bad_type_d = !(rx_word[31:24] == T_COMMANDS ||
-                               (rx_word[31:24] == T_POLL && rx_word[15:0] == 16'd0));
+                               (rx_word[31:24] == T_POLL && rx_word[15:0] == 16'd0) ||
+                               (rx_word[31:24] == T_URGENT && rx_word[15:0] == 16'd1));
+                urg_d = rx_word[31:24] == T_URGENT;
                 no_room_d = rx_word[31:24] == T_COMMANDS && rx_word[15:0] > free16;
                 wr_ok_d = rx_word[31:24] == T_COMMANDS && rx_word[15:0] <= free16;
                 ph_d = (rx_word[15:0] == 16'd0) ? PH_CRC : PH_WORDS;
@@ -253,7 +265,10 @@ always @* begin
             buf_wr = wr_ok_q;
             left_d = left_q - 1'b1;
             if (left_q == 16'd1) ph_d = PH_CRC;
-            if (!in_cmd) begin
+            if (urg_q) begin
+                // An URGENT frame's word: not a command, kept for its CS rise.
+                uw_d = rx_word[1:0];
+            end else if (!in_cmd) begin
                 // A command starts: a SEGMENT has H1, N v words and its chunks to
                 // come, a CONIC also K0..K6 before its chunks.
                 case (rx_word[31:28])
@@ -303,6 +318,8 @@ always @* begin
         buf_commit   = result_d == R_OK;
         buf_rollback = result_d != R_OK;
         fresh_d = 1'b0;
+        ctl_start_o  = result_d == R_OK && urg_q && uw_q[0];
+        ctl_stop_o   = result_d == R_OK && urg_q && uw_q[1];
     end
 end
 
@@ -323,7 +340,7 @@ always @(posedge clk) begin
     ph_q <= ph_d;  bit_q <= bit_d;  txn_q <= txn_d;  crc_rx_q <= crc_rx_d;  crc_tx_q <= crc_tx_d;
     left_q <= left_d;  wr_ok_q <= wr_ok_d;  bad_type_q <= bad_type_d;  no_room_q <= no_room_d;
     bad_cmd_q <= bad_cmd_d;  hdr_left_q <= hdr_left_d;  chunks_left_q <= chunks_left_d;
-    cw_q <= cw_d;  seg_add2_q <= seg_add2_d;
+    cw_q <= cw_d;  seg_add2_q <= seg_add2_d;  urg_q <= urg_d;  uw_q <= uw_d;
     sr_q <= sr_d;
 end
 
@@ -353,6 +370,7 @@ reg [17:0]   f_cl;             // words still due in the current command
 reg          f_bc;             // a command started with an unknown opcode
 reg [16:0]   f_nwr;            // command words this frame put into the buffer
 reg [CBUF_AW+1:0] f_lvl;       // committed words in the buffer (head included)
+reg [1:0]    f_uw;             // an URGENT frame's word, [1:0]
 
 wire [31:0] f_word    = {f_sr[30:0], bit_in};                // the word ending now
 wire        f_wend    = shift && f_b5 == 5'd31;
@@ -363,7 +381,9 @@ wire        f_hdr_ok  = f_wc != 17'd0;                       // the header has a
 // The CRC's last bit has arrived: words 0..nwords, then 16 bits.
 wire        f_done    = f_hdr_ok && (f_wc > f_nw17 + 17'd1 || (f_wc == f_nw17 + 17'd1 && f_b5 >= 5'd16));
 wire        f_cmdword = f_wend && f_hdr_ok && f_wc <= f_nw17; // a command word ends now
-wire        f_badtype = !(f_type == 8'h01 || (f_type == 8'h00 && f_nwords == 16'd0));
+wire        f_badtype = !(f_type == 8'h01 || (f_type == 8'h00 && f_nwords == 16'd0) ||
+                          (f_type == 8'h02 && f_nwords == 16'd1));
+wire        f_urgent  = f_type == 8'h02;                     // its word is not a command
 wire        f_noroom  = f_type == 8'h01 && f_nwords > f_free;
 wire        f_wr_ok   = f_type == 8'h01 && !f_noroom;
 wire        f_pop     = cmd_valid_o && cmd_ready_i;
@@ -403,7 +423,8 @@ always @(posedge clk) begin
             f_hdr  <= f_word;
             f_free <= f_free_now;
         end
-        if (f_cmdword) begin
+        if (f_cmdword && f_urgent) f_uw <= f_word[1:0];
+        if (f_cmdword && !f_urgent) begin
             if (f_wr_ok) f_nwr <= f_nwr + 1'b1;
             if (f_cl != 18'd0)                f_cl <= f_cl - 1'b1;
             else if (f_word[31:28] == 4'h1)   f_cl <= f_seg_len;
@@ -431,6 +452,9 @@ always @* if (f_past_valid) begin
     // when every check of the table passes, roll back otherwise.
     // (As the buffer sees its write side: f_buf_* are cp_fifo's own inputs.)
     if (f_buf_commit || f_buf_rollback) assert(cs_rise);
+    // An URGENT frame acts at its CS rise, when every check passes, and only then.
+    assert(ctl_start_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[0]));
+    assert(ctl_stop_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[1]));
     if (cs_rise) begin
         assert(result_d == f_result);
         assert(f_buf_commit == (f_result == R_OK));
@@ -456,9 +480,12 @@ always @* if (f_past_valid) begin
         assert(cw_q < f_cpc[1:0] && hdr_left_q <= (f_conic ? CON_HDR_WORDS : SEG_HDR_WORDS));
         if (hdr_left_q != 5'd0 || chunks_left_q == 16'd0) assert(cw_q == 2'd0);
         if (!f_hdr_ok) begin
-            assert(ph_q == PH_HDR && f_cl == 18'd0 && !f_bc && f_nwr == 17'd0);
+            assert(ph_q == PH_HDR && f_cl == 18'd0 && !f_bc && f_nwr == 17'd0 && !urg_q);
         end else begin
             assert(bad_type_q == f_badtype && no_room_q == f_noroom && wr_ok_q == f_wr_ok);
+            assert(urg_q == f_urgent);
+            // An URGENT frame's word, once received, as the shadow's.
+            if (f_urgent && f_nwords != 16'd0 && f_wc > 17'd1) assert(uw_q == f_uw);
             if (f_wc <= f_nw17) begin
                 assert(ph_q == PH_WORDS && left_q == f_nwords + 16'd1 - f_wc[15:0]);
             end else begin

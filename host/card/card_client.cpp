@@ -68,6 +68,24 @@ void CardClient::send_frame(std::vector<uint32_t> frame_words, size_t caller_wor
   pending_ = std::move(p);
 }
 
+bool CardClient::urgent(uint32_t word, const KeepWaiting& keep) {
+  if (!settle(keep)) return false;
+  for (unsigned tries = 0;; ++tries) {
+    const uint8_t seq = next_seq_++;
+    const uint32_t words[1] = {word};
+    ++stats_.urgent_frames;
+    // Nothing of it enters the buffer: accounted as a POLL is.
+    on_reply(link_.transfer(encode_frame(FrameType::urgent, seq, words, reply_bytes(o_.axes))), {Kind::poll, seq, 0});
+    do {
+      if (keep && have_reply_ && !keep(last_)) return false;
+    } while (!poll_once());
+    if (last_.last_seq == seq && last_.last_result == uint8_t(FrameResult::ok)) return true;
+    if (!damage(last_.last_result) || tries >= o_.max_retries)
+      throw CardError(link_.name() + ": the card refused URGENT frame " + std::to_string(seq) + ": " +
+                      result_text(last_.last_result));
+  }
+}
+
 bool CardClient::on_reply(std::span<const uint8_t> miso, const Sent& sent) {
   const size_t need = reply_bytes(o_.axes);
   if (miso.size() < need)

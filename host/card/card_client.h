@@ -78,6 +78,7 @@ struct LinkStats {
   uint64_t transfers = 0;       // CS-low periods (frames of any kind)
   uint64_t command_frames = 0;  // COMMANDS frames, resends included
   uint64_t polls = 0;           // POLL frames
+  uint64_t urgent_frames = 0;   // URGENT frames, resends included
   uint64_t bytes = 0;           // bytes clocked out (and in): frames padded to a whole reply
   uint64_t words = 0;           // command words the card accepted (markers not included)
   uint64_t markers = 0;         // marker READs the card accepted
@@ -129,6 +130,13 @@ class CardClient {
   // (true at connect). Throws CardError as send() does, or when keep_waiting
   // gives up.
   uint32_t read_register(Register r, unsigned axis = 0, const KeepWaiting& keep_waiting = nullptr);
+
+  // Sends an URGENT frame (docs/PROTOCOL.md "Out of band": `word` of urgent::start,
+  // urgent::stop), which acts at once, past every word the card's command buffer
+  // holds; settles first, then POLLs until the card reports it accepted, sending it
+  // again while it arrives damaged. false: keep_waiting gave up. Throws CardError
+  // when the card refuses it otherwise.
+  bool urgent(uint32_t word, const KeepWaiting& keep_waiting = nullptr);
 
   // Settles, then POLLs every poll_interval_s until the card is not running and
   // its command buffer is empty (with a BufferedTime: not before the motion the

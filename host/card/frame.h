@@ -18,7 +18,13 @@ namespace cpstep::card {
 // `crc` continues a CRC over earlier bytes.
 uint16_t crc16(std::span<const uint8_t> bytes, uint16_t crc = 0xFFFF);
 
-enum class FrameType : uint8_t { poll = 0x00, commands = 0x01 };
+enum class FrameType : uint8_t { poll = 0x00, commands = 0x01, urgent = 0x02 };
+// An URGENT frame's one word (docs/PROTOCOL.md "Out of band"): what it does at its CS
+// rise, past the command buffer.
+namespace urgent {
+constexpr uint32_t start = 1u << 0;  // START, as CONTROL's
+constexpr uint32_t stop = 1u << 1;   // STOP: no move from then on; what is loaded and queued stays
+}  // namespace urgent
 
 constexpr size_t kFrameHeaderBytes = 4;  // type, seq, nwords
 constexpr size_t kCrcBytes = 2;

@@ -25,6 +25,8 @@ struct CorePortBase {
     r.cmd_data_i = i.cmd_data;
     r.rsp_ready_i = i.rsp_ready;
     r.estop_i = i.estop;
+    r.ctl_start_i = i.ctl_start;
+    r.ctl_stop_i = i.ctl_stop;
     r.rd_addr_i = i.rd_addr;
   }
   static Out sample(const V& r) {

@@ -165,6 +165,7 @@ struct RunPortT {
     r.flush_i = i.flush;
     r.estop_i = i.estop;
     r.start_i = i.start;
+    r.stop_i = i.stop;
     r.abort_i = i.abort;
     r.fault_i = i.fault;
     r.ch_valid_i = i.ch_valid;

@@ -267,6 +267,7 @@ void run_traffic(uint64_t seed, bool conic) {
     in.flush = pick(rng, 0, 999) < 5;
     in.estop = pick(rng, 0, 999) < 2;
     in.start = chance(rng, 5);
+    in.stop = pick(rng, 0, 999) < 4;
     in.abort = pick(rng, 0, 999) < 2;
     if (chance(rng, 1)) in.fault = !in.fault;
     in.ch_valid = chance(rng, 70);
