@@ -259,6 +259,17 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
   // A fault (E-stop among them) or an ABORT flushes the walk a continuation would go on from.
   if (i.fault || o.fault || o.abort) d.lc_valid = false;
   o.ch_data = chunk_word(q.interval, d.add, d.count, d.add2, q.chunks_left == 1);
+  // FLUSH: back to a command's first word; what this cycle would have done is not
+  // done (the queues are emptied in this cycle).
+  if (i.flush) {
+    d.parse = Parse::command;
+    d.discard = d.rsp_valid = d.lc_valid = false;
+    o.seg_wr = o.seg_commit = o.seg_rollback = false;
+    o.ch_wr = o.ch_commit = o.ch_rollback = false;
+    o.start = o.abort = o.clear = o.drivers_on = o.drivers_off = false;
+    o.cfg_write = o.fault = false;
+    o.fault_code = 0;
+  }
   return o;
 }
 

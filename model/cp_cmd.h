@@ -25,6 +25,7 @@ struct CpCmdIn {
   uint32_t read_data = 0;  // the register cmd_data[7:0] names, now
   bool fault = false, running = false, pulse_busy = false;
   bool seg_full = false, ch_full = false;
+  bool flush = false;  // FLUSH (out of band): the command in hand dropped, nothing of it written
 };
 
 struct CpCmdOut {

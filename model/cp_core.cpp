@@ -82,6 +82,7 @@ CpCore::Wires CpCore::settle() const {
   c.cmd_valid = in.cmd_valid;
   c.cmd_data = in.cmd_data;
   c.rsp_ready = in.rsp_ready;
+  c.flush = in.ctl_flush;
   c.read_data = status_.read(s, s.rd_addr0);
   c.fault = status_.fault();
   c.running = run_.running();
@@ -146,8 +147,9 @@ CpCore::Wires CpCore::settle() const {
   s.seg_done = w.r.seg_done;
   s.seg_active = w.r.seg_active;
   w.st = status_.eval_outputs(s);
-  w.b_in.flush = w.st.flush;
-  w.r_in.flush = w.st.flush;
+  // The status's flush, or an out-of-band FLUSH.
+  w.b_in.flush = w.st.flush || in.ctl_flush;
+  w.r_in.flush = w.st.flush || in.ctl_flush;
   return w;
 }
 
@@ -163,7 +165,8 @@ const CpCore::Wires& CpCore::wires() const {
 bool CpCore::lazy_holds() const {
   return lazy_left_ > 0 && in.rst == lazy_in_.rst && in.cmd_valid == lazy_in_.cmd_valid &&
          in.cmd_data == lazy_in_.cmd_data && in.rsp_ready == lazy_in_.rsp_ready && in.estop == lazy_in_.estop &&
-         in.ctl_start == lazy_in_.ctl_start && in.ctl_stop == lazy_in_.ctl_stop;
+         in.ctl_start == lazy_in_.ctl_start && in.ctl_stop == lazy_in_.ctl_stop &&
+         in.ctl_flush == lazy_in_.ctl_flush;
 }
 
 void CpCore::catch_up() {
@@ -241,14 +244,14 @@ CpFifoIn fifo_in(bool rst, bool clear, bool wr, const FifoWord& data, bool commi
 }  // namespace
 
 CpFifoIn CpCore::seg_in(const Wires& w) const {
-  return fifo_in(in.rst, w.st.flush, w.cmd.seg_wr, {w.cmd.seg_data, 0, 0, 0}, w.cmd.seg_commit,
+  return fifo_in(in.rst, w.st.flush || in.ctl_flush, w.cmd.seg_wr, {w.cmd.seg_data, 0, 0, 0}, w.cmd.seg_commit,
                  w.cmd.seg_rollback, w.b.seg_pop);
 }
 CpFifoIn CpCore::chunk_in(const Wires& w) const {
-  return fifo_in(in.rst, w.st.flush, w.cmd.ch_wr, w.cmd.ch_data, w.cmd.ch_commit, w.cmd.ch_rollback, w.r.ch_pop);
+  return fifo_in(in.rst, w.st.flush || in.ctl_flush, w.cmd.ch_wr, w.cmd.ch_data, w.cmd.ch_commit, w.cmd.ch_rollback, w.r.ch_pop);
 }
 CpFifoIn CpCore::run_in(const Wires& w) const {
-  return fifo_in(in.rst, w.st.flush, w.b.run_wr, {w.b.run_data, 0, 0, 0}, true, false, w.r.run_pop);
+  return fifo_in(in.rst, w.st.flush || in.ctl_flush, w.b.run_wr, {w.b.run_data, 0, 0, 0}, true, false, w.r.run_pop);
 }
 
 uint64_t CpCore::quiet_for(uint64_t limit) const {

@@ -137,8 +137,8 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
     d.out = false;
   }
   // The torch: on while the run is on and the segment last loaded says so; off from
-  // the cycle after an E-stop or an abort is seen.
-  d.torch = d.running && d.out && !stopping;
+  // the cycle after an E-stop or an abort is seen (their flush comes in that cycle).
+  d.torch = d.running && d.out;
   return o;
 }
 

@@ -29,6 +29,8 @@ module cp_cmd #(
 ) (
     input  wire          clk,
     input  wire          rst,
+    // FLUSH (out of band): the command in hand is dropped, nothing of it written.
+    input  wire          flush_i,
 
     input  wire          cmd_valid_i,
     output wire          cmd_ready_o,
@@ -425,6 +427,15 @@ always @* begin
     if (fault_i || refuse || abort_o) lc_valid_d = 1'b0;
     fault_o      = refuse;
     fault_code_o = refuse_code;
+    // FLUSH: back to a command's first word; what this cycle would have done is not
+    // done (the queues are emptied in this cycle: nothing to commit or roll back).
+    if (flush_i) begin
+        p_state_d = P_CMD;  discard_d = 1'b0;  rsp_valid_d = 1'b0;  lc_valid_d = 1'b0;
+        seg_wr_o = 1'b0;  seg_commit_o = 1'b0;  seg_rollback_o = 1'b0;
+        ch_wr_o = 1'b0;  ch_commit_o = 1'b0;  ch_rollback_o = 1'b0;
+        start_o = 1'b0;  abort_o = 1'b0;  clear_o = 1'b0;  drivers_on_o = 1'b0;  drivers_off_o = 1'b0;
+        cfg_write_o = 1'b0;  fault_o = 1'b0;  fault_code_o = 8'd0;
+    end
 end
 
 // ---------------------------------------------------------------- registers

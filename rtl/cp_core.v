@@ -70,10 +70,13 @@ module cp_core #(
     // E-stop, synchronous to clk, active high.
     input  wire          estop_i,
     // Out of band (the SPI front end's URGENT frames, docs/PROTOCOL.md): START as
-    // CONTROL's, and STOP: no move fires from this cycle on, the run is off, the
+    // CONTROL's; STOP: no move fires from this cycle on, the run is off, the
     // segment under way and the queues stay for a START to go on with.
     input  wire          ctl_start_i,
     input  wire          ctl_stop_i,
+    // FLUSH (out of band): the parser drops the command in hand, every queue, the
+    // builder and the runner are emptied, the run is off; no fault is latched.
+    input  wire          ctl_flush_i,
 
     // Pins.
     output wire [N-1:0]  step_o,
@@ -138,6 +141,9 @@ endgenerate
 // ---------------------------------------------------------------- the seams
 // Status to the others.
 wire          fault, flush;
+// What empties the queues, the builder and the runner: the status's flush (a fault,
+// E-stop, ABORT) or an out-of-band FLUSH.
+wire          flush_all = flush || ctl_flush_i;
 wire [N*TW-1:0] cfg_high, cfg_low, cfg_setup, cfg_hold;
 wire [N-1:0]  cfg_step_pol, cfg_dir_pol;
 wire          cfg_new;
@@ -173,7 +179,7 @@ wire unused = &{1'b0, seg_used, seg_level, ch_used, run_used, run_full};
 
 // ---------------------------------------------------------------- parts
 cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW), .CONIC(CONIC)) u_cmd (
-    .clk(clk), .rst(rst),
+    .clk(clk), .rst(rst), .flush_i(ctl_flush_i),
     .cmd_valid_i(cmd_valid_i), .cmd_ready_o(cmd_ready_o), .cmd_data_i(cmd_data_i),
     .rsp_valid_o(rsp_valid_o), .rsp_ready_i(rsp_ready_i), .rsp_data_o(rsp_data_o),
     .rsp_addr_o(rsp_addr_o), .read_data_i(read_cmd_data),
@@ -187,19 +193,19 @@ cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW), .CONIC(CONIC)) u_c
     .fault_o(cmd_fault), .fault_code_o(cmd_code));
 
 cp_fifo #(.DW(SWW), .AW(SQW)) u_seg_fifo (
-    .clk(clk), .rst(rst), .clear_i(flush),
+    .clk(clk), .rst(rst), .clear_i(flush_all),
     .wr_i(seg_wr), .wr_data_i(seg_wdata), .commit_i(seg_commit), .rollback_i(seg_rollback),
     .full_o(seg_full), .used_o(seg_used), .level_o(seg_level),
     .out_valid_o(seg_head_valid), .out_ready_i(seg_pop), .out_data_o(seg_head));
 
 cp_fifo #(.DW(CDW), .AW(CAW)) u_chunk_fifo (
-    .clk(clk), .rst(rst), .clear_i(flush),
+    .clk(clk), .rst(rst), .clear_i(flush_all),
     .wr_i(ch_wr), .wr_data_i(ch_wdata), .commit_i(ch_commit), .rollback_i(ch_rollback),
     .full_o(ch_full), .used_o(ch_used), .level_o(ch_level),
     .out_valid_o(ch_head_valid), .out_ready_i(ch_pop), .out_data_o(ch_head));
 
 cp_build #(.N(N), .W(W), .UMAX(UMAX), .SAW(SAW), .CONIC(CONIC)) u_build (
-    .clk(clk), .rst(rst), .flush_i(flush), .fault_i(fault),
+    .clk(clk), .rst(rst), .flush_i(flush_all), .fault_i(fault),
     .seg_valid_i(seg_head_valid), .seg_head_i(seg_head), .seg_pop_o(seg_pop),
     .seg_commit_i(seg_commit),
     .run_level_i(run_level), .cur_valid_i(cur_valid),
@@ -211,13 +217,13 @@ cp_build #(.N(N), .W(W), .UMAX(UMAX), .SAW(SAW), .CONIC(CONIC)) u_build (
     .fault_o(build_fault), .busy_o(build_busy), .segq_o(segq));
 
 cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
-    .clk(clk), .rst(rst), .clear_i(flush),
+    .clk(clk), .rst(rst), .clear_i(flush_all),
     .wr_i(run_wr), .wr_data_i(run_wdata), .commit_i(1'b1), .rollback_i(1'b0),
     .full_o(run_full), .used_o(run_used), .level_o(run_level),
     .out_valid_o(run_head_valid), .out_ready_i(run_pop), .out_data_o(run_head));
 
 cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW)) u_run (
-    .clk(clk), .rst(rst), .flush_i(flush), .estop_i(estop_i),
+    .clk(clk), .rst(rst), .flush_i(flush_all), .estop_i(estop_i),
     .start_i(start_req || ctl_start_i), .stop_i(ctl_stop_i), .abort_i(abort_req), .fault_i(fault),
     .ch_valid_i(ch_head_valid), .ch_head_i(ch_head), .ch_pop_o(ch_pop),
     .run_valid_i(run_head_valid), .run_head_i(run_head), .run_level_i(run_level),

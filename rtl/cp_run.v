@@ -311,8 +311,8 @@ always @* begin
         out_d       = 1'b0;
     end
     // The torch: on while the run is on and the segment last loaded says so; off from
-    // the cycle after an E-stop or an abort is seen (the flush follows them).
-    torch_d = running_d && out_d && !estop_i && !abort_i;
+    // the cycle after an E-stop or an abort is seen (their flush comes in that cycle).
+    torch_d = running_d && out_d;
     // due_d = ch_loaded_d && elapsed_d >= delay_d, case by case. A move that fires
     // sets elapsed to 1 and either steps to its chunk's next interval or takes the
     // head chunk (or none); otherwise elapsed counts on (or starts at 1) against the

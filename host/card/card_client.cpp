@@ -79,7 +79,11 @@ bool CardClient::urgent(uint32_t word, const KeepWaiting& keep) {
     do {
       if (keep && have_reply_ && !keep(last_)) return false;
     } while (!poll_once());
-    if (last_.last_seq == seq && last_.last_result == uint8_t(FrameResult::ok)) return true;
+    if (last_.last_seq == seq && last_.last_result == uint8_t(FrameResult::ok)) {
+      // After a FLUSH no word sent before it runs: the READs among them never reply.
+      if (word & urgent::flush) reads_expected_ = last_.reads;
+      return true;
+    }
     if (!damage(last_.last_result) || tries >= o_.max_retries)
       throw CardError(link_.name() + ": the card refused URGENT frame " + std::to_string(seq) + ": " +
                       result_text(last_.last_result));

@@ -132,7 +132,7 @@ class CardClient {
   uint32_t read_register(Register r, unsigned axis = 0, const KeepWaiting& keep_waiting = nullptr);
 
   // Sends an URGENT frame (docs/PROTOCOL.md "Out of band": `word` of urgent::start,
-  // urgent::stop), which acts at once, past every word the card's command buffer
+  // urgent::stop, urgent::flush), which acts at once, past every word the card's command buffer
   // holds; settles first, then POLLs until the card reports it accepted, sending it
   // again while it arrives damaged. false: keep_waiting gave up. Throws CardError
   // when the card refuses it otherwise.

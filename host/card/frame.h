@@ -24,6 +24,7 @@ enum class FrameType : uint8_t { poll = 0x00, commands = 0x01, urgent = 0x02 };
 namespace urgent {
 constexpr uint32_t start = 1u << 0;  // START, as CONTROL's
 constexpr uint32_t stop = 1u << 1;   // STOP: no move from then on; what is loaded and queued stays
+constexpr uint32_t flush = 1u << 2;  // FLUSH: the run off, the command buffer and every queue emptied
 }  // namespace urgent
 
 constexpr size_t kFrameHeaderBytes = 4;  // type, seq, nwords

@@ -38,6 +38,7 @@ struct CmdPortT {
   static void drive(Rtl& r, const In& i) {
     r.rst = i.rst;
     r.cmd_valid_i = i.cmd_valid;
+    r.flush_i = i.flush;
     r.cmd_data_i = i.cmd_data;
     r.rsp_ready_i = i.rsp_ready;
     r.read_data_i = i.read_data;

@@ -147,6 +147,7 @@ void cmd_traffic(uint64_t seed, int cycles, bool conic = false) {
     in.pulse_busy = chance(rng, 10);
     in.seg_full = chance(rng, 10);
     in.ch_full = chance(rng, 10);
+    in.flush = pick(rng, 0, 999) < 2;  // an out-of-band FLUSH now and then
     const model::CpCmdOut o = ls.step(in);
     if (in.cmd_valid && o.cmd_ready) words.pop_front();
     // A conic's header goes into the segment queue with the conic flag (bit 30 + N)

@@ -97,9 +97,11 @@ struct Card {
   }
 };
 
+// (Replies are copied: CardClient::poll() returns a reference to its latest reply.)
+
 // The job ran whole: no fault, its moves, its end on the counters and on the pins.
 void expect_job_done(card::CardClient& c, const Card& card, const Job& j) {
-  const card::Reply& r = c.poll();
+  const card::Reply r = c.poll();
   EXPECT_EQ(r.status & 0xFF02, 0u) << "no fault";
   EXPECT_EQ(r.moves, j.moves);
   EXPECT_EQ(r.positions, (std::vector<int32_t>{j.x, j.y}));
@@ -121,7 +123,7 @@ TEST(OutOfBand, StartPastAFullBufferEndsTheOldDeadlock) {
   for (size_t w = 0; w < j.segments.size();) {
     const size_t len = card::command_words(j.segments[w], 2);
     c.settle();
-    const card::Reply& r = c.poll();
+    const card::Reply r = c.poll();
     free_words = r.free_words;
     if (len > r.free_words) break;
     ASSERT_EQ(c.send(std::span(j.segments).subspan(w, len)), len);
@@ -130,7 +132,7 @@ TEST(OutOfBand, StartPastAFullBufferEndsTheOldDeadlock) {
   }
   ASSERT_LT(sent, j.segments.size()) << "the buffer should fill before the job is sent";
   card.spi.idle(20000);
-  const card::Reply& stuck = c.poll();
+  const card::Reply stuck = c.poll();
   EXPECT_EQ(stuck.free_words, free_words) << "the core took nothing more: it is stuck";
   EXPECT_FALSE(card::decode_status(stuck.status).running);
   // A START in band would not fit (and would wait behind the words if it did).
@@ -167,14 +169,14 @@ TEST(OutOfBand, StopAtRandomCyclesThenStartGoesOnExactly) {
       card.spi.idle(std::uniform_int_distribution<uint64_t>(100, 20000)(rng));
       // A STOP while the run is on and well before its end (a START after the end
       // would start a run with nothing to run).
-      const card::Reply& now = c.poll();
+      const card::Reply now = c.poll();
       if (stops < 4 && card::decode_status(now.status).running && now.moves + 16 < j.moves) {
         ASSERT_TRUE(c.urgent(card::urgent::stop));
         ++stops;
-        const card::Reply& s = c.poll();
+        const card::Reply s = c.poll();
         EXPECT_FALSE(card::decode_status(s.status).running) << "STOP: the run is off";
         card.spi.idle(3000);
-        const card::Reply& still = c.poll();
+        const card::Reply still = c.poll();
         EXPECT_EQ(still.moves, s.moves) << "no move while stopped";
         EXPECT_EQ(still.positions, (std::vector<int32_t>{int32_t(card.pins[0]), int32_t(card.pins[1])}))
             << "the pins' steps are the counters";
@@ -185,6 +187,55 @@ TEST(OutOfBand, StopAtRandomCyclesThenStartGoesOnExactly) {
     expect_job_done(c, card, j);
     EXPECT_GE(card.shortest_high, kStepHigh) << "no runt STEP pulse";
   }
+}
+
+// FLUSH while the run is on, the buffer and queues full and the parser inside a
+// segment: the run stops, the buffer and every queue are empty, no fault; the
+// positions are the pins'; nothing sent before it runs, and a new job (one START
+// out of band) runs from where the card stands, exactly.
+TEST(OutOfBand, FlushEmptiesEverythingAndANewJobRunsExactly) {
+  const Job first = make_job(40, 3000), second = make_job(3, 500);
+  Card card;
+  card::CardClient c(card.link, card.options());
+  ASSERT_EQ(c.send(first.setup), first.setup.size());
+  ASSERT_TRUE(c.urgent(card::urgent::start));
+  size_t w = 0;
+  while (w < first.segments.size()) {
+    const size_t len = card::command_words(first.segments[w], 2);
+    c.settle();
+    if (c.poll().free_words < len) break;
+    ASSERT_EQ(c.send(std::span(first.segments).subspan(w, len)), len);
+    w += len;
+  }
+  ASSERT_LT(w, first.segments.size()) << "the buffer should be full";
+  card.spi.idle(5000);
+  const card::Reply before = c.poll();
+  ASSERT_TRUE(card::decode_status(before.status).running);
+  ASSERT_LT(before.free_words, 32u) << "words wait in the buffer";
+  ASSERT_GE(card::decode_status(before.status).segments_queued, 2u) << "and segments in the queues";
+  ASSERT_TRUE(c.urgent(card::urgent::flush));
+  card.spi.idle(2000);
+  const card::Reply after = c.poll();
+  const card::Status st = card::decode_status(after.status);
+  EXPECT_FALSE(st.running);
+  EXPECT_FALSE(st.fault) << st.err_code;
+  EXPECT_EQ(after.free_words, 32u) << "the command buffer is empty";
+  EXPECT_EQ(after.status >> 16, 0u) << "no segment and no chunk queued";
+  EXPECT_LT(after.moves, first.moves);
+  EXPECT_EQ(after.positions, (std::vector<int32_t>{int32_t(card.pins[0]), int32_t(card.pins[1])}));
+  card.spi.idle(20000);
+  EXPECT_EQ(c.poll().moves, after.moves) << "nothing that was buffered runs";
+
+  const std::vector<int32_t> at = after.positions;
+  ASSERT_EQ(c.send(second.segments), second.segments.size());
+  ASSERT_TRUE(c.urgent(card::urgent::start));
+  ASSERT_TRUE(c.wait_until_stopped());
+  const card::Reply r = c.poll();
+  EXPECT_EQ(r.status & 0xFF02, 0u) << "no fault";
+  EXPECT_EQ(r.moves, after.moves + second.moves);
+  EXPECT_EQ(r.positions, (std::vector<int32_t>{at[0] + second.x, at[1] + second.y}));
+  EXPECT_EQ(card.pins[0], at[0] + second.x);
+  EXPECT_EQ(card.pins[1], at[1] + second.y);
 }
 
 // URGENT frames the card refuses do nothing: a word count other than 1 is BAD_TYPE,
