@@ -133,6 +133,7 @@ CpCore::Wires CpCore::settle() const {
 
   s.abort = w.cmd.abort;
   s.clear = w.cmd.clear;
+  s.ack = in.ctl_ack;
   s.drivers_on = w.cmd.drivers_on;
   s.drivers_off = w.cmd.drivers_off;
   s.cfg_write = w.cmd.cfg_write;
@@ -166,7 +167,7 @@ bool CpCore::lazy_holds() const {
   return lazy_left_ > 0 && in.rst == lazy_in_.rst && in.cmd_valid == lazy_in_.cmd_valid &&
          in.cmd_data == lazy_in_.cmd_data && in.rsp_ready == lazy_in_.rsp_ready && in.estop == lazy_in_.estop &&
          in.ctl_start == lazy_in_.ctl_start && in.ctl_stop == lazy_in_.ctl_stop &&
-         in.ctl_flush == lazy_in_.ctl_flush;
+         in.ctl_flush == lazy_in_.ctl_flush && in.ctl_ack == lazy_in_.ctl_ack;
 }
 
 void CpCore::catch_up() {

@@ -39,7 +39,7 @@ struct CpCoreIn {
   bool estop = false;
   uint32_t rd_addr = 0;  // the read port's register (8 bits)
   // Out of band (rtl/cp_spi.v URGENT frames): START, STOP.
-  bool ctl_start = false, ctl_stop = false, ctl_flush = false;
+  bool ctl_start = false, ctl_stop = false, ctl_flush = false, ctl_ack = false;
   bool operator==(const CpCoreIn&) const = default;
 };
 

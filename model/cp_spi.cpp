@@ -45,6 +45,7 @@ CpSpi::Out CpSpi::outputs() const {
   o.ctl_start = (c & 1) != 0;
   o.ctl_stop = (c & 2) != 0;
   o.ctl_flush = (c & 4) != 0;
+  o.ctl_ack = (c & 8) != 0;
   return o;
 }
 
@@ -54,7 +55,7 @@ uint32_t CpSpi::ctl() const {
   if (!cs_rise || !q.urg) return 0;
   const bool in_cmd = q.hdr_left != 0 || q.chunks_left != 0;
   const bool ok = q.ph == kPhaseDone && q.crc_rx == 0 && !q.bad_type && !q.no_room && !q.bad_cmd && !in_cmd;
-  return ok ? q.uw & 7 : 0;
+  return ok ? q.uw & 15 : 0;
 }
 
 bool CpSpi::tick_synchronizers_only() {
@@ -162,7 +163,7 @@ void CpSpi::tick() {
           if (q.left == 1) d.ph = kPhaseCrc;
           if (q.urg) {
             // An URGENT frame's word: not a command, kept for its CS rise.
-            d.uw = rx_word & 7;
+            d.uw = rx_word & 15;
           } else if (!in_cmd) {
             // A command starts: a SEGMENT has H1, N v words and its chunks to come,
             // a CONIC also K0..K6 before its chunks.

@@ -39,7 +39,7 @@ struct CpSpiOut {
   bool rsp_ready = false;
   uint32_t rd_addr = 0;  // 8 bits
   // An URGENT frame accepted at this CS rise: its START and STOP (docs/PROTOCOL.md).
-  bool ctl_start = false, ctl_stop = false, ctl_flush = false;
+  bool ctl_start = false, ctl_stop = false, ctl_flush = false, ctl_ack = false;
 };
 
 class CpSpi {
@@ -60,8 +60,8 @@ class CpSpi {
   bool cmd_valid() const { return cbuf_.out_valid(); }
   uint32_t cmd_data() const { return uint32_t(cbuf_.out_word0()); }
   uint32_t rd_addr() const;
-  // An URGENT frame's word [2:0] in the cycle its CS rise accepts it, else 0
-  // (registered state only: rtl/cp_spi.v ctl_start_o, ctl_stop_o, ctl_flush_o).
+  // An URGENT frame's word [3:0] in the cycle its CS rise accepts it, else 0
+  // (registered state only: rtl/cp_spi.v ctl_start_o, ctl_stop_o, ctl_flush_o, ctl_ack_o).
   uint32_t ctl() const;
   // Every synchronizer stage holds what the current inputs load into it: another
   // cycle with the same pins changes no synchronizer (with rst: the reset values).
@@ -154,7 +154,7 @@ class CpSpi {
     uint32_t hdr_left = 0, chunks_left = 0, cw = 0;
     bool seg_add2 = false;
     bool urg = false;  // an URGENT frame: its one word is not a command
-    uint32_t uw = 0;   // its word's [2:0]
+    uint32_t uw = 0;   // its word's [3:0]
     uint32_t sr = 0;
   };
 

@@ -109,7 +109,8 @@ CpStatus::Regs CpStatus::next(const In& i) const {
   if (i.drivers_off || i.estop) d.enable = false;
   // CLEAR drops what was latched before this cycle (a stretch in this very cycle
   // stays); then the first fault latches.
-  const bool clearing = i.clear && !i.estop;
+  // CLEAR does not clear an E-stop: only the out-of-band ACK does (input released).
+  const bool clearing = !i.estop && ((i.clear && (q.err & 0xFF) != uint32_t(CoreError::estop)) || i.ack);
   if (clearing) {
     d.fault = false;
     d.err = 0;

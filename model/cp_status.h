@@ -27,6 +27,7 @@ struct CpStatusParams {
 struct CpStatusIn {
   bool rst = false, estop = false;
   bool abort = false, clear = false, drivers_on = false, drivers_off = false;
+  bool ack = false;  // ACK (out of band): clears any fault, E-stop's too
   bool cfg_write = false;
   uint32_t cfg_word = 0;
   bool cmd_fault = false;

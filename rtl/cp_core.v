@@ -77,6 +77,9 @@ module cp_core #(
     // FLUSH (out of band): the parser drops the command in hand, every queue, the
     // builder and the runner are emptied, the run is off; no fault is latched.
     input  wire          ctl_flush_i,
+    // ACK (out of band): clears a latched fault, an E-stop's included (CONTROL's
+    // CLEAR does not clear an E-stop), when the E-stop input is released.
+    input  wire          ctl_ack_i,
 
     // Pins.
     output wire [N-1:0]  step_o,
@@ -245,7 +248,7 @@ cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW
             .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC),
             .CIW(CIW)) u_status (
     .clk(clk), .rst(rst), .estop_i(estop_i),
-    .abort_i(abort_req), .clear_i(clear_req), .drivers_on_i(drivers_on_req),
+    .abort_i(abort_req), .clear_i(clear_req), .ack_i(ctl_ack_i), .drivers_on_i(drivers_on_req),
     .drivers_off_i(drivers_off_req), .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i),
     .cmd_fault_i(cmd_fault), .cmd_code_i(cmd_code), .build_fault_i(build_fault),
     .run_fault_i(run_fault), .run_conic_i(run_conic),

@@ -55,10 +55,12 @@ module cp_spi #(
 
     // An URGENT frame (type 0x02, one word) accepted at this CS rise: its word's
     // [0] START, [1] STOP and [2] FLUSH go to the core at once, past the command
-    // buffer, which FLUSH empties (docs/PROTOCOL.md "Out of band").
+    // buffer, which FLUSH empties; [3] ACK clears a fault, an E-stop's too
+    // (docs/PROTOCOL.md "Out of band").
     output reg           ctl_start_o,
     output reg           ctl_stop_o,
-    output reg           ctl_flush_o
+    output reg           ctl_flush_o,
+    output reg           ctl_ack_o
 );
 
 generate
@@ -177,7 +179,7 @@ reg           bad_type_q, bad_type_d;
 reg           no_room_q, no_room_d;
 reg           bad_cmd_q, bad_cmd_d;
 reg           urg_q, urg_d;              // an URGENT frame: its one word is not a command
-reg [2:0]     uw_q, uw_d;                // its word's [2:0]
+reg [3:0]     uw_q, uw_d;                // its word's [3:0]
 // Whole-command tracking: a segment's header words, then its chunks' words.
 reg [4:0]     hdr_left_q, hdr_left_d;
 reg [15:0]    chunks_left_q, chunks_left_d;
@@ -225,7 +227,7 @@ always @* begin
     cw_d = cw_q;  seg_add2_d = seg_add2_q;  urg_d = urg_q;  uw_d = uw_q;
     sr_d = sr_q;
     buf_wr = 1'b0;  buf_commit = 1'b0;  buf_rollback = 1'b0;
-    ctl_start_o = 1'b0;  ctl_stop_o = 1'b0;  ctl_flush_o = 1'b0;
+    ctl_start_o = 1'b0;  ctl_stop_o = 1'b0;  ctl_flush_o = 1'b0;  ctl_ack_o = 1'b0;
 
     if (cs_fall) begin
         // A frame begins: the reply's word 0 goes out at once.
@@ -268,7 +270,7 @@ always @* begin
             if (left_q == 16'd1) ph_d = PH_CRC;
             if (urg_q) begin
                 // An URGENT frame's word: not a command, kept for its CS rise.
-                uw_d = rx_word[2:0];
+                uw_d = rx_word[3:0];
             end else if (!in_cmd) begin
                 // A command starts: a SEGMENT has H1, N v words and its chunks to
                 // come, a CONIC also K0..K6 before its chunks.
@@ -322,6 +324,7 @@ always @* begin
         ctl_start_o  = result_d == R_OK && urg_q && uw_q[0];
         ctl_stop_o   = result_d == R_OK && urg_q && uw_q[1];
         ctl_flush_o  = result_d == R_OK && urg_q && uw_q[2];
+        ctl_ack_o    = result_d == R_OK && urg_q && uw_q[3];
     end
 end
 
@@ -372,7 +375,7 @@ reg [17:0]   f_cl;             // words still due in the current command
 reg          f_bc;             // a command started with an unknown opcode
 reg [16:0]   f_nwr;            // command words this frame put into the buffer
 reg [CBUF_AW+1:0] f_lvl;       // committed words in the buffer (head included)
-reg [2:0]    f_uw;             // an URGENT frame's word, [2:0]
+reg [3:0]    f_uw;             // an URGENT frame's word, [3:0]
 
 wire [31:0] f_word    = {f_sr[30:0], bit_in};                // the word ending now
 wire        f_wend    = shift && f_b5 == 5'd31;
@@ -425,7 +428,7 @@ always @(posedge clk) begin
             f_hdr  <= f_word;
             f_free <= f_free_now;
         end
-        if (f_cmdword && f_urgent) f_uw <= f_word[2:0];
+        if (f_cmdword && f_urgent) f_uw <= f_word[3:0];
         if (f_cmdword && !f_urgent) begin
             if (f_wr_ok) f_nwr <= f_nwr + 1'b1;
             if (f_cl != 18'd0)                f_cl <= f_cl - 1'b1;
@@ -460,6 +463,7 @@ always @* if (f_past_valid) begin
     assert(ctl_start_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[0]));
     assert(ctl_stop_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[1]));
     assert(ctl_flush_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[2]));
+    assert(ctl_ack_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[3]));
     if (cs_rise) begin
         assert(result_d == f_result);
         assert(f_buf_commit == (f_result == R_OK));

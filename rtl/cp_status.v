@@ -47,6 +47,7 @@ module cp_status #(
     // Requests of the command word taken now (cp_cmd).
     input  wire          abort_i,
     input  wire          clear_i,
+    input  wire          ack_i,            // ACK (out of band): clears any fault, E-stop's too
     input  wire          drivers_on_i,
     input  wire          drivers_off_i,
     input  wire          cfg_write_i,
@@ -151,8 +152,10 @@ always @* begin
     if (drivers_on_i) enable_d = 1'b1;
     if (drivers_off_i || estop_i) enable_d = 1'b0;
     // CLEAR drops what was latched before this cycle (a stretch in this very cycle
-    // stays); then the first fault latches.
-    clearing = clear_i && !estop_i;
+    // stays), but not an E-stop: only the out-of-band ACK, with the input released,
+    // clears that (a CLEAR buffered before the E-stop cannot); then the first fault
+    // latches.
+    clearing = !estop_i && ((clear_i && err_q != E_ESTOP) || ack_i);
     if (clearing) begin
         fault_d     = 1'b0;
         err_d       = E_NONE;

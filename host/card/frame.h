@@ -25,6 +25,7 @@ namespace urgent {
 constexpr uint32_t start = 1u << 0;  // START, as CONTROL's
 constexpr uint32_t stop = 1u << 1;   // STOP: no move from then on; what is loaded and queued stays
 constexpr uint32_t flush = 1u << 2;  // FLUSH: the run off, the command buffer and every queue emptied
+constexpr uint32_t ack = 1u << 3;    // ACK: clears a latched fault, an E-stop's too (input released)
 }  // namespace urgent
 
 constexpr size_t kFrameHeaderBytes = 4;  // type, seq, nwords

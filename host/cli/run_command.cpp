@@ -385,6 +385,7 @@ int run_spidev_transport(const RunOptions& o) {
   Progress progress(!o.no_progress);
   run::LinkRunOptions lo;
   lo.sck_hz = double(hz);
+  lo.ack_estop = o.ack_estop;
   // Frames stay within spidev's transfer limit.
   lo.client.max_frame_words = (card::kSpidevMaxTransfer - card::frame_bytes(0)) / 4;
   lo.progress = [&progress](uint64_t done, uint64_t total) { progress.update(done, total); };
@@ -436,6 +437,9 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& o) {
   c->add_option("--spi-hz", o.spi_hz, "spidev: the SCK rate in Hz (default and limit: the card's clock / 8)")
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
   c->add_flag("--no-progress", o.no_progress, "no progress display on stderr");
+  c->add_flag("--ack-estop", o.ack_estop,
+              "spidev: acknowledge an E-stop the card latched, its input released (without it such a card is "
+              "refused: docs/CORE.md \"Faults\")");
   c->add_option("--state", o.state,
                 "sim, spidev: after the run write its state here (JSON: contours completed, the card's "
                 "position; docs/PLASMA.md \"Resume\")");

@@ -25,6 +25,7 @@ struct RunOptions {
   std::string device;              // spidev: the device ("": /dev/spidev0.0)
   uint64_t spi_hz = 0;             // spidev: SCK rate; 0: the card's clock / 8
   bool no_progress = false;
+  bool ack_estop = false;  // spidev: acknowledge an E-stop the card latched (its input released)
   // A cut job by contours (docs/PLASMA.md "Resume"): sim and spidev.
   std::string state;               // write the run's state here (contours completed, position)
   std::string resume;              // continue the run this state file records

@@ -81,6 +81,8 @@ class SimRun {
           run_to_stop();
         } else if (const auto* e = std::get_if<sim::Estop>(&s.action)) {
           spi_.set_estop(e->on);
+        } else if (const auto* u = std::get_if<sim::Urgent>(&s.action)) {
+          client_.urgent(u->word);
         }
         check_cycles();
       }

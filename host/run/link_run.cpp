@@ -5,9 +5,13 @@
 
 #include <fmt/format.h>
 
+#include "card/frame.h"
+
 namespace cpstep::run {
 
 namespace {
+
+constexpr uint32_t model_estop_code = 10;  // ESTOP (docs/CORE.md error codes)
 
 // A stopped card whose command buffer stays full this long is stalled (as the
 // sim's 10^6 cycles at 48 MHz).
@@ -46,6 +50,9 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   else if (st0.running) refuse = "the card is running";
   else if (first.flags & card::reply_flag::busy) refuse = "the card's command buffer holds words";
   else if (first.flags & card::reply_flag::estop) refuse = "the card's E-stop input is active";
+  else if (st0.fault && st0.err_code == uint32_t(model_estop_code) && !o.ack_estop)
+    refuse = "the card latched an E-stop (ESTOP, code 10); with its input released, acknowledge it "
+             "(cpstep run --ack-estop)";
   if (!refuse.empty()) {
     take_reply(run, first);
     run.faults.push_back(host_fault(HostFault::link, fmt::format("{}; nothing was sent", refuse)));
@@ -67,7 +74,17 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
     return finish();
   }
   std::vector<uint32_t> words;
-  if (st0.fault) card::encode_control(false, false, true, words);  // CLEAR the fault left latched
+  if (st0.fault && st0.err_code == uint32_t(model_estop_code)) {
+    try {
+      client.urgent(card::urgent::ack);  // the operator's acknowledge (ack_estop)
+    } catch (const card::CardError& e) {
+      take_reply(run, client.last());
+      run.faults.push_back(host_fault(HostFault::link, fmt::format("acknowledging the E-stop: {}", e.what())));
+      return finish();
+    }
+  } else if (st0.fault) {
+    card::encode_control(false, false, true, words);  // CLEAR the fault left latched
+  }
   const uint64_t before_job = words.size();
   words.insert(words.end(), job.words.begin(), job.words.end());
   // The card's segment count goes on from the last job's.

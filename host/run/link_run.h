@@ -19,11 +19,16 @@ struct LinkRunOptions {
   double sck_hz = 0;           // the SCK rate, for the report
   // Called with (moves done, moves planned) at every wait.
   std::function<void(uint64_t, uint64_t)> progress;
+  // An E-stop fault the card latched is cleared only by an explicit acknowledge
+  // (docs/CORE.md "Faults"): with this set the host sends it (an URGENT ACK frame)
+  // once the input is released; without it such a card is refused.
+  bool ack_estop = false;
 };
 
 // Polls the card; refuses to start (a LINK fault, nothing sent) when no card
 // answers, when it is running or holds words, or when its E-stop input is
-// active; clears a fault it has latched (CONTROL clear before the job's words);
+// active, or has an E-stop latched and ack_estop is not set; clears a fault it has
+// latched (CONTROL clear before the job's words; an E-stop's by an URGENT ACK);
 // sends the job; waits until it stopped; takes the final state from a POLL.
 // Counters are the job's (the card's minus their values before it); positions
 // are the card's, and the job's end is checked as start + the plan's end. A run

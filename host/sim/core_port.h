@@ -27,6 +27,8 @@ struct CorePortBase {
     r.estop_i = i.estop;
     r.ctl_start_i = i.ctl_start;
     r.ctl_stop_i = i.ctl_stop;
+    r.ctl_flush_i = i.ctl_flush;
+    r.ctl_ack_i = i.ctl_ack;
     r.rd_addr_i = i.rd_addr;
   }
   static Out sample(const V& r) {

@@ -5,6 +5,7 @@
 #include <optional>
 #include <set>
 
+#include "card/frame.h"
 #include "card/protocol.h"
 
 namespace cpstep::sim {
@@ -276,6 +277,21 @@ class Parser {
       steps_.push_back({line_, Wait{parse_unsigned(toks[1].text, toks[1].col, UINT64_MAX, "cycles")}});
       return;
     }
+    if (cmd == "urgent") {
+      // urgent start|stop|flush|ack ...: one URGENT frame with those bits.
+      if (toks.size() < 2) fail(toks[0].col + 6, "urgent takes start, stop, flush or ack");
+      uint32_t word = 0;
+      for (size_t t = 1; t < toks.size(); ++t) {
+        const std::string& b = toks[t].text;
+        if (b == "start") word |= card::urgent::start;
+        else if (b == "stop") word |= card::urgent::stop;
+        else if (b == "flush") word |= card::urgent::flush;
+        else if (b == "ack") word |= card::urgent::ack;
+        else fail(toks[t].col, "unknown urgent bit '" + b + "' (start, stop, flush, ack)");
+      }
+      steps_.push_back({line_, Urgent{word}});
+      return;
+    }
     if (cmd == "estop") {
       if (toks.size() != 2 || (toks[1].text != "on" && toks[1].text != "off"))
         fail(toks.size() < 2 ? toks[0].col + 5 : toks[1].col, "estop takes 'on' or 'off'");
@@ -283,7 +299,7 @@ class Parser {
       return;
     }
     fail(toks[0].col, "unknown command '" + cmd +
-                          "' (config, segment, chunk, start, wait, run, estop, abort, clear)");
+                          "' (config, segment, chunk, start, wait, run, estop, abort, clear, urgent)");
   }
 
   std::vector<ScriptStep> parse(std::istream& in) {

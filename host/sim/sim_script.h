@@ -27,10 +27,14 @@ struct RunToStop {};
 struct Estop {
   bool on = false;
 };
+// An URGENT frame (docs/PROTOCOL.md "Out of band"): card::urgent bits.
+struct Urgent {
+  uint32_t word = 0;
+};
 
 struct ScriptStep {
   unsigned line = 0;  // 1-based line of the script it came from
-  std::variant<SendWords, Wait, RunToStop, Estop> action;
+  std::variant<SendWords, Wait, RunToStop, Estop, Urgent> action;
 };
 
 // A syntax error: "<file>:<line>:<column>: error: <message>" in what().

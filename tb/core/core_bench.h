@@ -346,6 +346,13 @@ class CoreHarness {
     if (clear) late_at_clear = chk.late_moves();  // (a CLEAR refused under E-stop is followed by another)
     return taken;
   }
+  // The out-of-band ACK (docs/PROTOCOL.md "Out of band"): one cycle of ctl_ack_i.
+  void ack() {
+    model::CpCoreIn in;
+    in.ctl_ack = true;
+    drv.step(in);
+    late_at_clear = chk.late_moves();
+  }
   // A segment the core must run (expect) or must refuse/drop (!expect).
   uint64_t segment(const card::WireSegment& s, bool expect = true) {
     std::vector<uint32_t> w;

@@ -253,6 +253,7 @@ struct StatusPort {
     r.estop_i = i.estop;
     r.abort_i = i.abort;
     r.clear_i = i.clear;
+    r.ack_i = i.ack;
     r.drivers_on_i = i.drivers_on;
     r.drivers_off_i = i.drivers_off;
     r.cfg_write_i = i.cfg_write;

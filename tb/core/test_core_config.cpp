@@ -98,7 +98,7 @@ void config_while_pulse_high(Stop how, unsigned axis) {
       h.expecting = false;
       h.drv.set_estop(false);
       h.idle(1);
-      h.control(false, false, true);  // CLEAR, E-stop released: code 10 dropped
+      h.ack();  // E-stop released and acknowledged out of band: code 10 dropped
       h.idle(1);
       break;
     case Stop::end_of_run: break;  // the segment's only move fired: not running any more

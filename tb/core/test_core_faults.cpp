@@ -29,11 +29,17 @@ card::WireSegment seg_of(const std::vector<int64_t>& d, std::vector<card::WireCh
   return s;
 }
 
-// The run after a fault: released and cleared, a new job runs exactly.
+// The run after a fault: released and cleared, a new job runs exactly. An E-stop
+// is not cleared by CLEAR, only by the out-of-band ACK (docs/CORE.md "Faults").
 template <class H>
 void expect_recovers(H& h, const std::string& where) {
   h.expecting = true;
   h.control(false, false, true);
+  if (const card::Status kept = h.status(); kept.fault && kept.err_code == 10) {
+    h.ack();
+  } else {
+    ASSERT_FALSE(kept.fault) << where << ": CLEAR did not clear (code " << kept.err_code << ")";
+  }
   const card::Status st = h.status();
   ASSERT_FALSE(st.fault) << where << ": CLEAR did not clear (code " << st.err_code << ")";
   JobShape shape;
@@ -111,6 +117,11 @@ TEST(CoreFaults, Estop) {
     EXPECT_TRUE(st.fault) << where << ": CLEAR accepted while E-stop is held";
     EXPECT_EQ(st.err_code, kEstop) << where;
     h.drv.set_estop(false);
+    h.idle(2);
+    h.control(false, false, true);  // released: CLEAR still does not clear an E-stop
+    const card::Status kept = h.status();
+    EXPECT_TRUE(kept.fault) << where << ": CLEAR cleared an E-stop (only the out-of-band ACK may)";
+    EXPECT_EQ(kept.err_code, kEstop) << where;
     expect_recovers(h, where);
     if (HasFailure()) return;
   }

@@ -332,6 +332,7 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
     in.estop = pick(rng, 0, 999) < 3;
     in.abort = pick(rng, 0, 999) < 3;
     in.clear = chance(rng, 3);
+    in.ack = pick(rng, 0, 999) < 5;
     in.drivers_on = chance(rng, 3);
     in.drivers_off = chance(rng, 2);
     in.cfg_write = chance(rng, 5);

@@ -425,12 +425,20 @@ TEST_F(CardLink, TheSpidevPathOverTheSimulatedCard) {
   EXPECT_FALSE(spi.last().running);
 
   // The same card again: the second job starts where the first ended (here at
-  // the origin), and a fault latched on the card is cleared first.
+  // the origin). An E-stop latched on the card is not cleared unasked (nothing is
+  // sent); acknowledged (ack_estop: an URGENT ACK frame), the job runs.
   spi.set_estop(true);
   spi.idle(8);
   spi.set_estop(false);
   spi.idle(8);
-  const run::CardRun again = run::run_on_link(*job_, link, {});
+  const run::CardRun refused = run::run_on_link(*job_, link, {});
+  ASSERT_EQ(refused.faults.size(), 1u);
+  EXPECT_NE(refused.faults[0].message.find("the card latched an E-stop"), std::string::npos)
+      << refused.faults[0].message;
+  EXPECT_EQ(refused.link.stats.command_frames, 0u);
+  run::LinkRunOptions ack;
+  ack.ack_estop = true;
+  const run::CardRun again = run::run_on_link(*job_, link, ack);
   EXPECT_TRUE(again.ok()) << (again.faults.empty() ? "" : again.faults.front().message);
   EXPECT_EQ(again.moves_done, job_->moves());
   EXPECT_EQ(again.position, job_->checkpoints.back().position);

@@ -125,7 +125,9 @@ inline uint8_t expected_result(std::span<const uint8_t> b, size_t bits, size_t f
   const uint16_t crc = crc_reference(b.first(len - 2));
   if (b[len - 2] != (crc >> 8) || b[len - 1] != (crc & 0xFF)) return 2;
   const uint8_t type = b[0];
-  if (!(type == 0x01 || (type == 0x00 && nwords == 0))) return 3;
+  // POLL: no words; URGENT ("Out of band"): one word, which is not a command.
+  if (!(type == 0x01 || (type == 0x00 && nwords == 0) || (type == 0x02 && nwords == 1))) return 3;
+  if (type == 0x02) return 0;
   if (type == 0x01 && nwords > free) return 4;
   size_t i = 0;
   while (i < nwords) {

@@ -594,13 +594,24 @@ void random_run(uint64_t seed, uint64_t budget, RandomStats& stats) {
       if (const auto f = b.frame_free()) {
         EXPECT_EQ(*b.wanted(), w.size() > *f ? 4 : 6) << "SPLIT";
       }
-    } else if (action < 70) {
-      // BAD_TYPE: an unknown type, or a POLL with words.
+    } else if (action < 69) {
+      // BAD_TYPE: an unknown type, a POLL with words, an URGENT frame of 0 or 2 words.
       const auto w = words_of(b.rand(0, 2));
-      const uint8_t type = w.empty() ? uint8_t(b.rand(2, 255)) : uint8_t(b.chance(0.5) ? 0 : b.rand(2, 255));
+      uint8_t type = w.empty() ? uint8_t(b.rand(2, 255)) : uint8_t(b.chance(0.5) ? 0 : b.rand(2, 255));
+      if (type == 2 && w.size() == 1) type = 3;
       b.frame(b.encode(type, w));
       if (b.wanted()) {
         EXPECT_EQ(*b.wanted(), 3) << "BAD_TYPE";
+      }
+    } else if (action < 72) {
+      // URGENT (docs/PROTOCOL.md "Out of band"): START, STOP, FLUSH, ACK in any mix,
+      // mostly with ACK (a CLEAR in band does not clear an E-stop: without the ACK
+      // the random E-stops would keep the card faulted).
+      const uint32_t bits = b.rand(0, 15) | (b.chance(0.7) ? card::urgent::ack : 0) |
+                            (b.chance(0.1) ? b.rand(0, 0xFFFF) << 4 : 0);
+      b.frame(b.encode(0x02, std::vector<uint32_t>{bits}));
+      if (b.wanted()) {
+        EXPECT_EQ(*b.wanted(), 0) << "URGENT";
       }
     } else if (action < 78) {
       // A damaged frame: a reset pulse, a CS glitch, a runt or a missing SCK pulse.

@@ -617,6 +617,16 @@ class Run {
     ++reads_;
     return true;
   }
+  // Sends an URGENT frame (docs/PROTOCOL.md "Out of band") and learns its result.
+  void urgent(uint32_t bits) {
+    const uint8_t seq = ++seq_;
+    transfer(rig_, card::encode_frame(card::FrameType::urgent, seq, std::vector<uint32_t>{bits},
+                                      card::reply_bytes(N)));
+    last_ = poll();
+    if (last_.last_seq != seq || last_.last_result != 0)
+      fail("last_result", "OK for URGENT frame seq " + std::to_string(seq),
+           std::to_string(last_.last_result) + " for seq " + std::to_string(last_.last_seq));
+  }
   std::vector<uint32_t> control(bool start, bool abort, bool clear) {
     std::vector<uint32_t> w;
     card::encode_control(start, abort, clear, w);
@@ -1180,6 +1190,11 @@ class Run {
     last_ = poll();
     if (faulted()) {
       command(control(false, false, true));
+      if ((last_.status >> 8 & 0xFF) == kEstop) {
+        // An E-stop is cleared only by the out-of-band ACK (docs/CORE.md "Faults").
+        expect_eq("status fault after CLEAR of an E-stop", 1u, last_.status >> 1 & 1);
+        urgent(card::urgent::ack);
+      }
       expect_eq("status fault after CLEAR", 0u, last_.status >> 1 & 1);
     }
     if (!(last_.flags & card::reply_flag::drivers)) {
