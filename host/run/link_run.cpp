@@ -2,6 +2,7 @@
 #include "run/link_run.h"
 
 #include <limits>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -10,8 +11,6 @@
 namespace cpstep::run {
 
 namespace {
-
-constexpr uint32_t model_estop_code = 10;  // ESTOP (docs/CORE.md error codes)
 
 // A stopped card whose command buffer stays full this long is stalled (as the
 // sim's 10^6 cycles at 48 MHz).
@@ -42,6 +41,8 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   }
   for (int a = 0; a < plan::kAxes; ++a) run.start_position[a] = first.positions[size_t(a)];
   const card::Status st0 = card::decode_status(first.status);
+  // An E-stop latched (docs/CORE.md "Faults"): only the acknowledge clears it.
+  const bool estop_latched = st0.fault && std::string_view(card::error_name(st0.err_code).name) == "ESTOP";
   std::string refuse;
   if (run.start_position != job.start)
     refuse = fmt::format("the card is at {}, but the job was planned from {} (cpstep run plans from the "
@@ -50,7 +51,7 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   else if (st0.running) refuse = "the card is running";
   else if (first.flags & card::reply_flag::busy) refuse = "the card's command buffer holds words";
   else if (first.flags & card::reply_flag::estop) refuse = "the card's E-stop input is active";
-  else if (st0.fault && st0.err_code == uint32_t(model_estop_code) && !o.ack_estop)
+  else if (estop_latched && !o.ack_estop)
     refuse = "the card latched an E-stop (ESTOP, code 10); with its input released, acknowledge it "
              "(cpstep run --ack-estop)";
   if (!refuse.empty()) {
@@ -74,7 +75,7 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
     return finish();
   }
   std::vector<uint32_t> words;
-  if (st0.fault && st0.err_code == uint32_t(model_estop_code)) {
+  if (estop_latched) {
     try {
       client.urgent(card::urgent::ack);  // the operator's acknowledge (ack_estop)
     } catch (const card::CardError& e) {
