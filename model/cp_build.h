@@ -18,7 +18,7 @@ struct CpBuildParams {
 struct CpBuildIn {
   bool rst = false, flush = false, fault = false;
   bool seg_valid = false;
-  uint64_t seg_head = 0;  // 29 + N bits; with conic max(31 + N, 32)
+  uint64_t seg_head = 0;  // 30 + N bits; with conic 32 + N
   bool seg_commit = false;
   uint32_t run_level = 0;  // 2 bits
   bool cur_valid = false;

@@ -33,7 +33,7 @@ struct CpCmdOut {
   bool rsp_valid = false;
   uint32_t rsp_data = 0, rsp_addr = 0;
   bool seg_wr = false, seg_commit = false, seg_rollback = false;
-  uint64_t seg_data = 0;  // 29 + N bits; with conic max(31 + N, 32)
+  uint64_t seg_data = 0;  // 30 + N bits; with conic 32 + N
   bool ch_wr = false, ch_commit = false, ch_rollback = false;
   FifoWord ch_data{};     // 81 bits: {last, add2, count, add, interval}
   bool start = false, abort = false, clear = false, drivers_on = false, drivers_off = false;
