@@ -30,6 +30,7 @@ const CpCoreOut& CpCard::core_outputs() const {
   c.ctl_stop = (ctl & 2) != 0;
   c.ctl_flush = (ctl & 4) != 0;
   c.ctl_ack = (ctl & 8) != 0;
+  c.kick = (ctl & 16) != 0;
   c.rd_addr = spi_.rd_addr();
   core_out_ = core_.outputs();
   core_valid_ = true;

@@ -106,7 +106,7 @@ CpCore::Wires CpCore::settle() const {
   r.rst = in.rst;
   r.estop = in.estop;
   r.start = w.cmd.start || in.ctl_start;
-  r.stop = in.ctl_stop;
+  r.stop = in.ctl_stop || status_.wd_trip(in.kick);  // STOP, or the watchdog ran out
   r.abort = w.cmd.abort;
   r.fault = status_.fault();
   r.ch_valid = w.chunk.out_valid;
@@ -134,6 +134,7 @@ CpCore::Wires CpCore::settle() const {
   s.abort = w.cmd.abort;
   s.clear = w.cmd.clear;
   s.ack = in.ctl_ack;
+  s.kick = in.kick;
   s.drivers_on = w.cmd.drivers_on;
   s.drivers_off = w.cmd.drivers_off;
   s.cfg_write = w.cmd.cfg_write;
@@ -167,13 +168,14 @@ bool CpCore::lazy_holds() const {
   return lazy_left_ > 0 && in.rst == lazy_in_.rst && in.cmd_valid == lazy_in_.cmd_valid &&
          in.cmd_data == lazy_in_.cmd_data && in.rsp_ready == lazy_in_.rsp_ready && in.estop == lazy_in_.estop &&
          in.ctl_start == lazy_in_.ctl_start && in.ctl_stop == lazy_in_.ctl_stop &&
-         in.ctl_flush == lazy_in_.ctl_flush && in.ctl_ack == lazy_in_.ctl_ack;
+         in.ctl_flush == lazy_in_.ctl_flush && in.ctl_ack == lazy_in_.ctl_ack && in.kick == lazy_in_.kick;
 }
 
 void CpCore::catch_up() {
   if (lazy_pending_) {
     cmd_.skip(lazy_pending_);
     run_.skip(lazy_pending_);
+    status_.skip(lazy_pending_);
     for (CpPulse& p : pulses_) p.skip(lazy_pending_);
     wires_valid_ = false;
   }
@@ -271,7 +273,9 @@ uint64_t CpCore::quiet_for(const Wires& w, uint64_t limit) const {
     h = std::min(h, cmd_.counting_for(w.cmd_in));
     if (h == 0) return 0;
   }
-  if (!build_.still(w.b_in) || !status_.still(w.st_in)) return 0;
+  if (!build_.still(w.b_in)) return 0;
+  h = std::min(h, status_.quiet_for(w.st_in, h));  // the watchdog's count counts
+  if (h == 0) return 0;
   if (!seg_fifo_.still(seg_in(w)) || !chunk_fifo_.still(chunk_in(w)) || !run_fifo_.still(run_in(w))) return 0;
   // The counters: the move timer and each pulse timer say how far they stay quiet.
   h = std::min<uint64_t>(h, run_.quiet_for(w.r_in));
@@ -290,6 +294,7 @@ void CpCore::skip(uint64_t cycles) {
   catch_up();
   cmd_.skip(cycles);
   run_.skip(cycles);
+  status_.skip(cycles);
   for (CpPulse& p : pulses_) p.skip(cycles);
   wires_valid_ = false;
 }

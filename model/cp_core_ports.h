@@ -40,6 +40,8 @@ struct CpCoreIn {
   uint32_t rd_addr = 0;  // the read port's register (8 bits)
   // Out of band (rtl/cp_spi.v URGENT frames): START, STOP.
   bool ctl_start = false, ctl_stop = false, ctl_flush = false, ctl_ack = false;
+  // A whole frame with a good CRC ended (rtl/cp_spi.v frame_ok_o): the watchdog's kick.
+  bool kick = false;
   bool operator==(const CpCoreIn&) const = default;
 };
 
@@ -80,6 +82,7 @@ enum class CoreError : uint32_t {
   conic_axes = 16,  // a CONIC segment's plane axes: equal, not an axis, or a v_i of theirs not 0
   conic_end = 17,   // a conic's walk arrives at its end before its last move, or not at it
   conic_cont = 18,  // a CONIC continuing a walk (H0[18]) that does not follow a CONIC on its axes, its way
+  watchdog = 19,    // no frame for the watchdog's timeout (CONFIG field 5)
 };
 
 }  // namespace cpstep::model

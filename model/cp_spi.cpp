@@ -46,16 +46,21 @@ CpSpi::Out CpSpi::outputs() const {
   o.ctl_stop = (c & 2) != 0;
   o.ctl_flush = (c & 4) != 0;
   o.ctl_ack = (c & 8) != 0;
+  o.frame_ok = (c & 16) != 0;
   return o;
 }
 
 uint32_t CpSpi::ctl() const {
   const Regs& q = r_;
   const bool cs_rise = (q.cs >> 1 & 1) && !(q.cs >> 2 & 1);
-  if (!cs_rise || !q.urg) return 0;
+  if (!cs_rise) return 0;
+  // Bit 4: a whole frame with a good CRC (the watchdog's kick), whatever its result.
+  const bool whole = q.ph == kPhaseDone && q.crc_rx == 0;
+  const uint32_t kick = whole ? 16 : 0;
+  if (!q.urg) return kick;
   const bool in_cmd = q.hdr_left != 0 || q.chunks_left != 0;
-  const bool ok = q.ph == kPhaseDone && q.crc_rx == 0 && !q.bad_type && !q.no_room && !q.bad_cmd && !in_cmd;
-  return ok ? q.uw & 15 : 0;
+  const bool ok = whole && !q.bad_type && !q.no_room && !q.bad_cmd && !in_cmd;
+  return kick | (ok ? q.uw & 15 : 0);
 }
 
 bool CpSpi::tick_synchronizers_only() {

@@ -40,6 +40,8 @@ struct CpSpiOut {
   uint32_t rd_addr = 0;  // 8 bits
   // An URGENT frame accepted at this CS rise: its START and STOP (docs/PROTOCOL.md).
   bool ctl_start = false, ctl_stop = false, ctl_flush = false, ctl_ack = false;
+  // A whole frame with a good CRC ended at this CS rise: the core's watchdog kick.
+  bool frame_ok = false;
 };
 
 class CpSpi {
@@ -60,8 +62,9 @@ class CpSpi {
   bool cmd_valid() const { return cbuf_.out_valid(); }
   uint32_t cmd_data() const { return uint32_t(cbuf_.out_word0()); }
   uint32_t rd_addr() const;
-  // An URGENT frame's word [3:0] in the cycle its CS rise accepts it, else 0
-  // (registered state only: rtl/cp_spi.v ctl_start_o, ctl_stop_o, ctl_flush_o, ctl_ack_o).
+  // An URGENT frame's word [3:0] in the cycle its CS rise accepts it, and bit 4 in
+  // the cycle of the CS rise ending any whole frame with a good CRC, else 0
+  // (registered state only: rtl/cp_spi.v ctl_start_o .. ctl_ack_o, frame_ok_o).
   uint32_t ctl() const;
   // Every synchronizer stage holds what the current inputs load into it: another
   // cycle with the same pins changes no synchronizer (with rst: the reset values).

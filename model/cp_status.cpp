@@ -14,10 +14,11 @@ constexpr uint32_t kProtocolVersion = 2;
 
 }  // namespace
 
-FaultPick pick_fault(bool estop, bool abort, bool underrun, bool pattern, bool cmd_fault,
+FaultPick pick_fault(bool estop, bool abort, bool watchdog, bool underrun, bool pattern, bool cmd_fault,
                      uint32_t cmd_code, bool run_conic) {
   if (estop) return {true, uint32_t(CoreError::estop)};
   if (abort) return {true, uint32_t(CoreError::abort)};
+  if (watchdog) return {true, uint32_t(CoreError::watchdog)};
   if (underrun) return {true, uint32_t(run_conic ? CoreError::conic_end : CoreError::underrun)};
   if (pattern) return {true, uint32_t(CoreError::seg_pattern)};
   if (cmd_fault) return {true, cmd_code & 0xFF};
@@ -92,7 +93,23 @@ CpStatus::Out CpStatus::eval_outputs(const In& i) const {
   o.segments_done = q.segments_done;
   o.cfg = q.cfg;
   o.cfg_new = q.cfg_new;
+  o.wd_trip = wd_trip(i.kick);
   return o;
+}
+
+uint64_t CpStatus::quiet_for(const In& i, uint64_t limit) const {
+  if (i.rst || i.kick || i.cfg_write) return 0;
+  Regs n = next(i);
+  n.wd_count = r_.wd_count;
+  if (!(n == r_)) return 0;
+  // Off, or tripped and holding: the count stays. Else it counts up to the trip,
+  // whose clock is clocked.
+  if (r_.wd_limit == 0 || wd_at()) return limit;
+  return std::min<uint64_t>(limit, (uint64_t(r_.wd_limit) << 12) - r_.wd_count);
+}
+
+void CpStatus::skip(uint64_t cycles) {
+  if (r_.wd_limit != 0) r_.wd_count = uint32_t(std::min<uint64_t>(r_.wd_count + cycles, uint64_t(r_.wd_limit) << 12));
 }
 
 void CpStatus::tick() { r_ = in.rst ? reset_state() : next(in); }
@@ -104,9 +121,15 @@ CpStatus::Regs CpStatus::next(const In& i) const {
   d.stretch_count = q.stretch_count + uint32_t(i.stretch);
   d.moves_done = q.moves_done + uint32_t(i.fire);
   d.segments_done = q.segments_done + uint32_t(i.seg_done);
-  // Drivers: off wins over on; E-stop holds them off.
+  // The watchdog: no kick for its timeout trips it (the count holds there).
+  const bool trip = wd_trip(i.kick);
+  const bool wd_cfg = i.cfg_write && (i.cfg_word >> 20 & 0xF) == 5;
+  if (i.kick || wd_cfg) d.wd_count = 1;
+  else if (q.wd_limit != 0 && !wd_at()) d.wd_count = q.wd_count + 1;
+  if (wd_cfg) d.wd_limit = i.cfg_word & 0xFFFF;
+  // Drivers: off wins over on; E-stop and a tripped watchdog hold them off.
   if (i.drivers_on) d.enable = true;
-  if (i.drivers_off || i.estop) d.enable = false;
+  if (i.drivers_off || i.estop || trip) d.enable = false;
   // CLEAR drops what was latched before this cycle (a stretch in this very cycle
   // stays); then the first fault latches.
   // CLEAR does not clear an E-stop: only the out-of-band ACK does (input released).
@@ -117,7 +140,7 @@ CpStatus::Regs CpStatus::next(const In& i) const {
     d.stretched = i.stretch;
   }
   const FaultPick f =
-      pick_fault(i.estop, i.abort, i.run_fault, i.build_fault, i.cmd_fault, i.cmd_code, i.run_conic);
+      pick_fault(i.estop, i.abort, trip, i.run_fault, i.build_fault, i.cmd_fault, i.cmd_code, i.run_conic);
   if (f.set && (!q.fault || clearing)) {
     d.fault = true;
     d.err = f.code;
@@ -134,10 +157,11 @@ CpStatus::Regs CpStatus::next(const In& i) const {
         case 1: c.step_low = value; break;
         case 2: c.dir_setup = value; break;
         case 3: c.dir_hold = value; break;
-        default:
+        case 4:
           c.step_pol = (word & 1) != 0;
           c.dir_pol = (word >> 1 & 1) != 0;
           break;
+        default: break;  // card-wide fields (5: the watchdog)
       }
     }
   }

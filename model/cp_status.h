@@ -28,6 +28,7 @@ struct CpStatusIn {
   bool rst = false, estop = false;
   bool abort = false, clear = false, drivers_on = false, drivers_off = false;
   bool ack = false;  // ACK (out of band): clears any fault, E-stop's too
+  bool kick = false;  // a whole frame with a good CRC ended: the watchdog's kick
   bool cfg_write = false;
   uint32_t cfg_word = 0;
   bool cmd_fault = false;
@@ -58,16 +59,17 @@ struct CpStatusOut {
   uint32_t status = 0, stretch_count = 0, moves_done = 0, segments_done = 0;
   std::array<PulseConfig, kCoreMaxAxes> cfg{};
   bool cfg_new = false;  // CONFIG was written at the last edge
+  bool wd_trip = false;  // the watchdog ran out: the runner stops, drivers off, WATCHDOG
 };
 
 // The fault priority encoder: which fault (if any) a cycle raises. Highest
-// first: E-stop, abort, the runner's (underrun, or CONIC_END when run_conic),
-// pattern, the command parser's refusal.
+// first: E-stop, abort, the watchdog, the runner's (underrun, or CONIC_END when
+// run_conic), pattern, the command parser's refusal.
 struct FaultPick {
   bool set = false;
   uint32_t code = 0;
 };
-FaultPick pick_fault(bool estop, bool abort, bool underrun, bool pattern, bool cmd_fault,
+FaultPick pick_fault(bool estop, bool abort, bool watchdog, bool underrun, bool pattern, bool cmd_fault,
                      uint32_t cmd_code, bool run_conic = false);
 
 class CpStatus {
@@ -85,6 +87,13 @@ class CpStatus {
   // True when a clock with inputs `i` changes no register (the event-skipping
   // core's test; see CpCore::quiet_for).
   bool still(const In& i) const { return !i.rst && next(i) == r_; }
+  // The clocks from now, with inputs `i` held, in which no register changes but the
+  // watchdog's count, which counts on (at most `limit`; 0: clock this one). skip(n)
+  // advances them.
+  uint64_t quiet_for(const In& i, uint64_t limit) const;
+  void skip(uint64_t cycles);
+  // The watchdog trips in this clock if `kick` is not raised in it.
+  bool wd_trip(bool kick) const { return r_.wd_limit != 0 && wd_at() && !kick; }
 
   // Registered outputs, for the core's other parts.
   bool fault() const { return r_.fault; }
@@ -101,8 +110,12 @@ class CpStatus {
     uint32_t stretch_count = 0, moves_done = 0, segments_done = 0;
     std::array<PulseConfig, kCoreMaxAxes> cfg{};
     bool cfg_new = false;
+    // The watchdog: its timeout in units of 4096 clocks (0: off), and the clocks since
+    // the last kick (1 in the clock after it).
+    uint32_t wd_limit = 0, wd_count = 1;
     bool operator==(const Regs&) const = default;
   };
+  bool wd_at() const { return r_.wd_count == uint64_t(r_.wd_limit) << 12; }
   Regs reset_state() const;
   Regs next(const In& i) const;  // the registers after a clock (not in reset)
   uint32_t status_word(const In& i) const;

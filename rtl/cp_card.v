@@ -78,6 +78,7 @@ wire        cmd_valid, cmd_ready, rsp_valid, rsp_ready;
 wire [31:0] cmd_data, rsp_data, rd_data, status, stretch_cnt, moves_done, segs_done;
 wire [7:0]  rsp_addr, rd_addr;
 wire        ctl_start, ctl_stop, ctl_flush, ctl_ack;  // an URGENT frame's bits (docs/PROTOCOL.md)
+wire        frame_ok;   // a whole frame with a good CRC: the watchdog's kick
 // The core's READ reply data, status and counter outputs: the SPI front end reads
 // the same registers through the core's read port instead.
 wire unused_core = &{1'b0, rsp_data, status, stretch_cnt, moves_done, segs_done};
@@ -90,7 +91,7 @@ cp_spi #(.N(N), .CBUF_AW(CBUF_AW), .CONIC(CONIC)) u_spi (
     .rsp_valid_i(rsp_valid), .rsp_ready_o(rsp_ready), .rsp_addr_i(rsp_addr),
     .rd_addr_o(rd_addr), .rd_data_i(rd_data),
     .estop_i(estop), .enable_i(enable_o),
-    .ctl_start_o(ctl_start), .ctl_stop_o(ctl_stop), .ctl_flush_o(ctl_flush), .ctl_ack_o(ctl_ack));
+    .ctl_start_o(ctl_start), .ctl_stop_o(ctl_stop), .ctl_flush_o(ctl_flush), .ctl_ack_o(ctl_ack), .frame_ok_o(frame_ok));
 
 cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32),
           .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW),
@@ -102,7 +103,7 @@ cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
     .rsp_valid_o(rsp_valid), .rsp_ready_i(rsp_ready), .rsp_data_o(rsp_data),
     .rsp_addr_o(rsp_addr), .rd_addr_i(rd_addr), .rd_data_o(rd_data),
     .estop_i(estop), .ctl_start_i(ctl_start), .ctl_stop_i(ctl_stop), .ctl_flush_i(ctl_flush),
-    .ctl_ack_i(ctl_ack),
+    .ctl_ack_i(ctl_ack), .kick_i(frame_ok),
     .step_o(step_o), .dir_o(dir_o), .torch_o(torch_o),
     .running_o(running_o), .fault_o(fault_o), .err_code_o(err_code_o),
     .stretched_o(stretched_o), .position_o(position_o),

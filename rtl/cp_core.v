@@ -80,6 +80,9 @@ module cp_core #(
     // ACK (out of band): clears a latched fault, an E-stop's included (CONTROL's
     // CLEAR does not clear an E-stop), when the E-stop input is released.
     input  wire          ctl_ack_i,
+    // A whole frame with a good CRC ended (the SPI front end): the watchdog's kick
+    // (docs/CORE.md "Watchdog"; CONFIG field 5 sets its timeout, 0 = off).
+    input  wire          kick_i,
 
     // Pins.
     output wire [N-1:0]  step_o,
@@ -144,6 +147,7 @@ endgenerate
 // ---------------------------------------------------------------- the seams
 // Status to the others.
 wire          fault, flush;
+wire          wd_trip;     // the watchdog ran out: the runner stops (cp_status)
 // What empties the queues, the builder and the runner: the status's flush (a fault,
 // E-stop, ABORT) or an out-of-band FLUSH.
 wire          flush_all = flush || ctl_flush_i;
@@ -227,7 +231,7 @@ cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
 
 cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW)) u_run (
     .clk(clk), .rst(rst), .flush_i(flush_all), .estop_i(estop_i),
-    .start_i(start_req || ctl_start_i), .stop_i(ctl_stop_i), .abort_i(abort_req), .fault_i(fault),
+    .start_i(start_req || ctl_start_i), .stop_i(ctl_stop_i || wd_trip), .abort_i(abort_req), .fault_i(fault),
     .ch_valid_i(ch_head_valid), .ch_head_i(ch_head), .ch_pop_o(ch_pop),
     .run_valid_i(run_head_valid), .run_head_i(run_head), .run_level_i(run_level),
     .run_pop_o(run_pop),
@@ -248,7 +252,7 @@ cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW
             .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC),
             .CIW(CIW)) u_status (
     .clk(clk), .rst(rst), .estop_i(estop_i),
-    .abort_i(abort_req), .clear_i(clear_req), .ack_i(ctl_ack_i), .drivers_on_i(drivers_on_req),
+    .abort_i(abort_req), .clear_i(clear_req), .ack_i(ctl_ack_i), .kick_i(kick_i), .drivers_on_i(drivers_on_req),
     .drivers_off_i(drivers_off_req), .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i),
     .cmd_fault_i(cmd_fault), .cmd_code_i(cmd_code), .build_fault_i(build_fault),
     .run_fault_i(run_fault), .run_conic_i(run_conic),
@@ -261,7 +265,8 @@ cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW
     .enable_o(enable_o), .status_o(status_o), .stretch_cnt_o(stretch_cnt_o),
     .moves_done_o(moves_done_o), .segs_done_o(segs_done_o),
     .cfg_high_o(cfg_high), .cfg_low_o(cfg_low), .cfg_setup_o(cfg_setup), .cfg_hold_o(cfg_hold),
-    .cfg_step_pol_o(cfg_step_pol), .cfg_dir_pol_o(cfg_dir_pol), .cfg_new_o(cfg_new));
+    .cfg_step_pol_o(cfg_step_pol), .cfg_dir_pol_o(cfg_dir_pol), .cfg_new_o(cfg_new),
+    .wd_trip_o(wd_trip));
 
 // pulse_busy[a]: axis a's STEP pin is at its active level (CONFIG is refused then).
 genvar ga;

@@ -60,7 +60,10 @@ module cp_spi #(
     output reg           ctl_start_o,
     output reg           ctl_stop_o,
     output reg           ctl_flush_o,
-    output reg           ctl_ack_o
+    output reg           ctl_ack_o,
+    // A whole frame with a good CRC ended at this CS rise, whatever its type or
+    // result: the host is alive (the core's watchdog kick, docs/CORE.md "Watchdog").
+    output reg           frame_ok_o
 );
 
 generate
@@ -228,6 +231,7 @@ always @* begin
     sr_d = sr_q;
     buf_wr = 1'b0;  buf_commit = 1'b0;  buf_rollback = 1'b0;
     ctl_start_o = 1'b0;  ctl_stop_o = 1'b0;  ctl_flush_o = 1'b0;  ctl_ack_o = 1'b0;
+    frame_ok_o = 1'b0;
 
     if (cs_fall) begin
         // A frame begins: the reply's word 0 goes out at once.
@@ -325,6 +329,7 @@ always @* begin
         ctl_stop_o   = result_d == R_OK && urg_q && uw_q[1];
         ctl_flush_o  = result_d == R_OK && urg_q && uw_q[2];
         ctl_ack_o    = result_d == R_OK && urg_q && uw_q[3];
+        frame_ok_o   = ph_q == PH_DONE && crc_rx_q == 16'd0;
     end
 end
 
@@ -464,6 +469,8 @@ always @* if (f_past_valid) begin
     assert(ctl_stop_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[1]));
     assert(ctl_flush_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[2]));
     assert(ctl_ack_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[3]));
+    // The watchdog's kick: at a CS rise that ends a whole frame whose CRC checks.
+    assert(frame_ok_o == (cs_rise && f_done && f_crc == 16'd0));
     if (cs_rise) begin
         assert(result_d == f_result);
         assert(f_buf_commit == (f_result == R_OK));

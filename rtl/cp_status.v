@@ -3,12 +3,13 @@
 // the READ registers.
 //
 // Fault requests come from the parser (a refusal with its code), the builder
-// (a pattern too long), the runner (underrun, or a conic walk not ending on its last move), CONTROL abort and the E-stop
-// input; one priority encoder picks the code: E-stop, abort, the runner's (underrun or CONIC_END), pattern,
-// then the parser's. CLEAR drops what was latched before this cycle; then the
+// (a pattern too long), the runner (underrun, or a conic walk not ending on its last move), CONTROL abort, the
+// watchdog and the E-stop input; one priority encoder picks the code: E-stop, abort, watchdog, the runner's
+// (underrun or CONIC_END), pattern, then the parser's. CLEAR drops what was latched before this cycle; then the
 // first fault latches. The flush (stop and empty every queue) is raised by the
 // E-stop, by abort, and by a latched fault once no segment is under way.
-// It also holds the drivers' enable, the stretch flag and the counters, each
+// It also holds the watchdog (no frame for its timeout: STOP, drivers off, WATCHDOG),
+// the drivers' enable, the stretch flag and the counters, each
 // axis's pulse configuration (CONFIG) and the READ registers, with two read
 // ports: the READ command's and the SPI front end's.
 //
@@ -48,6 +49,7 @@ module cp_status #(
     input  wire          abort_i,
     input  wire          clear_i,
     input  wire          ack_i,            // ACK (out of band): clears any fault, E-stop's too
+    input  wire          kick_i,           // a whole frame with a good CRC ended (cp_spi): the watchdog's kick
     input  wire          drivers_on_i,
     input  wire          drivers_off_i,
     input  wire          cfg_write_i,
@@ -97,7 +99,10 @@ module cp_status #(
     output wire [N*TW-1:0] cfg_hold_o,
     output wire [N-1:0]  cfg_step_pol_o,
     output wire [N-1:0]  cfg_dir_pol_o,
-    output wire          cfg_new_o         // CONFIG was written at the last edge (cp_pulse)
+    output wire          cfg_new_o,        // CONFIG was written at the last edge (cp_pulse)
+    // The watchdog ran out (docs/CORE.md "Watchdog"): the runner stops at once, at a
+    // move boundary; the drivers go off and WATCHDOG latches.
+    output wire          wd_trip_o
 );
 
 localparam integer SQW = SAW + $clog2(N + 1);
@@ -108,6 +113,7 @@ localparam [7:0] E_UNDERRUN    = 8'd9;
 localparam [7:0] E_ESTOP       = 8'd10;
 localparam [7:0] E_ABORT       = 8'd11;
 localparam [7:0] E_CONIC_END   = 8'd17;
+localparam [7:0] E_WATCHDOG    = 8'd19;
 
 reg          fault_q, fault_d;
 reg [7:0]    err_q, err_d;
@@ -123,6 +129,22 @@ reg [TW-1:0] cfg_hold_q [0:N-1];
 reg [N-1:0]  cfg_step_pol_q, cfg_dir_pol_q;
 reg          cfg_new_q;
 
+// ---------------------------------------------------------------- watchdog
+// CONFIG field 5 sets the timeout in units of 4096 clocks (0: off). The count is
+// 1 in the clock after a kick (or the CONFIG write) and counts the clocks since;
+// when it reaches timeout·4096 with no kick in that clock, the watchdog trips, and
+// stays tripped (the count holds) until a kick: no frame for timeout·4096 clocks.
+reg [15:0]   wd_limit_q;
+reg [27:0]   wd_cnt_q, wd_cnt_d;
+wire         wd_cfg = cfg_write_i && cfg_word_i[23:20] == 4'd5;
+wire         wd_at  = wd_cnt_q == {wd_limit_q, 12'd0};
+wire         wd_trip = wd_limit_q != 16'd0 && wd_at && !kick_i;
+always @* begin
+    wd_cnt_d = wd_cnt_q;
+    if (kick_i || wd_cfg)                    wd_cnt_d = 28'd1;
+    else if (wd_limit_q != 16'd0 && !wd_at) wd_cnt_d = wd_cnt_q + 1'b1;
+end
+
 // ---------------------------------------------------------------- fault priority
 // The one place that decides which fault a cycle raises.
 reg       fault_set;
@@ -131,6 +153,7 @@ always @* begin
     fault_set = 1'b1;
     if (estop_i)            fault_code = E_ESTOP;
     else if (abort_i)       fault_code = E_ABORT;
+    else if (wd_trip)       fault_code = E_WATCHDOG;
     else if (run_fault_i)   fault_code = run_conic_i ? E_CONIC_END : E_UNDERRUN;
     else if (build_fault_i) fault_code = E_SEG_PATTERN;
     else if (cmd_fault_i)   fault_code = cmd_code_i;
@@ -148,9 +171,9 @@ always @* begin
     stretch_cnt_d = stretch_cnt_q + {31'd0, stretch_i};
     moves_done_d  = moves_done_q + {31'd0, fire_i};
     segs_done_d   = segs_done_q + {31'd0, seg_done_i};
-    // Drivers: off wins over on; E-stop holds them off.
+    // Drivers: off wins over on; E-stop and a tripped watchdog hold them off.
     if (drivers_on_i) enable_d = 1'b1;
-    if (drivers_off_i || estop_i) enable_d = 1'b0;
+    if (drivers_off_i || estop_i || wd_trip) enable_d = 1'b0;
     // CLEAR drops what was latched before this cycle (a stretch in this very cycle
     // stays), but not an E-stop: only the out-of-band ACK, with the input released,
     // clears that (a CLEAR buffered before the E-stop cannot); then the first fault
@@ -183,6 +206,8 @@ always @(posedge clk) begin
         cfg_step_pol_q <= {N{STEP_POL_RESET}};
         cfg_dir_pol_q  <= {N{DIR_POL_RESET}};
         cfg_new_q      <= 1'b0;
+        wd_limit_q     <= 16'd0;
+        wd_cnt_q       <= 28'd1;
         for (a = 0; a < N; a = a + 1) begin
             cfg_high_q[a]  <= STEP_HIGH_RESET[TW-1:0];
             cfg_low_q[a]   <= STEP_LOW_RESET[TW-1:0];
@@ -198,6 +223,8 @@ always @(posedge clk) begin
         moves_done_q  <= moves_done_d;
         segs_done_q   <= segs_done_d;
         cfg_new_q     <= cfg_write_i;
+        wd_cnt_q      <= wd_cnt_d;
+        if (wd_cfg) wd_limit_q <= cfg_word_i[15:0];
         if (cfg_write_i) begin
             for (a = 0; a < N; a = a + 1) begin
                 if (cfg_word_i[27:24] == a[3:0]) begin
@@ -206,10 +233,11 @@ always @(posedge clk) begin
                     4'd1: cfg_low_q[a]   <= cfg_word_i[TW-1:0];
                     4'd2: cfg_setup_q[a] <= cfg_word_i[TW-1:0];
                     4'd3: cfg_hold_q[a]  <= cfg_word_i[TW-1:0];
-                    default: begin
+                    4'd4: begin
                         cfg_step_pol_q[a] <= cfg_word_i[0];
                         cfg_dir_pol_q[a]  <= cfg_word_i[1];
                     end
+                    default: ;  // card-wide fields (5: the watchdog) are not an axis's
                     endcase
                 end
             end
@@ -290,6 +318,7 @@ assign status_o       = status_word;
 assign stretch_cnt_o  = stretch_cnt_q;
 assign moves_done_o   = moves_done_q;
 assign segs_done_o    = segs_done_q;
+assign wd_trip_o      = wd_trip;
 
 endmodule
 

@@ -176,7 +176,9 @@ size_t CardClient::room() const {
 bool CardClient::pause(const KeepWaiting& keep, double seconds) {
   if (keep && !keep(last_)) return false;
   ++stats_.waits;
-  link_.wait(std::max(seconds, o_.poll_interval_s));
+  double wait = std::max(seconds, o_.poll_interval_s);
+  if (o_.keepalive_s > 0) wait = std::min(wait, o_.keepalive_s);  // the watchdog's frame comes in time
+  link_.wait(wait);
   return true;
 }
 

@@ -47,6 +47,9 @@ struct ClientOptions {
   size_t max_frame_words = 0;     // at most this many words per frame (marker included); 0: no limit of
                                   // the host's (the card's free words always limit)
   double poll_interval_s = 1e-3;  // between POLLs while waiting for room, a lost result or the end
+  // > 0: no wait between frames is longer than this (the card's watchdog: a quarter of
+  // its timeout keeps it alive, docs/CORE.md "Watchdog"); 0: no such bound.
+  double keepalive_s = 0;
   // Waiting for room, the first POLL comes after this share of the last waits for
   // room (their moving average), at least poll_interval_s and at most
   // max_first_wait_s; then every poll_interval_s. The card drains its buffer at

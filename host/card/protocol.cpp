@@ -1,7 +1,11 @@
 // SPDX-License-Identifier: MIT
 #include "card/protocol.h"
 
+#include <cmath>
 #include <iterator>
+#include <stdexcept>
+
+#include <fmt/format.h>
 
 namespace cpstep::card {
 
@@ -59,6 +63,20 @@ void encode_config(unsigned axis, ConfigField field, uint32_t value, std::vector
   out.push_back(0x2u << 28 | (axis & 0xFu) << 24 | uint32_t(field) << 20 | (value & 0xFFFF));
 }
 
+uint32_t watchdog_units(double seconds, uint32_t clock_hz) {
+  const double units = std::ceil(seconds * double(clock_hz) / kWatchdogUnit);
+  if (!(seconds >= 0) || units > 0xFFFF)
+    throw std::invalid_argument(fmt::format(
+        "the watchdog timeout {} s is outside 0 .. {:.3f} s, the longest the card's field holds (65,535 "
+        "units of {} clocks at {} Hz)",
+        seconds, 0xFFFF * double(kWatchdogUnit) / double(clock_hz), kWatchdogUnit, clock_hz));
+  return uint32_t(units);
+}
+
+void encode_watchdog(double seconds, uint32_t clock_hz, std::vector<uint32_t>& out) {
+  encode_config(0, ConfigField::watchdog, watchdog_units(seconds, clock_hz), out);
+}
+
 void encode_control(bool start, bool abort, bool clear, std::vector<uint32_t>& out) {
   out.push_back(0x3u << 28 | uint32_t(clear) << 2 | uint32_t(abort) << 1 | uint32_t(start));
 }
@@ -100,11 +118,13 @@ ErrorName error_name(uint32_t code) {
       {"ABORT", "CONTROL abort"},
       {"BAD_OPCODE", "an unknown command opcode"},
       {"CONFIG_BUSY", "CONFIG while running or while a STEP pulse is on a pin"},
-      {"CONFIG_VALUE", "a step high or step low time of 0"},
+      {"CONFIG_VALUE", "a step high or step low time of 0, a timing value too wide, an axis past N or a "
+                       "field past 5"},
       {"SEG_ADD2", "a chunk whose increment add + j*add2 changes sign"},
       {"CONIC_AXES", "a conic segment's plane axes equal or not axes, or a v of theirs not 0"},
       {"CONIC_END", "a conic's walk arrived at its end before its last move, or not on it"},
       {"CONIC_CONTINUE", "a conic continuing a walk that does not follow a conic on its axes and way"},
+      {"WATCHDOG", "no frame from the host for the watchdog's timeout"},
   };
   if (code < std::size(names)) return names[code];
   return {"UNKNOWN", "an error code this program does not know"};

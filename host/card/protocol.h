@@ -61,7 +61,17 @@ struct WireConic {
   std::vector<WireChunk> chunks;  // counts sum to T
 };
 
-enum class ConfigField : uint32_t { step_high = 0, step_low = 1, dir_setup = 2, dir_hold = 3, polarity = 4 };
+// CONFIG's fields: 0..4 an axis's pulse timing and polarity; 5 the card's watchdog
+// timeout in units of kWatchdogUnit clocks, 0 = off (docs/CORE.md "Watchdog").
+enum class ConfigField : uint32_t {
+  step_high = 0,
+  step_low = 1,
+  dir_setup = 2,
+  dir_hold = 3,
+  polarity = 4,
+  watchdog = 5,
+};
+constexpr uint32_t kWatchdogUnit = 4096;  // clocks
 
 enum class Register : uint32_t {
   status = 0x00,
@@ -85,6 +95,12 @@ constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
 void encode_segment(const WireSegment& s, std::vector<uint32_t>& out);
 void encode_conic(const WireConic& s, std::vector<uint32_t>& out);
 void encode_config(unsigned axis, ConfigField field, uint32_t value, std::vector<uint32_t>& out);
+// The watchdog field's value for a timeout of `seconds` on a card clocked at
+// `clock_hz`: whole units, rounded up (0 s: 0, off). Throws std::invalid_argument
+// for a negative timeout or one past the field's 65,535 units.
+uint32_t watchdog_units(double seconds, uint32_t clock_hz);
+// CONFIG field 5: the watchdog set to `seconds` (watchdog_units; 0 turns it off).
+void encode_watchdog(double seconds, uint32_t clock_hz, std::vector<uint32_t>& out);
 void encode_control(bool start, bool abort, bool clear, std::vector<uint32_t>& out);
 // CONTROL bit 3 (drivers on) or bit 4 (drivers off): the card's ENABLE pins.
 void encode_drivers(bool on, std::vector<uint32_t>& out);

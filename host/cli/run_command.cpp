@@ -13,6 +13,7 @@
 
 #include "card/caps.h"
 #include "card/card_client.h"
+#include "card/frame.h"
 #include "card/spidev.h"
 #include "cli/run_contours.h"
 #include "cpstep/builds.h"
@@ -301,6 +302,27 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
   return rc;
 }
 
+// --watchdog: a timeout the card's field holds at the card's clock, and at least
+// four times the longest frame at `sck_hz` (a frame kicks the watchdog at its end),
+// or a refusal.
+bool watchdog_fits(const RunOptions& o, const run::CardJob& j, double sck_hz) {
+  try {
+    (void)card::watchdog_units(o.watchdog_s, uint32_t(j.clock_hz()));
+  } catch (const std::invalid_argument& e) {
+    fmt::print(stderr, "cpstep run: --watchdog: {}; nothing was sent\n", e.what());
+    return false;
+  }
+  const double frame_s = 8.0 * double(card::frame_bytes(j.caps.command_buffer_words())) / sck_hz;
+  if (o.watchdog_s > 0 && o.watchdog_s < 4 * frame_s) {
+    fmt::print(stderr,
+               "cpstep run: --watchdog {} s: the card's longest frame ({} words) takes {:.6f} s at {:.0f} Hz; "
+               "the watchdog needs at least four times that, {:.6f} s; nothing was sent\n",
+               o.watchdog_s, j.caps.command_buffer_words(), frame_s, sck_hz, 4 * frame_s);
+    return false;
+  }
+  return true;
+}
+
 int run_sim_transport(const RunOptions& o) {
   // The simulated card of the board, asked what it is, as a real one is.
   const std::string board = o.board.empty() ? std::string(builds::kDefaultBoard) : o.board;
@@ -322,10 +344,12 @@ int run_sim_transport(const RunOptions& o) {
   const auto job = prepare(o.job, o.machine, run::connect_sim(board, *engine), {}, &contours);
   if (!job) return contours.nothing_left() ? 0 : kExitRefused;
   const run::CardJob& j = *job;
+  if (!watchdog_fits(o, j, j.clock_hz() / o.sck_div)) return kExitRefused;
   std::ofstream report_file;
   if (const int rc = open_outputs(o, report_file)) return rc;
   Progress progress(!o.no_progress);
   run::SimRunOptions so;
+  so.watchdog_s = o.watchdog_s;
   so.vcd = o.vcd;
   so.max_cycles = o.max_cycles;
   so.sck_div = o.sck_div;
@@ -372,6 +396,7 @@ int run_spidev_transport(const RunOptions& o) {
                limit);
     return kExitRefused;
   }
+  if (!watchdog_fits(o, j, double(hz))) return kExitRefused;
   std::ofstream report_file;
   if (const int rc = open_outputs(o, report_file)) return rc;
   try {
@@ -386,6 +411,7 @@ int run_spidev_transport(const RunOptions& o) {
   run::LinkRunOptions lo;
   lo.sck_hz = double(hz);
   lo.ack_estop = o.ack_estop;
+  lo.watchdog_s = o.watchdog_s;
   // Frames stay within spidev's transfer limit.
   lo.client.max_frame_words = (card::kSpidevMaxTransfer - card::frame_bytes(0)) / 4;
   lo.progress = [&progress](uint64_t done, uint64_t total) { progress.update(done, total); };
@@ -440,6 +466,13 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& o) {
   c->add_flag("--ack-estop", o.ack_estop,
               "spidev: acknowledge an E-stop the card latched, its input released (without it such a card is "
               "refused: docs/CORE.md \"Faults\")");
+  c->add_option("--watchdog", o.watchdog_s,
+                "sim, spidev: the card's watchdog in seconds: no frame from the host for this long stops "
+                "motion at a move boundary, drops ENABLE and latches WATCHDOG (code 19). The host sends a "
+                "frame at least every quarter of it while the job runs and turns it off at the job's end; 0: "
+                "off (docs/CORE.md \"Watchdog\")")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   c->add_option("--state", o.state,
                 "sim, spidev: after the run write its state here (JSON: contours completed, the card's "
                 "position; docs/PLASMA.md \"Resume\")");

@@ -26,6 +26,7 @@ struct RunOptions {
   uint64_t spi_hz = 0;             // spidev: SCK rate; 0: the card's clock / 8
   bool no_progress = false;
   bool ack_estop = false;  // spidev: acknowledge an E-stop the card latched (its input released)
+  double watchdog_s = 0.1;  // sim, spidev: the card's watchdog while the job runs (0: off)
   // A cut job by contours (docs/PLASMA.md "Resume"): sim and spidev.
   std::string state;               // write the run's state here (contours completed, position)
   std::string resume;              // continue the run this state file records

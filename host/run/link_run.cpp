@@ -21,7 +21,7 @@ constexpr double kStallSeconds = 0.02;
 CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& o) {
   CardRun run;
   run.pins_observed = false;
-  card::ClientOptions co = o.client;
+  card::ClientOptions co = keeping_alive(o.client, o.watchdog_s);
   co.axes = plan::kAxes;
   co.buffer_words = job.caps.command_buffer_words();
   card::CardClient client(link, co);
@@ -86,8 +86,9 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   } else if (st0.fault) {
     card::encode_control(false, false, true, words);  // CLEAR the fault left latched
   }
-  const uint64_t before_job = words.size();
-  words.insert(words.end(), job.words.begin(), job.words.end());
+  const std::vector<uint32_t> job_words = words_with_watchdog(job, o.watchdog_s);
+  const uint64_t before_job = words.size() + job_words.size() - job.words.size();  // the job's first word
+  words.insert(words.end(), job_words.begin(), job_words.end());
   // The card's segment count goes on from the last job's.
   client.set_buffered_time([&job, &first, before_job](const card::Reply& r, uint64_t handed) {
     if (!card::decode_status(r.status).running) return std::numeric_limits<double>::infinity();
@@ -108,7 +109,8 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   size_t sent = 0;
   try {
     sent = client.send(words, keep_waiting);
-    if (sent == words.size()) client.wait_until_stopped(keep_waiting);
+    if (sent == words.size() && client.wait_until_stopped(keep_waiting))
+      watchdog_off(client, o.watchdog_s, keep_waiting);
     if (gave_up == GaveUp::out_of_time) {
       std::vector<uint32_t> abort;
       card::encode_control(false, true, false, abort);

@@ -17,6 +17,9 @@ struct LinkRunOptions {
   card::ClientOptions client;  // axes is set to the machine's card (4)
   double timeout_s = 0;        // on the link's clock; 0: twice the planned job time plus 10 s
   double sck_hz = 0;           // the SCK rate, for the report
+  // The card's watchdog for the job (docs/CORE.md "Watchdog"): set before it, kept
+  // alive by a frame at least every quarter of it, off again at its end; 0: off.
+  double watchdog_s = 0;
   // Called with (moves done, moves planned) at every wait.
   std::function<void(uint64_t, uint64_t)> progress;
   // An E-stop fault the card latched is cleared only by an explicit acknowledge

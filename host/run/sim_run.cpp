@@ -265,14 +265,16 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   });
   sim::SimLink<Dut> sim_link(spi, double(Card::kBuild.clock_hz));
   const std::unique_ptr<card::Link> wrapped = o.wrap_link ? o.wrap_link(sim_link) : nullptr;
-  card::ClientOptions co = o.client;
+  const std::vector<uint32_t> words = words_with_watchdog(job, o.watchdog_s);
+  const uint64_t before_job = words.size() - job.words.size();  // the watchdog's CONFIG
+  card::ClientOptions co = keeping_alive(o.client, o.watchdog_s);
   co.axes = plan::kAxes;
   co.buffer_words = job.caps.command_buffer_words();
   card::CardClient client(wrapped ? *wrapped : sim_link, co);
   // A fresh card: its segment count starts at 0 with the job's first.
-  client.set_buffered_time([&job](const card::Reply& r, uint64_t handed) {
+  client.set_buffered_time([&job, before_job](const card::Reply& r, uint64_t handed) {
     if (!card::decode_status(r.status).running) return std::numeric_limits<double>::infinity();
-    return buffered_seconds(job, r.segments, r.moves, handed);
+    return buffered_seconds(job, r.segments, r.moves, handed > before_job ? handed - before_job : 0);
   });
 
   const double planned_cycles = job.planned.stats.duration_s * job.clock_hz();
@@ -301,8 +303,11 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
     if (caps != job.caps)
       throw card::CardError(fmt::format("the job was planned for {}, but the card is {}; nothing was sent",
                                         card::describe(job.caps), card::describe(caps)));
-    sent = client.send(job.words, keep_waiting);
-    if (sent == job.words.size()) client.wait_until_stopped(keep_waiting);
+    sent = client.send(words, keep_waiting);
+    if (sent == words.size()) {
+      client.wait_until_stopped(keep_waiting);
+      watchdog_off(client, o.watchdog_s, keep_waiting);
+    }
   } catch (const card::CardError& e) {
     run.faults.push_back(host_fault(HostFault::link, e.what()));
   }
@@ -319,7 +324,7 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
     run.faults.push_back(host_fault(HostFault::stall,
                                     fmt::format("the card, stopped, took no command word for {} cycles "
                                                 "(word {} of {} sent)",
-                                                kStallCycles, sent, job.words.size())));
+                                                kStallCycles, sent, words.size())));
   }
   // The final state: one POLL (the reply needs no command port, so it comes
   // even from a stalled card).
@@ -429,6 +434,26 @@ card::CardCaps connect_sim(std::string_view board, Engine engine) {
   CPSTEP_FOR_EACH_BOARD(CPSTEP_CONNECT)
 #undef CPSTEP_CONNECT
   throw std::invalid_argument(fmt::format("no simulated board '{}' (boards: {})", board, card::board_names()));
+}
+
+std::vector<uint32_t> words_with_watchdog(const CardJob& job, double watchdog_s) {
+  std::vector<uint32_t> words;
+  if (card::watchdog_units(watchdog_s, uint32_t(job.clock_hz())) != 0)
+    card::encode_watchdog(watchdog_s, uint32_t(job.clock_hz()), words);
+  words.insert(words.end(), job.words.begin(), job.words.end());
+  return words;
+}
+
+card::ClientOptions keeping_alive(card::ClientOptions client, double watchdog_s) {
+  if (watchdog_s > 0) client.keepalive_s = watchdog_s / 4;
+  return client;
+}
+
+void watchdog_off(card::CardClient& client, double watchdog_s, const card::CardClient::KeepWaiting& keep) {
+  if (watchdog_s <= 0 || card::decode_status(client.last().status).running) return;
+  std::vector<uint32_t> off;
+  card::encode_config(0, card::ConfigField::watchdog, 0, off);
+  if (client.send(off, keep) == off.size()) client.settle(keep);
 }
 
 }  // namespace cpstep::run

@@ -98,6 +98,9 @@ struct SimRunOptions {
   uint64_t max_cycles = 0;          // 0: twice the planned job time plus 10^7
   unsigned sck_div = 8;             // clock cycles per SCK period (8 or more)
   card::ClientOptions client;       // frames, polling (axes is set to the card's)
+  // The card's watchdog for the job (docs/CORE.md "Watchdog"): set before it, kept
+  // alive by a frame at least every quarter of it, off again at its end; 0: off.
+  double watchdog_s = 0;
   // Called with (moves done, moves planned) about every 65536 cycles.
   std::function<void(uint64_t, uint64_t)> progress;
   // Tests: every cycle's STEP and DIR pins (bit i: axis i).
@@ -121,6 +124,16 @@ struct SimRunOptions {
 // alone up to that cycle with an FST waveform (options.fst, or
 // cpstep-engine-mismatch.fst) for the fault to point at.
 CardRun run_on_sim(const CardJob& job, const SimRunOptions& options);
+
+// The card's watchdog around a job (docs/CORE.md "Watchdog"), for both runners: the
+// job's words behind the CONFIG that sets it (none for 0 s; watchdog_units throws
+// std::invalid_argument for a timeout the field cannot hold), the client options
+// that keep it alive (a frame at least every quarter of it), and, after the run,
+// with the card stopped, the CONFIG that turns it off, so that a host that ends
+// cleanly leaves no watchdog to run out. A card still running keeps it.
+std::vector<uint32_t> words_with_watchdog(const CardJob& job, double watchdog_s);
+card::ClientOptions keeping_alive(card::ClientOptions client, double watchdog_s);
+void watchdog_off(card::CardClient& client, double watchdog_s, const card::CardClient::KeepWaiting& keep);
 
 // The board run_on_sim() simulates for this job and these options.
 std::string sim_board_for(const CardJob& job, const SimRunOptions& options);

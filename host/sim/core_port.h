@@ -29,6 +29,7 @@ struct CorePortBase {
     r.ctl_stop_i = i.ctl_stop;
     r.ctl_flush_i = i.ctl_flush;
     r.ctl_ack_i = i.ctl_ack;
+    r.kick_i = i.kick;
     r.rd_addr_i = i.rd_addr;
   }
   static Out sample(const V& r) {

@@ -254,6 +254,7 @@ struct StatusPort {
     r.abort_i = i.abort;
     r.clear_i = i.clear;
     r.ack_i = i.ack;
+    r.kick_i = i.kick;
     r.drivers_on_i = i.drivers_on;
     r.drivers_off_i = i.drivers_off;
     r.cfg_write_i = i.cfg_write;
@@ -303,6 +304,7 @@ struct StatusPort {
       c.dir_pol = (r.cfg_dir_pol_o >> a & 1) != 0;
     }
     o.cfg_new = r.cfg_new_o;
+    o.wd_trip = r.wd_trip_o;
     return o;
   }
   // Axis a's configuration packed: high, low, setup, hold (8 bits each), polarities.
@@ -319,6 +321,7 @@ struct StatusPort {
         CPSTEP_FIELD("enable_o", o.enable),           CPSTEP_FIELD("status_o", o.status),
         CPSTEP_FIELD("stretch_cnt_o", o.stretch_count), CPSTEP_FIELD("moves_done_o", o.moves_done),
         CPSTEP_FIELD("segs_done_o", o.segments_done), CPSTEP_FIELD("cfg_new_o", o.cfg_new),
+        CPSTEP_FIELD("wd_trip_o", o.wd_trip),
         CPSTEP_FIELD("cfg axis 0 {pols, hold, setup, low, high}", cfg_bits(o, 0)),
         CPSTEP_FIELD("cfg axis 1 {pols, hold, setup, low, high}", cfg_bits(o, 1)),
         CPSTEP_FIELD("cfg axis 2 {pols, hold, setup, low, high}", cfg_bits(o, 2)),

@@ -325,7 +325,7 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
   ls.reset();
   model::CpStatusIn in;
   std::set<uint32_t> codes;
-  uint64_t flushes = 0, cfg_changes = 0;
+  uint64_t flushes = 0, cfg_changes = 0, trips = 0, trip_cycles = 0;
   model::CpStatusOut last;
   for (int c = 0; c < 300000; ++c) {
     in.rst = pick(rng, 0, 9999) == 0;
@@ -336,7 +336,14 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
     in.drivers_on = chance(rng, 3);
     in.drivers_off = chance(rng, 2);
     in.cfg_write = chance(rng, 5);
-    in.cfg_word = 0x2u << 28 | pick(rng, 0, 4) << 24 | pick(rng, 0, 5) << 20 | pick(rng, 0, 0xFFFF);
+    in.cfg_word = 0x2u << 28 | pick(rng, 0, 4) << 24 | pick(rng, 0, 4) << 20 | pick(rng, 0, 0xFFFF);
+    // The watchdog: a timeout of 0 (off) to 3 units of 4096 clocks set now and then,
+    // a kick one clock in 12,000 on average (so it runs out often).
+    if (pick(rng, 0, 49999) == 0) {
+      in.cfg_write = true;
+      in.cfg_word = 0x2u << 28 | pick(rng, 0, 4) << 24 | 5u << 20 | pick(rng, 0, 3);
+    }
+    in.kick = pick(rng, 0, 11999) == 0;
     in.cmd_fault = chance(rng, 2);
     in.cmd_code = pick(rng, 0, 255);
     in.build_fault = pick(rng, 0, 999) < 5;
@@ -360,6 +367,9 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
     const model::CpStatusOut o = ls.step(in);
     if (o.fault) codes.insert(o.err);
     flushes += o.flush;
+    trips += o.wd_trip && !last.wd_trip;
+    trip_cycles += o.wd_trip;
+    if (last.wd_trip) EXPECT_FALSE(o.enable) << "a tripped watchdog holds the drivers off";
     if (c > 0 && o.cfg != last.cfg) ++cfg_changes;
     last = o;
   }
@@ -367,15 +377,18 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
   EXPECT_GT(codes.size(), 50u) << "the parser's codes pass through";
   EXPECT_GT(flushes, 1000u);
   EXPECT_GT(cfg_changes, 1000u);
+  EXPECT_GT(trips, 5u) << "the watchdog should run out now and then";
+  EXPECT_GT(trip_cycles, 1000u);
+  EXPECT_TRUE(codes.count(19)) << "WATCHDOG latched";
 }
 
 // The priority encoder's order, written out from docs/CORE.md "Faults": E-stop,
-// abort, underrun, pattern, the parser's code; nothing raised, nothing set.
+// abort, watchdog, underrun, pattern, the parser's code; nothing raised, nothing set.
 TEST(CorePartStatus, FaultPriorityIsTheDocumentedOrder) {
-  for (unsigned m = 0; m < 32; ++m) {
-    const bool estop = m & 1, abort = m & 2, underrun = m & 4, pattern = m & 8, cmd = m & 16;
-    const model::FaultPick f = model::pick_fault(estop, abort, underrun, pattern, cmd, 6);
-    const uint32_t want = estop ? 10 : abort ? 11 : underrun ? 9 : pattern ? 8 : cmd ? 6 : 0;
+  for (unsigned m = 0; m < 64; ++m) {
+    const bool estop = m & 1, abort = m & 2, underrun = m & 4, pattern = m & 8, cmd = m & 16, wd = m & 32;
+    const model::FaultPick f = model::pick_fault(estop, abort, wd, underrun, pattern, cmd, 6);
+    const uint32_t want = estop ? 10 : abort ? 11 : wd ? 19 : underrun ? 9 : pattern ? 8 : cmd ? 6 : 0;
     EXPECT_EQ(f.set, m != 0) << m;
     EXPECT_EQ(f.code, want) << m;
   }

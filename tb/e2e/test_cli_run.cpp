@@ -263,6 +263,43 @@ TEST(CliRun, PlanWritesExactlyTheWordsRunSends) {
   EXPECT_EQ(decode(b).error, "");
 }
 
+// The card's watchdog (docs/CORE.md "Watchdog"): kept alive through the job by
+// POLLs at least every quarter of it (a short one asks for more of them than none),
+// the job whole either way; a timeout the card's field cannot hold, or one shorter
+// than four times the longest frame, is refused before anything is sent.
+TEST(CliRun, WatchdogIsKeptAliveOrRefusedBeforeAnythingIsSent) {
+  const fs::path job = write_job("small.ngc", kJob);
+  const auto run = [&](const std::string& seconds) {
+    const fs::path report = kDir / ("watchdog_" + seconds + ".json");
+    fs::remove(report);
+    const Outcome r = cpstep({"run", job.string(), "--machine", kMachine, "--watchdog", seconds, "--report",
+                              report.string()},
+                             "watchdog_" + seconds);
+    return std::pair{r, report};
+  };
+  const auto [off, off_report] = run("0");
+  const auto [on, on_report] = run("0.05");
+  ASSERT_EQ(off.rc, 0) << off.err;
+  ASSERT_EQ(on.rc, 0) << on.err;
+  const json a = json::parse(slurp(off_report)), b = json::parse(slurp(on_report));
+  EXPECT_EQ(a["faults"], json::array());
+  EXPECT_EQ(b["faults"], json::array());
+  EXPECT_EQ(b["moves"], a["moves"]);
+  const double job_s = b["job_time_s"].get<double>();
+  EXPECT_GE(b["link"]["polls"].get<double>(), job_s / 0.0125 - 2) << "a POLL at least every 12.5 ms of the job";
+  EXPECT_GT(b["link"]["polls"].get<uint64_t>(), a["link"]["polls"].get<uint64_t>());
+
+  for (const auto& [seconds, words] : {std::pair<std::string, std::string>{"100", "the longest the card's field holds"},
+                                       {"0.001", "at least four times"}}) {
+    const auto [r, report] = run(seconds);
+    EXPECT_EQ(r.rc, 2) << seconds;
+    EXPECT_NE(r.err.find("--watchdog"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("nothing was sent"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(report)) << report;
+  }
+}
+
 // A refused job: exit 2, the file:line:col on stderr, nothing on stdout and
 // no output file of any kind.
 void expect_refused(const std::string& name, const std::string& text, const std::string& where,

@@ -14,100 +14,17 @@
 #include <random>
 #include <vector>
 
-#include "Vcp_card_small.h"
 #include "card/card_client.h"
 #include "card/frame.h"
 #include "card/protocol.h"
-#include "cpstep/builds.h"
-#include "sim/card_configs.h"
-#include "sim/sim_link.h"
-#include "sim/spi_master.h"
-#include "sim/twin_card.h"
+#include "small_card_job.h"
 
 namespace cpstep::tb {
 namespace {
 
-using CardSmall = sim::CardOf<builds::small, Vcp_card_small>;
-using Twin = sim::TwinCardDut<CardSmall>;
-
-constexpr uint32_t kStepHigh = 3, kStepLow = 3;
-
-// Segments of 8 moves, `delay` cycles a move; no START in the words.
-struct Job {
-  std::vector<uint32_t> setup, segments;
-  int32_t x = 0, y = 0;
-  uint32_t moves = 0;
-};
-Job make_job(unsigned n, uint32_t delay) {
-  Job j;
-  card::encode_drivers(true, j.setup);
-  for (unsigned a = 0; a < 2; ++a) {
-    card::encode_config(a, card::ConfigField::step_high, kStepHigh, j.setup);
-    card::encode_config(a, card::ConfigField::step_low, kStepLow, j.setup);
-  }
-  // x always 8 steps on; y 2..6 steps, its direction turning every third segment.
-  for (unsigned s = 0; s < n; ++s) {
-    const uint32_t vy = 2 + s % 5;
-    const bool y_up = (s / 3) % 2 == 0;
-    card::WireSegment w;
-    w.u = 8;
-    w.v = {8, vy};
-    w.dir_positive = {true, y_up};
-    w.chunks = {{delay, 4, 0, 0}, {delay, 4, 0, 0}};
-    w.end = s + 1 == n;
-    card::encode_segment(w, j.segments);
-    j.x += 8;
-    j.y += y_up ? int32_t(vy) : -int32_t(vy);
-    j.moves += 8;
-  }
-  return j;
-}
-
-// The card, its pins watched: leading STEP edges per axis (signed by DIR) and the
-// shortest STEP active time.
-struct Card {
-  Twin twin;
-  sim::SpiMaster<Twin> spi{twin};
-  sim::SimLink<Twin> link{spi, 48e6};
-  std::array<int64_t, 2> pins{};
-  uint64_t shortest_high = UINT64_MAX;
-  std::array<uint64_t, 2> rose{};
-  uint32_t prev = 0;  // STEP pins active, last seen
-  Card() {
-    // The small card's pins after reset: STEP active low, DIR low = positive.
-    spi.set_span_observer([this](uint64_t c, uint64_t, const sim::CardIn&, const sim::CardOut& o) {
-      const uint32_t active = ~o.step & 3;
-      for (unsigned a = 0; a < 2; ++a) {
-        const bool now = active >> a & 1, was = prev >> a & 1;
-        if (now && !was) {
-          pins[a] += (o.dir >> a & 1) ? -1 : 1;
-          rose[a] = c;
-        }
-        if (!now && was) shortest_high = std::min(shortest_high, c - rose[a]);
-      }
-      prev = active;
-    });
-    spi.reset();
-  }
-  card::ClientOptions options() const {
-    card::ClientOptions o;
-    o.axes = 2;
-    o.poll_interval_s = 4000 / 48e6;
-    return o;
-  }
-};
+using namespace small_card;
 
 // (Replies are copied: CardClient::poll() returns a reference to its latest reply.)
-
-// The job ran whole: no fault, its moves, its end on the counters and on the pins.
-void expect_job_done(card::CardClient& c, const Card& card, const Job& j) {
-  const card::Reply r = c.poll();
-  EXPECT_EQ(r.status & 0xFF02, 0u) << "no fault";
-  EXPECT_EQ(r.moves, j.moves);
-  EXPECT_EQ(r.positions, (std::vector<int32_t>{j.x, j.y}));
-  EXPECT_EQ(card.pins[0], j.x);
-  EXPECT_EQ(card.pins[1], j.y);
-}
 
 // In band, a START queued behind a full buffer never reaches the core: the core
 // takes no word while its queues are full and it is not running. Out of band it
@@ -159,13 +76,7 @@ TEST(OutOfBand, StopAtRandomCyclesThenStartGoesOnExactly) {
     unsigned stops = 0;
     while (w < j.segments.size() || card::decode_status(c.poll().status).running) {
       // Every segment that fits (the card holds some 7 segments, 84,000 cycles or more).
-      while (w < j.segments.size()) {
-        const size_t len = card::command_words(j.segments[w], 2);
-        c.settle();
-        if (c.poll().free_words < len) break;
-        ASSERT_EQ(c.send(std::span(j.segments).subspan(w, len)), len);
-        w += len;
-      }
+      w = send_what_fits(c, j, w);
       card.spi.idle(std::uniform_int_distribution<uint64_t>(100, 20000)(rng));
       // A STOP while the run is on and well before its end (a START after the end
       // would start a run with nothing to run).
@@ -199,14 +110,7 @@ TEST(OutOfBand, FlushEmptiesEverythingAndANewJobRunsExactly) {
   card::CardClient c(card.link, card.options());
   ASSERT_EQ(c.send(first.setup), first.setup.size());
   ASSERT_TRUE(c.urgent(card::urgent::start));
-  size_t w = 0;
-  while (w < first.segments.size()) {
-    const size_t len = card::command_words(first.segments[w], 2);
-    c.settle();
-    if (c.poll().free_words < len) break;
-    ASSERT_EQ(c.send(std::span(first.segments).subspan(w, len)), len);
-    w += len;
-  }
+  const size_t w = send_what_fits(c, first, 0);
   ASSERT_LT(w, first.segments.size()) << "the buffer should be full";
   card.spi.idle(5000);
   const card::Reply before = c.poll();
@@ -226,16 +130,7 @@ TEST(OutOfBand, FlushEmptiesEverythingAndANewJobRunsExactly) {
   card.spi.idle(20000);
   EXPECT_EQ(c.poll().moves, after.moves) << "nothing that was buffered runs";
 
-  const std::vector<int32_t> at = after.positions;
-  ASSERT_EQ(c.send(second.segments), second.segments.size());
-  ASSERT_TRUE(c.urgent(card::urgent::start));
-  ASSERT_TRUE(c.wait_until_stopped());
-  const card::Reply r = c.poll();
-  EXPECT_EQ(r.status & 0xFF02, 0u) << "no fault";
-  EXPECT_EQ(r.moves, after.moves + second.moves);
-  EXPECT_EQ(r.positions, (std::vector<int32_t>{at[0] + second.x, at[1] + second.y}));
-  EXPECT_EQ(card.pins[0], at[0] + second.x);
-  EXPECT_EQ(card.pins[1], at[1] + second.y);
+  expect_next_job_runs_exactly(c, card, second, after);
 }
 
 // URGENT frames the card refuses do nothing: a word count other than 1 is BAD_TYPE,
