@@ -25,6 +25,13 @@ const CpCoreOut& CpCard::core_outputs() const {
   c.cmd_data = spi_.cmd_data();
   c.rsp_ready = true;  // cp_spi takes every READ reply
   c.estop = estop_synced();
+  {
+    const unsigned n = p_.core.n;
+    const uint32_t m = (1u << n) - 1;
+    c.lim_min = in_q1_ & m;
+    c.lim_max = in_q1_ >> n & m;
+    c.probe = (in_q1_ >> (2 * n) & 1) != 0;
+  }
   const uint32_t ctl = spi_.ctl();  // an URGENT frame's START / STOP, at its CS rise
   c.ctl_start = (ctl & 1) != 0;
   c.ctl_stop = (ctl & 2) != 0;
@@ -68,7 +75,7 @@ void CpCard::skip(uint64_t cycles) {
 }
 
 bool CpCard::clock_front_end(uint64_t cycles, bool* miso) {
-  if (in.rst || in.cs_n || cycles == 0 || !spi_.cs_low_settled() || estop_q_ != (in.estop ? 3u : 0u) ||
+  if (in.rst || in.cs_n || cycles == 0 || !spi_.cs_low_settled() || !slow_pins_settled(in) ||
       !spi_.buffer_settled())
     return false;
   const CpCoreOut& c = core_outputs();
@@ -102,7 +109,7 @@ bool CpCard::clock_front_end(uint64_t cycles, bool* miso) {
 size_t CpCard::clock_front_end(const CpPinPhase* phases, size_t n, uint8_t* miso) {
   if (n == 0) return 0;
   in = phases[0].pins;
-  if (in.rst || in.cs_n || !spi_.cs_low_settled() || estop_q_ != (in.estop ? 3u : 0u) || !spi_.buffer_settled())
+  if (in.rst || in.cs_n || !spi_.cs_low_settled() || !slow_pins_settled(in) || !spi_.buffer_settled())
     return 0;
   const CpCoreOut& c = core_outputs();
   if (c.rsp_valid) return 0;
@@ -115,12 +122,14 @@ size_t CpCard::clock_front_end(const CpPinPhase* phases, size_t n, uint8_t* miso
   s.rsp_addr = c.rsp_addr;
   s.estop = estop_synced();
   s.enable = c.enable;
-  const bool estop = in.estop;
+  const CpCardIn slow = in;  // its E-stop and inputs: a phase that changes them ends the run of phases
   uint64_t total = 0;
   size_t k = 0;
   for (; k < n; ++k) {
     const CpPinPhase& ph = phases[k];
-    if (ph.pins.rst || ph.pins.cs_n || ph.pins.estop != estop || ph.cycles > budget - total) break;
+    if (ph.pins.rst || ph.pins.cs_n || ph.pins.estop != slow.estop || ph.pins.lim_min != slow.lim_min ||
+        ph.pins.lim_max != slow.lim_max || ph.pins.probe != slow.probe || ph.cycles > budget - total)
+      break;
     const bool settled = spi_.pins_settled(false, s.sck, false, s.mosi);
     miso[k] = spi_.miso();
     if (settled && ph.cycles >= 3 && spi_.settled_phase(ph.pins.sck, ph.pins.mosi)) {
@@ -173,6 +182,8 @@ void CpCard::tick() {
   core_.tick();
   spi_.tick();
   estop_q_ = (estop_q_ << 1 | uint32_t(in.estop)) & 3;
+  in_q1_ = in_q0_;
+  in_q0_ = in_word(in);
   core_valid_ = false;
 }
 

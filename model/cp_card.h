@@ -34,6 +34,9 @@ struct CpCardIn {
   bool rst = false;
   bool sck = false, cs_n = true, mosi = false;  // SPI pins (asynchronous)
   bool estop = false;                           // raw E-stop input, active high
+  // Limit switches (bit a: axis a) and the probe, raw (docs/CORE.md "Inputs").
+  uint32_t lim_min = 0, lim_max = 0;
+  bool probe = false;
 };
 
 // `cycles` clocks with the pins `pins`; `sample`: the master samples MISO in the
@@ -102,7 +105,11 @@ class CpCard {
   // Every synchronizer (SPI pins, E-stop) holds what the pins of `in` load into
   // it: another cycle with the same pins changes none of them.
   bool pins_settled() const {
-    return spi_.pins_settled(in.rst, in.sck, in.cs_n, in.mosi) && estop_q_ == (in.estop ? 3u : 0u);
+    return spi_.pins_settled(in.rst, in.sck, in.cs_n, in.mosi) && slow_pins_settled(in);
+  }
+  // The E-stop's and the inputs' synchronizers hold the pins of `i`.
+  bool slow_pins_settled(const In& i) const {
+    return estop_q_ == (i.estop ? 3u : 0u) && in_q0_ == in_word(i) && in_q1_ == in_word(i);
   }
 
  private:
@@ -116,6 +123,12 @@ class CpCard {
   // The core's `in` is a wire of the card, set while settling; hence mutable.
   mutable CpCore core_;
   uint32_t estop_q_ = 0;  // [0] first flop, [1] the synchronized level
+  // The inputs' synchronizer, {probe, max[N], min[N]}: first flop, second (the core's).
+  uint32_t in_q0_ = 0, in_q1_ = 0;
+  uint32_t in_word(const In& i) const {
+    const uint32_t m = (1u << p_.core.n) - 1;
+    return (i.lim_min & m) | (i.lim_max & m) << p_.core.n | uint32_t(i.probe) << (2 * p_.core.n);
+  }
   mutable CpCoreOut core_out_{};
   mutable bool core_valid_ = false;
   mutable bool rd_stale_ = false;  // core_out_ holds but for rd_data (clock_front_end)

@@ -15,7 +15,8 @@ CpCore::CpCore(Params p)
       run_({p.n, p.w, p.conic, p.ciw}),
       status_({p.n, p.w, p.umax, p.kmax, p.caw, p.saw, p.tw, p.pw, p.step_high_reset, p.step_low_reset,
                p.dir_setup_reset, p.dir_hold_reset, p.step_pol_reset, p.dir_pol_reset, p.cbuf_aw,
-               p.clock_hz, p.build_id, p.conic, p.ciw}),
+               p.clock_hz, p.build_id, p.conic, p.ciw, p.inputs}),
+      inputs_(p.n),
       seg_fifo_({p.conic ? 32 + p.n : 30 + p.n, p.saw + bits::clog2(p.n + 1)}),
       chunk_fifo_({81, p.caw}),
       run_fifo_({3 + 2 * p.n + (p.conic ? 7 : 0), 1}) {
@@ -52,6 +53,14 @@ CpCore::Wires CpCore::settle() const {
   w.seg = seg_fifo_.outputs();
   w.chunk = chunk_fifo_.outputs();
   w.run = run_fifo_.outputs();
+  // The inputs (registered outputs); without INPUTS none is looked at.
+  CpInputsIn& ii = w.i_in;
+  ii.rst = in.rst;
+  ii.lim_min = in.lim_min;
+  ii.lim_max = in.lim_max;
+  ii.probe = in.probe;
+  ii.cfg_write = false;  // set with the parser's outputs below
+  if (p_.inputs) w.inp = inputs_.outputs();
   bool pulse_busy = false;
   uint32_t pulse_ready = 0;
   for (unsigned a = 0; a < n; ++a) {
@@ -107,6 +116,8 @@ CpCore::Wires CpCore::settle() const {
   r.estop = in.estop;
   r.start = w.cmd.start || in.ctl_start;
   r.stop = in.ctl_stop || status_.wd_trip(in.kick);  // STOP, or the watchdog ran out
+  r.lim_min = w.inp.lim_min;
+  r.lim_max = w.inp.lim_max;
   r.abort = w.cmd.abort;
   r.fault = status_.fault();
   r.ch_valid = w.chunk.out_valid;
@@ -135,9 +146,15 @@ CpCore::Wires CpCore::settle() const {
   s.clear = w.cmd.clear;
   s.ack = in.ctl_ack;
   s.kick = in.kick;
+  s.lim_hit = w.r.lim_hit;
+  s.lim_min = w.inp.lim_min;
+  s.lim_max = w.inp.lim_max;
+  s.probe = w.inp.probe;
   s.drivers_on = w.cmd.drivers_on;
   s.drivers_off = w.cmd.drivers_off;
   s.cfg_write = w.cmd.cfg_write;
+  w.i_in.cfg_write = w.cmd.cfg_write;
+  w.i_in.cfg_word = in.cmd_data;
   s.cfg_word = in.cmd_data;
   s.cmd_fault = w.cmd.fault;
   s.cmd_code = w.cmd.fault_code;
@@ -168,7 +185,8 @@ bool CpCore::lazy_holds() const {
   return lazy_left_ > 0 && in.rst == lazy_in_.rst && in.cmd_valid == lazy_in_.cmd_valid &&
          in.cmd_data == lazy_in_.cmd_data && in.rsp_ready == lazy_in_.rsp_ready && in.estop == lazy_in_.estop &&
          in.ctl_start == lazy_in_.ctl_start && in.ctl_stop == lazy_in_.ctl_stop &&
-         in.ctl_flush == lazy_in_.ctl_flush && in.ctl_ack == lazy_in_.ctl_ack && in.kick == lazy_in_.kick;
+         in.ctl_flush == lazy_in_.ctl_flush && in.ctl_ack == lazy_in_.ctl_ack && in.kick == lazy_in_.kick &&
+         in.lim_min == lazy_in_.lim_min && in.lim_max == lazy_in_.lim_max && in.probe == lazy_in_.probe;
 }
 
 void CpCore::catch_up() {
@@ -176,6 +194,7 @@ void CpCore::catch_up() {
     cmd_.skip(lazy_pending_);
     run_.skip(lazy_pending_);
     status_.skip(lazy_pending_);
+    if (p_.inputs) inputs_.skip(lazy_pending_);
     for (CpPulse& p : pulses_) p.skip(lazy_pending_);
     wires_valid_ = false;
   }
@@ -275,6 +294,7 @@ uint64_t CpCore::quiet_for(const Wires& w, uint64_t limit) const {
   }
   if (!build_.still(w.b_in)) return 0;
   h = std::min(h, status_.quiet_for(w.st_in, h));  // the watchdog's count counts
+  if (p_.inputs) h = std::min(h, inputs_.quiet_for(w.i_in, h));  // and the inputs' sample counter
   if (h == 0) return 0;
   if (!seg_fifo_.still(seg_in(w)) || !chunk_fifo_.still(chunk_in(w)) || !run_fifo_.still(run_in(w))) return 0;
   // The counters: the move timer and each pulse timer say how far they stay quiet.
@@ -295,6 +315,7 @@ void CpCore::skip(uint64_t cycles) {
   cmd_.skip(cycles);
   run_.skip(cycles);
   status_.skip(cycles);
+  if (p_.inputs) inputs_.skip(cycles);
   for (CpPulse& p : pulses_) p.skip(cycles);
   wires_valid_ = false;
 }
@@ -347,6 +368,10 @@ void CpCore::tick() {
   run_.tick();
   status_.in = w.st_in;
   status_.tick();
+  if (p_.inputs) {
+    inputs_.in = w.i_in;
+    inputs_.tick();
+  }
   wires_valid_ = false;
 }
 

@@ -20,6 +20,7 @@
 #include "model/cp_core_ports.h"
 #include "model/cp_fifo.h"
 #include "model/cp_pulse.h"
+#include "model/cp_inputs.h"
 #include "model/cp_run.h"
 #include "model/cp_status.h"
 
@@ -79,6 +80,8 @@ class CpCore {
     CpBuildOut b;
     CpRunIn r_in;
     CpRunOut r;
+    CpInputsIn i_in;
+    CpInputsOut inp;  // active limits and probe (all 0 without INPUTS)
   };
   Wires settle() const;
   // settle() for the current inputs, computed once per clock.
@@ -99,6 +102,7 @@ class CpCore {
   CpBuild build_;
   CpRun run_;
   CpStatus status_;
+  CpInputs inputs_;
   CpFifo seg_fifo_, chunk_fifo_, run_fifo_;
   std::vector<CpPulse> pulses_;
 

@@ -24,6 +24,7 @@ constexpr CpCoreParams core_params(const builds::Build& b) {
   p.clock_hz = b.clock_hz;
   p.build_id = b.build_id;
   p.conic = b.conic != 0;  // the walker at the RTL's default width, CIW = 40
+  p.inputs = b.inputs != 0;
   return p;
 }
 

@@ -23,6 +23,8 @@ struct CpCoreParams {
   // section 8); refused as BAD_OPCODE without.
   bool conic = false;
   unsigned ciw = 40;
+  // Limit switches and the probe (cp_inputs; docs/CORE.md "Inputs").
+  bool inputs = false;
   bool step_pol_reset = true, dir_pol_reset = true;
   // Only reported (READ 0x23..0x25): the command buffer's address width in front
   // of the core (0: none), the clock in Hz, the build id.
@@ -42,6 +44,9 @@ struct CpCoreIn {
   bool ctl_start = false, ctl_stop = false, ctl_flush = false, ctl_ack = false;
   // A whole frame with a good CRC ended (rtl/cp_spi.v frame_ok_o): the watchdog's kick.
   bool kick = false;
+  // Limit switches (bit a: axis a) and the probe, synchronized.
+  uint32_t lim_min = 0, lim_max = 0;
+  bool probe = false;
   bool operator==(const CpCoreIn&) const = default;
 };
 
@@ -83,6 +88,7 @@ enum class CoreError : uint32_t {
   conic_end = 17,   // a conic's walk arrives at its end before its last move, or not at it
   conic_cont = 18,  // a CONIC continuing a walk (H0[18]) that does not follow a CONIC on its axes, its way
   watchdog = 19,    // no frame for the watchdog's timeout (CONFIG field 5)
+  limit = 20,       // the segment under way moved toward an active limit switch
 };
 
 }  // namespace cpstep::model

@@ -22,13 +22,18 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   // counted late once: in the first cycle it is due and does not fire, or when it
   // fires after its time without having waited due (its chunk came late).
   const bool due = q.chunk_loaded && q.elapsed >= q.delay;
-  const bool stopping = i.estop || i.abort || i.stop;
   // In a conic, the plane axes step by the walker's presented move, in its directions;
   // its end mark must agree with the segment's last move.
   const CpConicSerialOut wo = p_.conic ? walker_.outputs() : CpConicSerialOut{};
   const bool conic_on = p_.conic && q.cur_conic;
   uint32_t plane_step = 0, plane_dir = 0;
   plane(plane_step, plane_dir);
+  // A limit hit: the segment under way moves an axis toward its active limit (a plane
+  // axis: the presented move steps it toward it); the run stops now as with STOP.
+  const uint32_t toward = (q.moving & ((q.dir & i.lim_max) | (~q.dir & i.lim_min))) |
+                          (plane_step & ((plane_dir & i.lim_max) | (~plane_dir & i.lim_min)));
+  o.lim_hit = q.running && q.cur_valid && (toward & bits::mask(n)) != 0;
+  const bool stopping = i.estop || i.abort || i.stop || o.lim_hit;
   const uint32_t move_steps = lane_move | plane_step;
   const bool seg_last = q.moves_left == 1 && q.timer_last;
   const bool conic_ok = !conic_on || (wo.move_valid && wo.move_end == seg_last);
@@ -114,6 +119,7 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
     d.cur_au = uint32_t(i.run_head >> (2 * n + 6)) & 7;
     d.cur_av = uint32_t(i.run_head >> (2 * n + 3)) & 7;
     d.dir = (d.dir & ~moving) | (dir & moving);
+    d.moving = moving;
     // The replay registers fetch each pattern's first move.
     rp.re = true;
     rp.lane = d.cur_lane;
@@ -126,7 +132,7 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   }
   // STOP: the run is off; what is loaded and queued stays (a START goes on, the
   // pending move timed from it).
-  if (i.stop) d.running = false;
+  if (i.stop || o.lim_hit) d.running = false;  // (a limit hit: then its fault's flush)
   if (i.flush) {
     d.running = false;
     d.cur_valid = false;
@@ -181,7 +187,7 @@ uint64_t CpRun::quiet_for(const In& i) const {
   Regs d = r_;
   Replay rp;
   const Out o = eval(i, d, rp);
-  if (o.fire || o.stretch || o.seg_done || o.ch_pop || o.run_pop || o.fault || rp.re) return 0;
+  if (o.fire || o.stretch || o.seg_done || o.ch_pop || o.run_pop || o.fault || o.lim_hit || rp.re) return 0;
   d.elapsed = r_.elapsed;
   if (!(d == r_)) return 0;
   // elapsed counts up (saturating); the next thing it can change is the pending

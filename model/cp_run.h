@@ -38,6 +38,8 @@ struct CpRunIn {
   bool len_we = false;
   uint32_t len_m1 = 0;
   uint32_t pulse_ready = 0;  // bit a: axis a's pulse timer is ready
+  // Active limit switches (cp_inputs), bit a: axis a.
+  uint32_t lim_min = 0, lim_max = 0;
   // The conic walker's word port (cp_build).
   bool cw_wr = false;
   uint32_t cw_sel = 0, cw_data = 0;
@@ -53,6 +55,7 @@ struct CpRunOut {
   bool fire = false, seg_done = false, stretch = false, seg_active = false;
   bool fault = false;        // underrun, or a conic's walk not ending on its last move
   bool fault_conic = false;  // the fault is the conic's (CONIC_END)
+  bool lim_hit = false;      // the run stops now: a limit toward which it moves is active
   bool walker_free = false;  // the conic walker is not walking and its last move is taken
 };
 
@@ -98,6 +101,7 @@ class CpRun {
     bool late = false;          // the pending move has been counted as stretched
     bool rp_valid = false;      // the replay registers hold the next move
     uint32_t dir = 0;
+    uint32_t moving = 0;  // the loaded segment's moving axes
     // Datapath.
     bool cur_end = false;
     bool out = false;    // reset: the out bit of the segment last loaded

@@ -14,11 +14,12 @@ constexpr uint32_t kProtocolVersion = 2;
 
 }  // namespace
 
-FaultPick pick_fault(bool estop, bool abort, bool watchdog, bool underrun, bool pattern, bool cmd_fault,
-                     uint32_t cmd_code, bool run_conic) {
+FaultPick pick_fault(bool estop, bool abort, bool watchdog, bool limit, bool underrun, bool pattern,
+                     bool cmd_fault, uint32_t cmd_code, bool run_conic) {
   if (estop) return {true, uint32_t(CoreError::estop)};
   if (abort) return {true, uint32_t(CoreError::abort)};
   if (watchdog) return {true, uint32_t(CoreError::watchdog)};
+  if (limit) return {true, uint32_t(CoreError::limit)};
   if (underrun) return {true, uint32_t(run_conic ? CoreError::conic_end : CoreError::underrun)};
   if (pattern) return {true, uint32_t(CoreError::seg_pattern)};
   if (cmd_fault) return {true, cmd_code & 0xFF};
@@ -64,10 +65,12 @@ uint32_t CpStatus::read(const In& i, uint32_t reg) const {
                       (p_.n & 0xFF);
     case 0x21: return p_.w;
     case 0x22: return p_.umax;
-    case 0x23: return kProtocolVersion << 16 | (p_.cbuf_aw & 0xFF) << 8 | (p_.pw & 0xFF);
+    case 0x23: return uint32_t(p_.inputs) << 24 | kProtocolVersion << 16 | (p_.cbuf_aw & 0xFF) << 8 | (p_.pw & 0xFF);
     case 0x24: return p_.clock_hz;
     case 0x25: return p_.build_id;
     case 0x26: return p_.conic ? p_.ciw : 0;
+    case 0x27: return uint32_t(i.probe) << 16 | (i.lim_max & 0xFF) << 8 | (i.lim_min & 0xFF);
+    case 0x28: return (q.lim_max_at & 0xFF) << 8 | (q.lim_min_at & 0xFF);
     default: {
       const uint32_t r = reg & 0xFF;
       if (r >= 0x10 && r < 0x10 + p_.n) return uint32_t(i.position[r - 0x10]);
@@ -140,10 +143,18 @@ CpStatus::Regs CpStatus::next(const In& i) const {
     d.stretched = i.stretch;
   }
   const FaultPick f =
-      pick_fault(i.estop, i.abort, trip, i.run_fault, i.build_fault, i.cmd_fault, i.cmd_code, i.run_conic);
+      pick_fault(i.estop, i.abort, trip, i.lim_hit, i.run_fault, i.build_fault, i.cmd_fault, i.cmd_code,
+                 i.run_conic);
   if (f.set && (!q.fault || clearing)) {
     d.fault = true;
     d.err = f.code;
+  }
+  // The limits that stopped the run, kept while LIMIT is latched.
+  if (f.set && (!q.fault || clearing) && f.code == uint32_t(CoreError::limit)) {
+    d.lim_min_at = i.lim_min;
+    d.lim_max_at = i.lim_max;
+  } else if (clearing) {
+    d.lim_min_at = d.lim_max_at = 0;
   }
   d.cfg_new = i.cfg_write;
   if (i.cfg_write) {

@@ -22,6 +22,7 @@ struct CpStatusParams {
   // Reported only (READ 0x26): conic segments taken, and the walker's width.
   bool conic = false;
   unsigned ciw = 40;
+  bool inputs = false;  // reported only (READ 0x23 [24]): limit and probe inputs
 };
 
 struct CpStatusIn {
@@ -35,6 +36,10 @@ struct CpStatusIn {
   uint32_t cmd_code = 0;  // 8 bits
   bool build_fault = false, run_fault = false;
   bool run_conic = false;  // the runner's fault is CONIC_END, not UNDERRUN
+  bool lim_hit = false;    // the runner stopped at an active limit (LIMIT)
+  // The inputs, active (cp_inputs): READ 0x27 live, 0x28 the limits at LIMIT.
+  uint32_t lim_min = 0, lim_max = 0;
+  bool probe = false;
   bool stretch = false, fire = false, seg_done = false, seg_active = false;
   bool running = false, cur_valid = false;
   bool torch = false;  // the torch output (status bit 5)
@@ -63,14 +68,14 @@ struct CpStatusOut {
 };
 
 // The fault priority encoder: which fault (if any) a cycle raises. Highest
-// first: E-stop, abort, the watchdog, the runner's (underrun, or CONIC_END when
-// run_conic), pattern, the command parser's refusal.
+// first: E-stop, abort, the watchdog, a limit hit, the runner's (underrun, or
+// CONIC_END when run_conic), pattern, the command parser's refusal.
 struct FaultPick {
   bool set = false;
   uint32_t code = 0;
 };
-FaultPick pick_fault(bool estop, bool abort, bool watchdog, bool underrun, bool pattern, bool cmd_fault,
-                     uint32_t cmd_code, bool run_conic = false);
+FaultPick pick_fault(bool estop, bool abort, bool watchdog, bool limit, bool underrun, bool pattern,
+                     bool cmd_fault, uint32_t cmd_code, bool run_conic = false);
 
 class CpStatus {
  public:
@@ -113,6 +118,7 @@ class CpStatus {
     // The watchdog: its timeout in units of 4096 clocks (0: off), and the clocks since
     // the last kick (1 in the clock after it).
     uint32_t wd_limit = 0, wd_count = 1;
+    uint32_t lim_min_at = 0, lim_max_at = 0;  // the active limits when LIMIT latched
     bool operator==(const Regs&) const = default;
   };
   bool wd_at() const { return r_.wd_count == uint64_t(r_.wd_limit) << 12; }

@@ -39,7 +39,9 @@ module cp_card #(
     parameter [31:0] BUILD_ID = 32'h0,
     // CONIC segments and the conic walker's width (docs/CORE.md "CONIC").
     parameter integer CONIC = 0,
-    parameter integer CIW = 40
+    parameter integer CIW = 40,
+    // Limit switches and the probe (docs/CORE.md "Inputs").
+    parameter integer INPUTS = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -54,6 +56,11 @@ module cp_card #(
     // E-stop, asynchronous, active high here (a normally closed switch to ground
     // with a pull-up reads high when pressed or when its wire is cut).
     input  wire          estop_i,
+    // Limit switches (min, max per axis) and the probe, asynchronous; their active
+    // level is configured (CONFIG fields 7 and 8).
+    input  wire [N-1:0]  lim_min_i,
+    input  wire [N-1:0]  lim_max_i,
+    input  wire          probe_i,
 
     // Pins.
     output wire [N-1:0]  step_o,
@@ -73,6 +80,12 @@ module cp_card #(
 reg [1:0] estop_q;
 always @(posedge clk) estop_q <= {estop_q[0], estop_i};
 wire estop = estop_q[1];
+// The inputs into the clk domain, as the E-stop.
+reg [2*N:0] in_q0, in_q1;
+always @(posedge clk) begin
+    in_q0 <= {probe_i, lim_max_i, lim_min_i};
+    in_q1 <= in_q0;
+end
 
 wire        cmd_valid, cmd_ready, rsp_valid, rsp_ready;
 wire [31:0] cmd_data, rsp_data, rd_data, status, stretch_cnt, moves_done, segs_done;
@@ -95,7 +108,7 @@ cp_spi #(.N(N), .CBUF_AW(CBUF_AW), .CONIC(CONIC)) u_spi (
 
 cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32),
           .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW),
-          .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
+          .INPUTS(INPUTS), .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
           .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
           .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET)) u_core (
     .clk(clk), .rst(rst),
@@ -104,6 +117,7 @@ cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
     .rsp_addr_o(rsp_addr), .rd_addr_i(rd_addr), .rd_data_o(rd_data),
     .estop_i(estop), .ctl_start_i(ctl_start), .ctl_stop_i(ctl_stop), .ctl_flush_i(ctl_flush),
     .ctl_ack_i(ctl_ack), .kick_i(frame_ok),
+    .lim_min_i(in_q1[N-1:0]), .lim_max_i(in_q1[2*N-1:N]), .probe_i(in_q1[2*N]),
     .step_o(step_o), .dir_o(dir_o), .torch_o(torch_o),
     .running_o(running_o), .fault_o(fault_o), .err_code_o(err_code_o),
     .stretched_o(stretched_o), .position_o(position_o),

@@ -283,7 +283,7 @@ always @* begin
             // E-stop or the run's last move): a polarity or timing write never cuts it.
             if (running_i || pulse_busy_i) begin
                 refuse = 1'b1;  refuse_code = E_CONFIG_BUSY;
-            end else if ({28'd0, cmd_data_i[27:24]} >= N || cmd_data_i[23:20] > 4'd5 ||
+            end else if ({28'd0, cmd_data_i[27:24]} >= N || cmd_data_i[23:20] > 4'd8 ||
                          (cmd_data_i[23:20] <= 4'd1 && cmd_data_i[15:0] == 16'd0) ||
                          (cmd_data_i[23:20] <= 4'd3 && (cmd_data_i[15:0] & ~TMASK) != 16'd0)) begin
                 refuse = 1'b1;  refuse_code = E_CONFIG_VALUE;

@@ -48,7 +48,10 @@ module cp_core #(
     // 1: CONIC segments (opcode 0x5) walked by the bit-serial conic walker of CIW bits
     // (docs/CONIC.md section 8); 0: refused as BAD_OPCODE, and no walker.
     parameter integer CONIC = 0,
-    parameter integer CIW = 40
+    parameter integer CIW = 40,
+    // Limit switches and the probe (cp_inputs; docs/CORE.md "Inputs"); 0: the
+    // inputs are not looked at (READ 0x27 reads 0, no LIMIT).
+    parameter integer INPUTS = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -83,6 +86,10 @@ module cp_core #(
     // A whole frame with a good CRC ended (the SPI front end): the watchdog's kick
     // (docs/CORE.md "Watchdog"; CONFIG field 5 sets its timeout, 0 = off).
     input  wire          kick_i,
+    // Limit switches and the probe, synchronous to clk (cp_card synchronizes the pins).
+    input  wire [N-1:0]  lim_min_i,
+    input  wire [N-1:0]  lim_max_i,
+    input  wire          probe_i,
 
     // Pins.
     output wire [N-1:0]  step_o,
@@ -148,6 +155,9 @@ endgenerate
 // Status to the others.
 wire          fault, flush;
 wire          wd_trip;     // the watchdog ran out: the runner stops (cp_status)
+wire          lim_hit;     // the runner stopped at an active limit
+wire [N-1:0]  lim_min, lim_max;   // active limits (cp_inputs)
+wire          probe;
 // What empties the queues, the builder and the runner: the status's flush (a fault,
 // E-stop, ABORT) or an out-of-band FLUSH.
 wire          flush_all = flush || ctl_flush_i;
@@ -243,19 +253,20 @@ cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW)) u_run (
     .pulse_ready_i(pulse_ready), .step_o(pulse_step), .dir_o(run_dir),
     .running_o(running), .torch_o(torch), .cur_valid_o(cur_valid), .fire_o(fire), .seg_done_o(seg_done),
     .stretch_o(stretch), .seg_active_o(seg_active), .fault_o(run_fault),
-    .fault_conic_o(run_conic));
+    .fault_conic_o(run_conic), .lim_min_i(lim_min), .lim_max_i(lim_max), .lim_hit_o(lim_hit));
 
 cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(PW),
             .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
             .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
             .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET),
             .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC),
-            .CIW(CIW)) u_status (
+            .CIW(CIW), .INPUTS(INPUTS)) u_status (
     .clk(clk), .rst(rst), .estop_i(estop_i),
     .abort_i(abort_req), .clear_i(clear_req), .ack_i(ctl_ack_i), .kick_i(kick_i), .drivers_on_i(drivers_on_req),
     .drivers_off_i(drivers_off_req), .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i),
     .cmd_fault_i(cmd_fault), .cmd_code_i(cmd_code), .build_fault_i(build_fault),
-    .run_fault_i(run_fault), .run_conic_i(run_conic),
+    .run_fault_i(run_fault), .run_conic_i(run_conic), .lim_hit_i(lim_hit),
+    .lim_min_i(lim_min), .lim_max_i(lim_max), .probe_i(probe),
     .stretch_i(stretch), .fire_i(fire), .seg_done_i(seg_done), .seg_active_i(seg_active),
     .running_i(running), .torch_i(torch), .cur_valid_i(cur_valid), .segq_i(segq), .build_busy_i(build_busy),
     .run_level_i(run_level), .ch_level_i(ch_level), .position_i(position_o),
@@ -267,6 +278,21 @@ cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW
     .cfg_high_o(cfg_high), .cfg_low_o(cfg_low), .cfg_setup_o(cfg_setup), .cfg_hold_o(cfg_hold),
     .cfg_step_pol_o(cfg_step_pol), .cfg_dir_pol_o(cfg_dir_pol), .cfg_new_o(cfg_new),
     .wd_trip_o(wd_trip));
+
+// The inputs: filtered, made active by their polarity (CONFIG fields 6..8).
+generate
+    if (INPUTS != 0) begin : g_inputs
+        cp_inputs #(.N(N)) u_inputs (
+            .clk(clk), .rst(rst), .lim_min_i(lim_min_i), .lim_max_i(lim_max_i), .probe_i(probe_i),
+            .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i),
+            .lim_min_o(lim_min), .lim_max_o(lim_max), .probe_o(probe));
+    end else begin : g_no_inputs
+        assign lim_min = {N{1'b0}};
+        assign lim_max = {N{1'b0}};
+        assign probe   = 1'b0;
+        wire unused_pins = &{1'b0, lim_min_i, lim_max_i, probe_i};
+    end
+endgenerate
 
 // pulse_busy[a]: axis a's STEP pin is at its active level (CONFIG is refused then).
 genvar ga;

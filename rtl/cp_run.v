@@ -44,6 +44,10 @@ module cp_run #(
     input  wire          stop_i,           // STOP (out of band), this cycle
     input  wire          abort_i,          // CONTROL abort, this cycle
     input  wire          fault_i,          // a fault is latched
+    // Active limit switches (cp_inputs): a segment under way that moves an axis
+    // toward an active limit stops at once (lim_hit_o; docs/CORE.md "Inputs").
+    input  wire [N-1:0]  lim_min_i,
+    input  wire [N-1:0]  lim_max_i,
 
     // Chunk queue head: {last, add2, count, add, interval}.
     input  wire          ch_valid_i,
@@ -90,7 +94,8 @@ module cp_run #(
     output wire          stretch_o,        // a move is counted late now
     output wire          seg_active_o,     // a segment is under way and not ending now
     output reg           fault_o,          // underrun, or a conic's walk not ending on its last move
-    output wire          fault_conic_o     // the fault is the conic's (CONIC_END)
+    output wire          fault_conic_o,    // the fault is the conic's (CONIC_END)
+    output wire          lim_hit_o         // the run stops now: a limit toward which it moves is active
 );
 
 localparam integer AW = (W > 2) ? $clog2(W) : 1;
@@ -103,6 +108,7 @@ reg          ch_loaded_q, ch_loaded_d;   // reset: the timer holds a chunk
 reg          late_q, late_d;             // reset: the pending move has been counted as stretched
 reg          rp_valid_q, rp_valid_d;     // reset: the replay registers hold the next move
 reg [N-1:0]  dir_q, dir_d;               // reset
+reg [N-1:0]  moving_q, moving_d;         // reset: the loaded segment's moving axes
 reg          cur_end_q, cur_end_d;
 reg          out_q, out_d;               // reset: the out bit of the segment last loaded
 reg          torch_q, torch_d;           // reset: the torch pin
@@ -184,12 +190,19 @@ wire          conic_ok = !conic_on || (wk_valid && wk_end == seg_last);
 // due is ch_loaded_q && elapsed_q >= delay_q, registered: its next value is compared
 // beside the fire decision (below), not after it.
 wire due = due_q;
-assign fire_o = running_q && cur_valid_q && !estop_i && !abort_i && !stop_i && due && rp_valid_q && conic_ok &&
+// A limit hit: the segment under way moves an axis toward its active limit (a
+// plane axis of a conic: the presented move steps it toward it). The run stops in
+// this cycle as with STOP, and cp_status latches LIMIT.
+wire [N-1:0] toward = (moving_q & ((dir_q & lim_max_i) | (~dir_q & lim_min_i))) |
+                      (plane_step & ((plane_dir & lim_max_i) | (~plane_dir & lim_min_i)));
+assign lim_hit_o = running_q && cur_valid_q && |toward;
+wire halt = stop_i || lim_hit_o;
+assign fire_o = running_q && cur_valid_q && !estop_i && !abort_i && !halt && due && rp_valid_q && conic_ok &&
                 &(pulse_ready_i | ~move_steps);
 assign wk_ready = fire_o && conic_on;
-assign fault_conic_o = running_q && cur_valid_q && !estop_i && !abort_i && !stop_i && due && rp_valid_q &&
+assign fault_conic_o = running_q && cur_valid_q && !estop_i && !abort_i && !halt && due && rp_valid_q &&
                        conic_on && wk_valid && wk_end != seg_last;
-assign stretch_o = running_q && due && !late_q && !estop_i && !abort_i && !stop_i &&
+assign stretch_o = running_q && due && !late_q && !estop_i && !abort_i && !halt &&
                    (!fire_o || elapsed_q != delay_q);
 assign seg_done_o = fire_o && seg_last;
 
@@ -215,6 +228,7 @@ wire        le1_sum      = delay_sum <= 32'd1;
 always @* begin
     running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
     ch_loaded_d = ch_loaded_q;  late_d = late_q;  rp_valid_d = rp_valid_q;  dir_d = dir_q;
+    moving_d = moving_q;
     cur_end_d = cur_end_q;  out_d = out_q;  delay_d = delay_q;  left_d = left_q;  tinc_d = tinc_q;
     tadd2_d = tadd2_q;  tlast_d = tlast_q;
     cur_conic_d = cur_conic_q;  cur_au_d = cur_au_q;  cur_av_d = cur_av_q;
@@ -286,6 +300,7 @@ always @* begin
         cur_conic_d = CONIC != 0 && run_wide[RFW-1];
         cur_au_d    = run_wide[RFW-2 -: 3];
         cur_av_d    = run_wide[RFW-5 -: 3];
+        moving_d    = run_head_i[2*N-1:N];
         for (i = 0; i < N; i = i + 1)
             if (run_head_i[N + i]) dir_d[i] = run_head_i[i];
         // The replay registers fetch each pattern's first move.
@@ -299,8 +314,8 @@ always @* begin
         elapsed_d = 32'd1;
     end
     // STOP: the run is off; what is loaded and queued stays (a START goes on, the
-    // pending move timed from it).
-    if (stop_i) running_d = 1'b0;
+    // pending move timed from it). A limit hit: the same, then its fault's flush.
+    if (halt) running_d = 1'b0;
     if (flush_i) begin
         running_d   = 1'b0;
         cur_valid_d = 1'b0;
@@ -338,6 +353,7 @@ always @(posedge clk) begin
         late_q      <= 1'b0;
         rp_valid_q  <= 1'b0;
         dir_q       <= {N{1'b0}};
+        moving_q    <= {N{1'b0}};
         due_q       <= 1'b0;
         cur_conic_q <= 1'b0;
         out_q       <= 1'b0;
@@ -350,6 +366,7 @@ always @(posedge clk) begin
         late_q      <= late_d;
         rp_valid_q  <= rp_valid_d;
         dir_q       <= dir_d;
+        moving_q    <= moving_d;
         due_q       <= due_d;
         cur_conic_q <= cur_conic_d;
         out_q       <= out_d;

@@ -39,7 +39,9 @@ module cp_status #(
     parameter [31:0] BUILD_ID = 32'h0,
     // Reported only (READ 0x26): conic segments taken, and the walker's width.
     parameter integer CONIC = 0,
-    parameter integer CIW = 40
+    parameter integer CIW = 40,
+    // Reported only (READ 0x23 [24]): limit and probe inputs (cp_inputs).
+    parameter integer INPUTS = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -60,6 +62,11 @@ module cp_status #(
     input  wire          build_fault_i,
     input  wire          run_fault_i,
     input  wire          run_conic_i,      // the runner's fault is CONIC_END, not UNDERRUN
+    input  wire          lim_hit_i,        // the runner stopped at an active limit (LIMIT)
+    // The inputs, active (cp_inputs): READ 0x27 live, 0x28 the limits at the LIMIT fault.
+    input  wire [N-1:0]  lim_min_i,
+    input  wire [N-1:0]  lim_max_i,
+    input  wire          probe_i,
 
     // Events from the runner.
     input  wire          stretch_i,
@@ -114,6 +121,7 @@ localparam [7:0] E_ESTOP       = 8'd10;
 localparam [7:0] E_ABORT       = 8'd11;
 localparam [7:0] E_CONIC_END   = 8'd17;
 localparam [7:0] E_WATCHDOG    = 8'd19;
+localparam [7:0] E_LIMIT       = 8'd20;
 
 reg          fault_q, fault_d;
 reg [7:0]    err_q, err_d;
@@ -128,6 +136,7 @@ reg [TW-1:0] cfg_setup_q [0:N-1];
 reg [TW-1:0] cfg_hold_q [0:N-1];
 reg [N-1:0]  cfg_step_pol_q, cfg_dir_pol_q;
 reg          cfg_new_q;
+reg [N-1:0]  lim_min_at_q, lim_max_at_q;   // the active limits when LIMIT latched
 
 // ---------------------------------------------------------------- watchdog
 // CONFIG field 5 sets the timeout in units of 4096 clocks (0: off). The count is
@@ -154,6 +163,7 @@ always @* begin
     if (estop_i)            fault_code = E_ESTOP;
     else if (abort_i)       fault_code = E_ABORT;
     else if (wd_trip)       fault_code = E_WATCHDOG;
+    else if (lim_hit_i)     fault_code = E_LIMIT;
     else if (run_fault_i)   fault_code = run_conic_i ? E_CONIC_END : E_UNDERRUN;
     else if (build_fault_i) fault_code = E_SEG_PATTERN;
     else if (cmd_fault_i)   fault_code = cmd_code_i;
@@ -189,6 +199,7 @@ always @* begin
         err_d   = fault_code;
     end
 end
+wire lim_latch = fault_set && (!fault_q || clearing) && fault_code == E_LIMIT;
 // A latched fault lets the segment under way complete; E-stop and abort do not.
 assign flush_o = estop_i || abort_i || (fault_q && !seg_active_i);
 
@@ -208,6 +219,8 @@ always @(posedge clk) begin
         cfg_new_q      <= 1'b0;
         wd_limit_q     <= 16'd0;
         wd_cnt_q       <= 28'd1;
+        lim_min_at_q   <= {N{1'b0}};
+        lim_max_at_q   <= {N{1'b0}};
         for (a = 0; a < N; a = a + 1) begin
             cfg_high_q[a]  <= STEP_HIGH_RESET[TW-1:0];
             cfg_low_q[a]   <= STEP_LOW_RESET[TW-1:0];
@@ -224,6 +237,14 @@ always @(posedge clk) begin
         segs_done_q   <= segs_done_d;
         cfg_new_q     <= cfg_write_i;
         wd_cnt_q      <= wd_cnt_d;
+        // The limits that stopped the run, kept while LIMIT is latched.
+        if (lim_latch) begin
+            lim_min_at_q <= lim_min_i;
+            lim_max_at_q <= lim_max_i;
+        end else if (clearing) begin
+            lim_min_at_q <= {N{1'b0}};
+            lim_max_at_q <= {N{1'b0}};
+        end
         if (wd_cfg) wd_limit_q <= cfg_word_i[15:0];
         if (cfg_write_i) begin
             for (a = 0; a < N; a = a + 1) begin
@@ -260,9 +281,20 @@ localparam [31:0] UMAX_WORD = UMAX;
 // The version of the command set and register map (docs/CORE.md) together with
 // the SPI frames (docs/PROTOCOL.md); the host refuses a card of another version.
 localparam [7:0] PROTOCOL_VERSION = 8'd2;
-localparam [31:0] CAPS2 = {8'd0, PROTOCOL_VERSION, CBUF_AW[7:0], PW[7:0]};
+localparam [0:0] INPUTS_BIT = INPUTS != 0;
+localparam [31:0] CAPS2 = {7'd0, INPUTS_BIT, PROTOCOL_VERSION, CBUF_AW[7:0], PW[7:0]};
 localparam [31:0] CLK_WORD = CLK_HZ;
 localparam [31:0] CONIC_WORD = (CONIC == 0) ? 32'd0 : CIW;
+
+// The inputs (INPUTS = 1 builds; 0 otherwise): [7:0] min active, [15:8] max active,
+// [16] probe active; and the limits active when LIMIT latched.
+wire [8:0]  min9 = {{(9 - N){1'b0}}, lim_min_i};
+wire [8:0]  max9 = {{(9 - N){1'b0}}, lim_max_i};
+wire [8:0]  min9_at = {{(9 - N){1'b0}}, lim_min_at_q};
+wire [8:0]  max9_at = {{(9 - N){1'b0}}, lim_max_at_q};
+wire [31:0] inputs_word = {15'd0, probe_i, max9[7:0], min9[7:0]};
+wire [31:0] limits_at_word = {16'd0, max9_at[7:0], min9_at[7:0]};
+wire unused_inputs = &{1'b0, min9[8], max9[8], min9_at[8], max9_at[8]};
 
 wire [7:0] read_addr [0:1];
 assign read_addr[0] = rd_addr0_i;
@@ -285,6 +317,8 @@ always @* begin
         8'h24: read_value[rp] = CLK_WORD;
         8'h25: read_value[rp] = BUILD_ID;
         8'h26: read_value[rp] = CONIC_WORD;
+        8'h27: read_value[rp] = inputs_word;
+        8'h28: read_value[rp] = limits_at_word;
         default: begin
             for (ri = 0; ri < N; ri = ri + 1)
                 if (read_addr[rp] == 8'h10 + ri[7:0]) read_value[rp] = position_i[PW*ri +: 32];

@@ -32,6 +32,7 @@ struct CardCaps {
   uint32_t clock_hz = 0;           // 0x24
   uint32_t build_id = 0;           // 0x25
   unsigned ciw = 0;                // 0x26: the conic walker's width; 0: no CONIC segments
+  bool inputs = false;             // 0x23 [24]: limit and probe inputs (docs/CORE.md "Inputs")
 
   [[nodiscard]] unsigned chunk_queue() const { return 1u << caw; }
   [[nodiscard]] unsigned segment_queue() const { return 1u << saw; }

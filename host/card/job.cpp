@@ -219,6 +219,23 @@ std::vector<uint32_t> encode_job(const plan::Machine& m, const WireJob& job) {
     encode_config(a, ConfigField::polarity,
                   uint32_t(ax.step_active_high) | uint32_t(ax.dir_positive_high) << 1, words);
   }
+  // The inputs (a card that has them): the filter, each axis's limit switches (those
+  // not wired disabled), the probe's level (docs/CORE.md "Inputs").
+  if (m.card.inputs) {
+    encode_config(0, ConfigField::input_filter, m.inputs.filter_cycles, words);
+    for (int a = 0; a < plan::kAxes; ++a) {
+      const plan::AxisConfig& ax = m.axes[a];
+      if (!ax.present) continue;
+      const auto bits = [](plan::SwitchLevel l, uint32_t high, uint32_t enabled) {
+        return (l == plan::SwitchLevel::none ? 0 : enabled) | (l == plan::SwitchLevel::active_low ? 0 : high);
+      };
+      encode_config(a, ConfigField::limits,
+                    bits(ax.limit_min, limit_bits::min_active_high, limit_bits::min_enabled) |
+                        bits(ax.limit_max, limit_bits::max_active_high, limit_bits::max_enabled),
+                    words);
+    }
+    encode_config(0, ConfigField::probe, uint32_t(m.inputs.probe_active_high), words);
+  }
   for (size_t s = 0; s < job.segments.size(); ++s) {
     if (s == job.start_after) encode_control(true, false, false, words);
     encode_segment(job.segments[s], words);

@@ -125,6 +125,7 @@ ErrorName error_name(uint32_t code) {
       {"CONIC_END", "a conic's walk arrived at its end before its last move, or not on it"},
       {"CONIC_CONTINUE", "a conic continuing a walk that does not follow a conic on its axes and way"},
       {"WATCHDOG", "no frame from the host for the watchdog's timeout"},
+      {"LIMIT", "a segment moved an axis toward its active limit switch"},
   };
   if (code < std::size(names)) return names[code];
   return {"UNKNOWN", "an error code this program does not know"};

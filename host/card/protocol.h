@@ -62,7 +62,10 @@ struct WireConic {
 };
 
 // CONFIG's fields: 0..4 an axis's pulse timing and polarity; 5 the card's watchdog
-// timeout in units of kWatchdogUnit clocks, 0 = off (docs/CORE.md "Watchdog").
+// timeout in units of kWatchdogUnit clocks, 0 = off (docs/CORE.md "Watchdog"); on a
+// card with inputs (docs/CORE.md "Inputs"): 6 the input filter's sample period in
+// clocks, 7 an axis's limits (bit 0 min active high, 1 max active high, 2 min
+// enabled, 3 max enabled), 8 the probe (bit 0 active high).
 enum class ConfigField : uint32_t {
   step_high = 0,
   step_low = 1,
@@ -70,7 +73,13 @@ enum class ConfigField : uint32_t {
   dir_hold = 3,
   polarity = 4,
   watchdog = 5,
+  input_filter = 6,
+  limits = 7,
+  probe = 8,
 };
+namespace limit_bits {
+constexpr uint32_t min_active_high = 1, max_active_high = 2, min_enabled = 4, max_enabled = 8;
+}
 constexpr uint32_t kWatchdogUnit = 4096;  // clocks
 
 enum class Register : uint32_t {
@@ -87,6 +96,8 @@ enum class Register : uint32_t {
   clock_hz = 0x24,      // the card clock in Hz
   build_id = 0x25,      // the build id (rtl/builds.json)
   conic_width = 0x26,   // the conic walker's width CIW; 0: no CONIC segments
+  inputs = 0x27,        // active now: [7:0] limit min per axis, [15:8] max, [16] probe
+  limits_at = 0x28,     // the limits active when LIMIT (20) latched: [7:0] min, [15:8] max
 };
 constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
 

@@ -144,7 +144,8 @@ void read_axis(Reader& r, const toml::table& t, std::string_view path, AxisConfi
     r.only_keys(t, path,
                 {"steps_per_mm", "travel_min_mm", "travel_max_mm", "max_velocity_mm_s",
                  "max_accel_mm_s2", "max_jerk_mm_s3", "driver", "step_high_ns", "step_low_ns",
-                 "dir_setup_ns", "dir_hold_ns", "step_active_high", "dir_positive_high"});
+                 "dir_setup_ns", "dir_hold_ns", "step_active_high", "dir_positive_high", "limit_min",
+                 "limit_max"});
     const auto gt0 = "> 0";
     ax.steps_per_mm = r.number(t, path, "steps_per_mm", true, positive, gt0).value_or(0);
     auto tmin = r.number(t, path, "travel_min_mm", true, any_value, "finite");
@@ -210,6 +211,17 @@ void read_axis(Reader& r, const toml::table& t, std::string_view path, AxisConfi
     }
     ax.step_active_high = r.boolean(t, path, "step_active_high").value_or(true);
     ax.dir_positive_high = r.boolean(t, path, "dir_positive_high").value_or(true);
+    for (const auto& [key, level] : {std::pair{"limit_min", &ax.limit_min}, std::pair{"limit_max", &ax.limit_max}}) {
+        const auto s = r.string(t, path, key);
+        if (!s) continue;
+        if (ax.limit_loc.line == 0) ax.limit_loc = loc_of(*t.get(key));
+        if (*s == "none") *level = SwitchLevel::none;
+        else if (*s == "active_high") *level = SwitchLevel::active_high;
+        else if (*s == "active_low") *level = SwitchLevel::active_low;
+        else
+            r.error(loc_of(*t.get(key)),
+                    fmt::format("{}.{}: \"{}\" is none of \"none\", \"active_high\", \"active_low\"", path, key, *s));
+    }
 }
 
 // [gcode]: z_words, g28_position, g30_position, [gcode.tool_lengths].
@@ -309,7 +321,18 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
 
     Machine m;
     m.file = std::string(file);
-    r.only_keys(root, "", {"card", "planner", "axes", "gcode"});
+    r.only_keys(root, "", {"card", "planner", "axes", "gcode", "inputs"});
+    if (const toml::table* in = r.table(root, "inputs", "inputs", false)) {
+        r.only_keys(*in, "inputs", {"filter_us", "probe"});
+        m.inputs.loc = loc_of(*in);
+        m.inputs.filter_us = r.number(*in, "inputs", "filter_us", false, non_negative, ">= 0").value_or(0);
+        if (const auto s = r.string(*in, "inputs", "probe")) {
+            if (*s == "active_high" || *s == "active_low") m.inputs.probe_active_high = *s == "active_high";
+            else
+                r.error(loc_of(*in->get("probe")),
+                        fmt::format("inputs.probe: \"{}\" is neither \"active_high\" nor \"active_low\"", *s));
+        }
+    }
 
     // [card] is optional: the card reports its clock, W and KMAX at connect
     // (bind_card()); what is stated here is checked against it.
@@ -452,7 +475,24 @@ std::vector<Diagnostic> bind_card(Machine& m, const CardFacts& card) {
                                           kAxisLetters[static_cast<std::size_t>(a)], name, v, card.clock_hz,
                                           card.name, max_cycles, card.timing_bits));
     }
+    // Limit switches and the probe need a card with inputs; the filter, a period its
+    // 16-bit field holds.
+    const double filter_cycles = std::ceil(m.inputs.filter_us * 1e-6 * card.clock_hz);
+    for (int a = 0; a < kAxes && !card.inputs; ++a) {
+        const AxisConfig& ax = m.axes[static_cast<std::size_t>(a)];
+        if (ax.present && (ax.limit_min != SwitchLevel::none || ax.limit_max != SwitchLevel::none))
+            error(ax.limit_loc, fmt::format("axes.{}: limit switches, but the card, {}, has no limit or probe inputs",
+                                            kAxisLetters[static_cast<std::size_t>(a)], card.name));
+    }
+    if (!card.inputs && m.inputs.loc.line != 0)
+        error(m.inputs.loc, fmt::format("inputs: the card, {}, has no limit or probe inputs", card.name));
+    if (filter_cycles > 65535)
+        error(m.inputs.loc, fmt::format("inputs.filter_us: {} us is {:.0f} cycles at the card's {} Hz; the filter "
+                                        "holds at most 65535",
+                                        m.inputs.filter_us, filter_cycles, card.clock_hz));
     if (!errors.empty()) return errors;
+    m.inputs.filter_cycles = static_cast<std::uint32_t>(filter_cycles);
+    m.card.inputs = card.inputs;
     m.card.clock_hz = card.clock_hz;
     m.card.pattern_capacity = c.stated_pattern_capacity ? c.stated_pattern_capacity : card.pattern_capacity;
     m.card.max_doubling = c.stated_max_doubling ? c.stated_max_doubling : card.max_doubling;

@@ -48,6 +48,10 @@ const DriverPreset* find_driver(std::string_view name);
 std::uint32_t ns_to_cycles(double ns, double clock_hz);
 PulseTimingCycles to_cycles(const PulseTimingNs& ns, double clock_hz);
 
+// A limit switch of an axis (docs/CORE.md "Inputs"): not wired (the card ignores
+// its pin), or active at a high or a low level.
+enum class SwitchLevel { none, active_high, active_low };
+
 struct AxisConfig {
     bool present = false;
     double steps_per_mm = 0;        // card output steps (microsteps) per mm
@@ -61,6 +65,8 @@ struct AxisConfig {
     PulseTimingCycles pulse;        // derived from pulse_ns and card.clock_hz
     bool step_active_high = true;
     bool dir_positive_high = true;
+    SwitchLevel limit_min = SwitchLevel::none, limit_max = SwitchLevel::none;
+    SourceLoc limit_loc;            // the first limit_* key given (line 0: none)
     SourceLoc loc;                  // where [axes.X] starts
 
     // Fastest step rate the card can emit without violating the pulse
@@ -77,6 +83,7 @@ struct CardConfig {
     std::uint32_t max_doubling = 8;         // k: largest step-doubling exponent
     std::uint32_t max_moves = 1048575;      // UMAX: most moves of one card segment
     unsigned conic_width = 0;               // CIW: the card's conic walker (0: none, arcs are chords)
+    bool inputs = false;                    // the card has limit and probe inputs
     bool bound = false;                     // set by bind_card()
     // What the machine file says, and where (line 0: not given).
     double stated_clock_hz = 0;
@@ -93,6 +100,15 @@ struct CardFacts {
     unsigned timing_bits = 16;           // TW: pulse timing fields hold up to 2^TW - 1 cycles
     std::uint32_t max_moves = 1048575;   // UMAX
     unsigned conic_width = 0;            // CIW (READ 0x26): CONIC segments, 0: none
+    bool inputs = false;                 // limit and probe inputs (READ 0x23 [24])
+};
+
+// [inputs]: the card's input filter and the probe's level (docs/CORE.md "Inputs").
+struct InputsConfig {
+    double filter_us = 0;                // an input must hold ~3 samples this far apart
+    std::uint32_t filter_cycles = 0;     // derived by bind_card (CONFIG field 6)
+    bool probe_active_high = true;
+    SourceLoc loc;                       // where [inputs] starts (line 0: not given)
 };
 
 enum class OnLimit { refuse, slow };
@@ -141,6 +157,7 @@ struct Machine {
     CardConfig card;
     PlannerConfig planner;
     GcodeConfig gcode;
+    InputsConfig inputs;
 
     [[nodiscard]] double chunk_tolerance_cycles() const {
         return planner.chunk_tolerance_s * card.clock_hz;

@@ -48,6 +48,9 @@ struct CardPortBase {
     r.spi_cs_n_i = i.cs_n;
     r.spi_mosi_i = i.mosi;
     r.estop_i = i.estop;
+    r.lim_min_i = i.lim_min;
+    r.lim_max_i = i.lim_max;
+    r.probe_i = i.probe;
   }
   static Out sample(const V& r) {
     Out o;

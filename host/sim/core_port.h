@@ -30,6 +30,9 @@ struct CorePortBase {
     r.ctl_flush_i = i.ctl_flush;
     r.ctl_ack_i = i.ctl_ack;
     r.kick_i = i.kick;
+    r.lim_min_i = i.lim_min;
+    r.lim_max_i = i.lim_max;
+    r.probe_i = i.probe;
     r.rd_addr_i = i.rd_addr;
   }
   static Out sample(const V& r) {

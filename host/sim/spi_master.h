@@ -57,9 +57,9 @@ class SpiMaster {
     observe_ = nullptr;
   }
 
-  // One clock with the given pins (E-stop as last set).
+  // One clock with the given pins (E-stop and the inputs as last set).
   CardOut step(CardIn in) {
-    in.estop = estop_;
+    slow_pins(in);
     const uint64_t c = dut_.cycle();
     last_ = dut_.step(in);
     if (observe_) observe_(c, in, last_);
@@ -87,7 +87,7 @@ class SpiMaster {
     phases_.resize(bits > 0 ? 2 * bits + 2 : 3);
     SpiPhase* ph = phases_.data();
     CardIn in;
-    in.estop = estop_;
+    slow_pins(in);
     in.cs_n = false;
     in.mosi = bits > 0 && bit(0);
     *ph++ = {in, t_.cs_setup, false};
@@ -101,7 +101,9 @@ class SpiMaster {
       }
     }
     *ph++ = {in, t_.cs_hold, false};
-    *ph++ = {CardIn{.estop = estop_}, t_.cs_idle, false};
+    CardIn idle_pins;
+    slow_pins(idle_pins);
+    *ph++ = {idle_pins, t_.cs_idle, false};
     // A stepper that takes the whole schedule at once (the fast engine), else
     // phase by phase.
     sampled_.assign(phases_.size(), false);
@@ -135,6 +137,12 @@ class SpiMaster {
   }
   const SpiTiming& timing() const { return t_; }
   void set_estop(bool on) { estop_ = on; }
+  // The limit switches' pins (bit a: axis a) and the probe's, raw, from now on.
+  void set_inputs(uint32_t lim_min, uint32_t lim_max, bool probe) {
+    lim_min_ = lim_min;
+    lim_max_ = lim_max;
+    probe_ = probe;
+  }
   const CardOut& last() const { return last_; }
   Stepper& dut() { return dut_; }
 
@@ -144,7 +152,7 @@ class SpiMaster {
   CardOut hold(CardIn in, uint64_t cycles) {
     CardOut first{};
     if constexpr (requires { dut_.advance(in, cycles, [](uint64_t, uint64_t, const CardOut&) {}); }) {
-      in.estop = estop_;
+      slow_pins(in);
       bool any = false;
       dut_.advance(in, cycles, [&](uint64_t c, uint64_t n, const CardOut& out) {
         if (!any) first = out;
@@ -171,6 +179,15 @@ class SpiMaster {
   SpiTiming t_;
   CardOut last_{};
   bool estop_ = false;
+  uint32_t lim_min_ = 0, lim_max_ = 0;
+  bool probe_ = false;
+  // The pins the master holds across frames: the E-stop and the inputs.
+  void slow_pins(CardIn& in) const {
+    in.estop = estop_;
+    in.lim_min = lim_min_;
+    in.lim_max = lim_max_;
+    in.probe = probe_;
+  }
 };
 
 }  // namespace cpstep::sim

@@ -38,6 +38,7 @@ module cp_board #(
     // CONIC segments and the conic walker's width (docs/CORE.md "CONIC").
     parameter integer CONIC = 0,
     parameter integer CIW = 40,
+    parameter integer INPUTS = 0,
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
     input  wire         osc_i,          // the 12 MHz oscillator's pin
@@ -49,6 +50,10 @@ module cp_board #(
     // E-stop loop: NC switch to ground, pulled up here. An inout as the SB_IO pad
     // is (its output driver is configured off: PIN_TYPE 0000_01).
     inout  wire         estop_loop_i,
+    // Limit switches and the probe, from the board top's pads (tie to 0 without).
+    input  wire [N-1:0] lim_min_i,
+    input  wire [N-1:0] lim_max_i,
+    input  wire         probe_i,
     output wire [N-1:0] step_o,
     output wire [N-1:0] dir_o,
     output wire [N-1:0] enable_o,
@@ -136,11 +141,11 @@ wire [N*32-1:0] position;
 cp_card #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
           .CBUF_AW(CBUF_AW), .STEP_POL_RESET(STEP_POL_RESET),
           .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC),
-          .CIW(CIW)) u_card (
+          .CIW(CIW), .INPUTS(INPUTS)) u_card (
     .clk(clk), .rst(rst),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
     .spi_miso_o(miso), .spi_miso_oe_o(miso_oe),
-    .estop_i(estop),
+    .estop_i(estop), .lim_min_i(lim_min_i), .lim_max_i(lim_max_i), .probe_i(probe_i),
     .step_o(core_step), .dir_o(core_dir), .torch_o(core_torch), .enable_o(enable),
     .running_o(running), .fault_o(fault),
     .err_code_o(err_code), .stretched_o(stretched), .position_o(position));

@@ -14,11 +14,13 @@
 #include "Vcp_part_build_conic.h"
 #include "Vcp_part_run_conic.h"
 #include "Vcp_part_run.h"
+#include "Vcp_part_inputs.h"
 #include "Vcp_part_status.h"
 #include "core/core_bench.h"
 #include "model/bits.h"
 #include "model/cp_build.h"
 #include "model/cp_cmd.h"
+#include "model/cp_inputs.h"
 #include "model/cp_run.h"
 #include "model/cp_status.h"
 #include "sim/dut.h"
@@ -184,6 +186,8 @@ struct RunPortT {
     r.len_we_i = i.len_we;
     r.len_m1_i = i.len_m1;
     r.pulse_ready_i = i.pulse_ready;
+    r.lim_min_i = i.lim_min;
+    r.lim_max_i = i.lim_max;
   }
   static Out sample(const Rtl& r) {
     Out o;
@@ -201,6 +205,7 @@ struct RunPortT {
     o.fault = r.fault_o;
     o.fault_conic = r.fault_conic_o;
     o.walker_free = r.walker_free_o;
+    o.lim_hit = r.lim_hit_o;
     return o;
   }
   static const std::vector<sim::Field<Out>>& fields() {
@@ -212,6 +217,7 @@ struct RunPortT {
         CPSTEP_FIELD("fire_o", o.fire),             CPSTEP_FIELD("seg_done_o", o.seg_done),
         CPSTEP_FIELD("stretch_o", o.stretch),       CPSTEP_FIELD("seg_active_o", o.seg_active),
         CPSTEP_FIELD("fault_o", o.fault),           CPSTEP_FIELD("torch_o", o.torch),
+        CPSTEP_FIELD("lim_hit_o", o.lim_hit),
     };
     return f;
   }
@@ -246,6 +252,7 @@ struct StatusPort {
     p.build_id = 3735928559u;
     p.conic = true;
     p.ciw = 36;
+    p.inputs = true;
     return p;
   }
   static void drive(Rtl& r, const In& i) {
@@ -255,6 +262,10 @@ struct StatusPort {
     r.clear_i = i.clear;
     r.ack_i = i.ack;
     r.kick_i = i.kick;
+    r.lim_hit_i = i.lim_hit;
+    r.lim_min_i = i.lim_min;
+    r.lim_max_i = i.lim_max;
+    r.probe_i = i.probe;
     r.drivers_on_i = i.drivers_on;
     r.drivers_off_i = i.drivers_off;
     r.cfg_write_i = i.cfg_write;
@@ -331,6 +342,37 @@ struct StatusPort {
 
 };
 
+struct InputsPort {
+  using Rtl = AfterOneResetEdge<Vcp_part_inputs>;
+  using Model = model::CpInputs;
+  using In = model::CpInputsIn;
+  using Out = model::CpInputsOut;
+  static Model::Params model_params() { return 3; }
+  static void drive(Rtl& r, const In& i) {
+    r.rst = i.rst;
+    r.lim_min_i = i.lim_min;
+    r.lim_max_i = i.lim_max;
+    r.probe_i = i.probe;
+    r.cfg_write_i = i.cfg_write;
+    r.cfg_word_i = i.cfg_word;
+  }
+  static Out sample(const Rtl& r) {
+    Out o;
+    o.lim_min = r.lim_min_o;
+    o.lim_max = r.lim_max_o;
+    o.probe = r.probe_o;
+    return o;
+  }
+  static const std::vector<sim::Field<Out>>& fields() {
+    static const std::vector<sim::Field<Out>> f = {
+        CPSTEP_FIELD("lim_min_o", o.lim_min), CPSTEP_FIELD("lim_max_o", o.lim_max),
+        CPSTEP_FIELD("probe_o", o.probe),
+    };
+
 #undef CPSTEP_FIELD
+
+    return f;
+  }
+};
 
 }  // namespace cpstep::tb

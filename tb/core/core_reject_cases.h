@@ -88,7 +88,7 @@ inline std::vector<BadInput> bad_inputs(const model::CpCoreParams& p) {
       {"config_step_high_0", 14, [] { return config_word(1, 0, 0); }},
       {"config_step_low_0", 14, [] { return config_word(2, 1, 0); }},
       {"config_axis_out_of_range", 14, [] { return config_word(4, 0, 3); }},
-      {"config_unknown_field", 14, [] { return config_word(0, 6, 3); }},
+      {"config_unknown_field", 14, [] { return config_word(0, 9, 3); }},
   };
   // CONIC (opcode 5) is a command only in a core built with CONIC = 1.
   if (!p.conic) cases.push_back({"opcode_5_without_conic", 12, [] { return std::vector<uint32_t>{0x50000001u}; }});

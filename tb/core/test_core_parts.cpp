@@ -261,9 +261,14 @@ void run_traffic(uint64_t seed, bool conic) {
   ls.reset();
   model::CpRunIn in;
   uint64_t fires = 0, seg_done = 0, stretches = 0, underruns = 0, conic_faults = 0;
-  uint64_t torch_edges = 0;
+  uint64_t torch_edges = 0, lim_hits = 0;
   bool torch = false;
   for (int c = 0; c < 400000; ++c) {
+    // Limits: mostly none active; now and then one or two for a while.
+    if (pick(rng, 0, 999) < 3) {
+      in.lim_min = chance(rng, 90) ? 0 : pick(rng, 0, 7);
+      in.lim_max = chance(rng, 90) ? 0 : pick(rng, 0, 7);
+    }
     in.rst = pick(rng, 0, 9999) == 0;
     in.flush = pick(rng, 0, 999) < 5;
     in.estop = pick(rng, 0, 999) < 2;
@@ -305,7 +310,12 @@ void run_traffic(uint64_t seed, bool conic) {
     underruns += o.fault;
     torch_edges += o.torch != torch;
     torch = o.torch;
+    lim_hits += o.lim_hit;
+    if (o.lim_hit) {
+      EXPECT_FALSE(o.fire) << "no move fires at a limit hit";
+    }
   }
+  EXPECT_GT(lim_hits, 100u) << "segments should run into active limits now and then";
   EXPECT_GT(fires, 5000u);
   EXPECT_GT(torch_edges, 1000u) << "the torch output should follow the segments' out bits";
   EXPECT_GT(seg_done, conic ? 200u : 500u);
@@ -337,13 +347,19 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
     in.drivers_off = chance(rng, 2);
     in.cfg_write = chance(rng, 5);
     in.cfg_word = 0x2u << 28 | pick(rng, 0, 4) << 24 | pick(rng, 0, 4) << 20 | pick(rng, 0, 0xFFFF);
-    // The watchdog: a timeout of 0 (off) to 3 units of 4096 clocks set now and then,
-    // a kick one clock in 12,000 on average (so it runs out often).
-    if (pick(rng, 0, 49999) == 0) {
+    // The watchdog: a timeout of 0 (off) to 2 units of 4096 clocks set every 3,000
+    // clocks or so, a kick one clock in 20,000 on average (so it runs out often).
+    if (pick(rng, 0, 2999) == 0) {
       in.cfg_write = true;
-      in.cfg_word = 0x2u << 28 | pick(rng, 0, 4) << 24 | 5u << 20 | pick(rng, 0, 3);
+      in.cfg_word = 0x2u << 28 | pick(rng, 0, 4) << 24 | 5u << 20 | (chance(rng, 80) ? pick(rng, 1, 2) : 0);
     }
-    in.kick = pick(rng, 0, 11999) == 0;
+    in.kick = pick(rng, 0, 19999) == 0;
+    in.lim_hit = pick(rng, 0, 999) < 3;
+    if (chance(rng, 2)) {
+      in.lim_min = pick(rng, 0, 7);
+      in.lim_max = pick(rng, 0, 7);
+      in.probe = chance(rng, 50);
+    }
     in.cmd_fault = chance(rng, 2);
     in.cmd_code = pick(rng, 0, 255);
     in.build_fault = pick(rng, 0, 999) < 5;
@@ -362,8 +378,8 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
     in.ch_level = pick(rng, 0, 9);
     for (unsigned a = 0; a < 3; ++a) in.position[a] = rng() & ((uint64_t(1) << 40) - 1);
     // READ every register there is, and some that are not.
-    in.rd_addr0 = chance(rng, 50) ? pick(rng, 0, 0x27) : pick(rng, 0, 255);
-    in.rd_addr1 = chance(rng, 50) ? pick(rng, 0, 0x27) : pick(rng, 0, 255);
+    in.rd_addr0 = chance(rng, 50) ? pick(rng, 0, 0x29) : pick(rng, 0, 255);
+    in.rd_addr1 = chance(rng, 50) ? pick(rng, 0, 0x29) : pick(rng, 0, 255);
     const model::CpStatusOut o = ls.step(in);
     if (o.fault) codes.insert(o.err);
     flushes += o.flush;
@@ -380,15 +396,92 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
   EXPECT_GT(trips, 5u) << "the watchdog should run out now and then";
   EXPECT_GT(trip_cycles, 1000u);
   EXPECT_TRUE(codes.count(19)) << "WATCHDOG latched";
+  EXPECT_TRUE(codes.count(20)) << "LIMIT latched";
+}
+
+// ---------------------------------------------------------------- cp_inputs
+// Random pins (levels held for random spans, glitches of a clock or a few) and
+// random CONFIG of the filter (fields 6), the limits (7) and the probe (8).
+TEST(CorePartInputs, RandomPinsAndConfigurationMatchTheModel) {
+  Rng rng(61);
+  Lockstep<InputsPort> ls;
+  ls.reset();
+  model::CpInputsIn in;
+  uint64_t changes = 0;
+  model::CpInputsOut last;
+  for (int c = 0; c < 300000; ++c) {
+    in.rst = pick(rng, 0, 49999) == 0;
+    if (pick(rng, 0, 99) < 3) {
+      in.lim_min ^= 1u << pick(rng, 0, 2);
+      in.lim_max ^= chance(rng, 50) ? 1u << pick(rng, 0, 2) : 0;
+      in.probe = chance(rng, 50) ? !in.probe : in.probe;
+    }
+    in.cfg_write = pick(rng, 0, 999) < 2;
+    const uint32_t field = pick(rng, 6, 8);
+    const uint32_t value = field == 6 ? pick(rng, 0, 6) : pick(rng, 0, 15);
+    in.cfg_word = 0x2u << 28 | pick(rng, 0, 3) << 24 | field << 20 | value;
+    const model::CpInputsOut o = ls.step(in);
+    changes += !(o == last);
+    last = o;
+  }
+  EXPECT_GT(changes, 500u);
+}
+
+// The filter against the documented rule, on the RTL's pins alone: with P = 4 a
+// pulse of 7 clocks (shorter than two sample periods) never passes; one of 13 (three
+// periods and more) does, within 3P clocks; active low and disabled as configured.
+TEST(CorePartInputs, TheFilterPassesWhatStaysThreeSamples) {
+  Lockstep<InputsPort> ls;
+  ls.reset();
+  model::CpInputsIn in;
+  const auto config = [&](uint32_t axis, uint32_t field, uint32_t value) {
+    in.cfg_write = true;
+    in.cfg_word = 0x2u << 28 | axis << 24 | field << 20 | value;
+    ls.step(in);
+    in.cfg_write = false;
+  };
+  config(0, 6, 4);                 // P = 4
+  config(1, 7, 0b1100);            // axis 1: min and max enabled, active low
+  config(0, 7, 0b0101);            // axis 0: min enabled, active high; max disabled
+  in.lim_min = 0b010;              // axis 1's min pin high: inactive (active low)
+  in.lim_max = 0b010;
+  for (int c = 0; c < 40; ++c) ls.step(in);
+  model::CpInputsOut o = ls.step(in);
+  EXPECT_EQ(o.lim_min, 0u);
+  EXPECT_EQ(o.lim_max, 0u);
+  // A 7-clock pulse on axis 0's min: never seen.
+  in.lim_min |= 1;
+  for (int c = 0; c < 7; ++c) EXPECT_EQ(ls.step(in).lim_min & 1, 0u) << c;
+  in.lim_min &= ~1u;
+  for (int c = 0; c < 20; ++c) EXPECT_EQ(ls.step(in).lim_min & 1, 0u) << c;
+  // A 13-clock one: seen within 3P = 12 clocks, and gone within 3P after it ends.
+  in.lim_min |= 1;
+  int seen = -1;
+  for (int c = 0; c < 13; ++c)
+    if ((ls.step(in).lim_min & 1) && seen < 0) seen = c;
+  EXPECT_GE(seen, 8) << "not before two sample periods";
+  EXPECT_LE(seen, 12);
+  in.lim_min &= ~1u;
+  int gone = -1;
+  for (int c = 0; c < 14; ++c)
+    if (!(ls.step(in).lim_min & 1) && gone < 0) gone = c;
+  EXPECT_GE(gone, 0);
+  EXPECT_LE(gone, 12);
+  // Axis 1's max, active low: the pin going low is active; axis 0's max never (disabled).
+  in.lim_max = 0b001;
+  for (int c = 0; c < 16; ++c) o = ls.step(in);
+  EXPECT_EQ(o.lim_max, 0b010u);
 }
 
 // The priority encoder's order, written out from docs/CORE.md "Faults": E-stop,
-// abort, watchdog, underrun, pattern, the parser's code; nothing raised, nothing set.
+// abort, watchdog, limit, underrun, pattern, the parser's code; nothing raised, nothing set.
 TEST(CorePartStatus, FaultPriorityIsTheDocumentedOrder) {
-  for (unsigned m = 0; m < 64; ++m) {
-    const bool estop = m & 1, abort = m & 2, underrun = m & 4, pattern = m & 8, cmd = m & 16, wd = m & 32;
-    const model::FaultPick f = model::pick_fault(estop, abort, wd, underrun, pattern, cmd, 6);
-    const uint32_t want = estop ? 10 : abort ? 11 : wd ? 19 : underrun ? 9 : pattern ? 8 : cmd ? 6 : 0;
+  for (unsigned m = 0; m < 128; ++m) {
+    const bool estop = m & 1, abort = m & 2, underrun = m & 4, pattern = m & 8, cmd = m & 16, wd = m & 32,
+               limit = m & 64;
+    const model::FaultPick f = model::pick_fault(estop, abort, wd, limit, underrun, pattern, cmd, 6);
+    const uint32_t want =
+        estop ? 10 : abort ? 11 : wd ? 19 : limit ? 20 : underrun ? 9 : pattern ? 8 : cmd ? 6 : 0;
     EXPECT_EQ(f.set, m != 0) << m;
     EXPECT_EQ(f.code, want) << m;
   }

@@ -31,31 +31,31 @@ using Twin = sim::TwinCardDut<CardSmall>;
 
 constexpr uint32_t kStepHigh = 3, kStepLow = 3;
 
-// Segments of 8 moves, `delay` cycles a move; no START in the words.
+// Segments of 8 moves, `delay` cycles a move; no START in the words; x up (or down).
 struct Job {
   std::vector<uint32_t> setup, segments;
   int32_t x = 0, y = 0;
   uint32_t moves = 0;
 };
-inline Job make_job(unsigned n, uint32_t delay) {
+inline Job make_job(unsigned n, uint32_t delay, bool x_up = true) {
   Job j;
   card::encode_drivers(true, j.setup);
   for (unsigned a = 0; a < 2; ++a) {
     card::encode_config(a, card::ConfigField::step_high, kStepHigh, j.setup);
     card::encode_config(a, card::ConfigField::step_low, kStepLow, j.setup);
   }
-  // x always 8 steps on; y 2..6 steps, its direction turning every third segment.
+  // x always 8 steps on (up or down); y 2..6 steps, its direction turning every third segment.
   for (unsigned s = 0; s < n; ++s) {
     const uint32_t vy = 2 + s % 5;
     const bool y_up = (s / 3) % 2 == 0;
     card::WireSegment w;
     w.u = 8;
     w.v = {8, vy};
-    w.dir_positive = {true, y_up};
+    w.dir_positive = {x_up, y_up};
     w.chunks = {{delay, 4, 0, 0}, {delay, 4, 0, 0}};
     w.end = s + 1 == n;
     card::encode_segment(w, j.segments);
-    j.x += 8;
+    j.x += x_up ? 8 : -8;
     j.y += y_up ? int32_t(vy) : -int32_t(vy);
     j.moves += 8;
   }
@@ -113,6 +113,14 @@ inline void expect_job_done(card::CardClient& c, const Card& card, const Job& j)
   EXPECT_EQ(r.positions, (std::vector<int32_t>{j.x, j.y}));
   EXPECT_EQ(card.pins[0], j.x);
   EXPECT_EQ(card.pins[1], j.y);
+}
+
+// The card latched the fault `code` (its name for messages) and its run is off.
+inline void expect_stopped_by(const card::Reply& r, uint32_t code, const char* name) {
+  const card::Status st = card::decode_status(r.status);
+  EXPECT_TRUE(st.fault) << name;
+  EXPECT_EQ(st.err_code, code) << name;
+  EXPECT_FALSE(st.running) << name;
 }
 
 // Sends the job's segments from `w` on while each fits the card's free words (one

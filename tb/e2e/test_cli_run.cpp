@@ -300,6 +300,47 @@ TEST(CliRun, WatchdogIsKeptAliveOrRefusedBeforeAnythingIsSent) {
   }
 }
 
+// The machine file's limit switches reach the card (docs/CORE.md "Inputs"): on the
+// HX8K card, whose simulated limit pins are low, x's max configured active low is
+// closed, so the job (x moves up) stops with LIMIT before x's first step; configured
+// active high (open) it runs whole. The iCEBreaker card, without inputs, refuses the
+// machine file at the key before anything is sent.
+TEST(CliRun, MachineFileLimitSwitchesReachTheCard) {
+  const fs::path job = write_job("small.ngc", kJob);
+  std::string text = slurp(kMachine);
+  const auto with_limit = [&](const std::string& level) {
+    std::string t = text;
+    t.replace(t.find("[axes.x]\n"), 9, "[axes.x]\nlimit_max = \"" + level + "\"\n");
+    const fs::path p = kDir / ("limit_" + level + ".toml");
+    std::ofstream(p) << t;
+    return p.string();
+  };
+  const auto run_on = [&](const std::string& board, const std::string& level) {
+    const fs::path report = kDir / ("limit_" + board + "_" + level + ".json");
+    fs::remove(report);
+    const Outcome r = cpstep({"run", job.string(), "--machine", with_limit(level), "--board", board, "--report",
+                              report.string()},
+                             "limit_" + board + "_" + level);
+    return std::pair{r, report};
+  };
+  const auto [closed, closed_report] = run_on("hx8k", "active_low");
+  EXPECT_NE(closed.rc, 0);
+  const json c = json::parse(slurp(closed_report));
+  ASSERT_FALSE(c["faults"].empty());
+  EXPECT_NE(c["faults"].dump().find("LIMIT"), std::string::npos) << c["faults"].dump();
+  EXPECT_EQ(c["axes"]["x"]["final_steps"], 0) << c["axes"].dump();
+
+  const auto [open, open_report] = run_on("hx8k", "active_high");
+  ASSERT_EQ(open.rc, 0) << open.out << open.err;
+  EXPECT_EQ(json::parse(slurp(open_report))["faults"], json::array());
+
+  const auto [refused, refused_report] = run_on("icebreaker", "active_high");
+  EXPECT_EQ(refused.rc, 2);
+  EXPECT_NE(refused.err.find("limit switches, but the card"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("has no limit or probe inputs"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(refused_report));
+}
+
 // A refused job: exit 2, the file:line:col on stderr, nothing on stdout and
 // no output file of any kind.
 void expect_refused(const std::string& name, const std::string& text, const std::string& where,

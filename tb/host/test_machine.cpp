@@ -283,3 +283,40 @@ TEST(Machine, LoadMissingFile) {
     auto r = load_machine("/nonexistent/m.toml");
     EXPECT_EQ(join(r.errors), "/nonexistent/m.toml: cannot open file");
 }
+
+// Limit switches and the probe (docs/CORE.md "Inputs", docs/PLANNING.md): each axis's
+// limit_min / limit_max and [inputs]; a card without inputs refuses them at their
+// key; the filter in card cycles, rounded up, within the 16-bit field.
+TEST(Machine, LimitSwitchesAndTheInputsTable) {
+    auto r = parse(edit("driver = \"dm556\"\n", "driver = \"dm556\"\nlimit_min = \"active_low\"\nlimit_max = \"active_high\"\n") +
+                   "\n[inputs]\nfilter_us = 10.01\nprobe = \"active_low\"\n");
+    ASSERT_TRUE(r.ok()) << join(r.errors);
+    Machine m = *r;
+    EXPECT_EQ(m.axes[0].limit_min, SwitchLevel::active_low);
+    EXPECT_EQ(m.axes[0].limit_max, SwitchLevel::active_high);
+    EXPECT_EQ(m.axes[1].limit_min, SwitchLevel::none) << "not given: not wired";
+    EXPECT_FALSE(m.inputs.probe_active_high);
+
+    CardFacts without{"card E", 50e6, 1024, 8, 16};
+    const std::string refused = join(bind_card(m, without));
+    EXPECT_NE(refused.find("mach.toml:12:13: axes.x: limit switches, but the card, card E, has no limit or probe inputs"),
+              std::string::npos)
+        << refused;
+    EXPECT_NE(refused.find("mach.toml:29:1: inputs: the card, card E, has no limit or probe inputs"), std::string::npos)
+        << refused;
+    CardFacts with = without;
+    with.inputs = true;
+    ASSERT_TRUE(bind_card(m, with).empty());
+    EXPECT_EQ(m.inputs.filter_cycles, 501u) << "10.01 us at 50 MHz is 500.5 cycles: rounded up";
+    EXPECT_TRUE(m.card.inputs);
+
+    auto slow = parse(std::string(kGood) + "\n[inputs]\nfilter_us = 2000\n");
+    ASSERT_TRUE(slow.ok());
+    Machine s = *slow;
+    EXPECT_NE(join(bind_card(s, with)).find("inputs.filter_us: 2000 us is 100000 cycles"), std::string::npos);
+
+    const auto bad = parse(edit("driver = \"dm556\"\n", "driver = \"dm556\"\nlimit_max = \"closed\"\n"));
+    ASSERT_FALSE(bad.ok());
+    EXPECT_EQ(join(bad.errors),
+              "mach.toml:12:13: axes.x.limit_max: \"closed\" is none of \"none\", \"active_high\", \"active_low\"");
+}

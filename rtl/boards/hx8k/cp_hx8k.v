@@ -31,6 +31,8 @@ module cp_hx8k #(
     // CONIC segments and the conic walker's width (docs/CORE.md "CONIC").
     parameter integer CONIC = 0,
     parameter integer CIW = 40,
+    // Limit switches and the probe (docs/CORE.md "Inputs").
+    parameter integer INPUTS = 0,
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
     input  wire         CLK,
@@ -44,19 +46,46 @@ module cp_hx8k #(
     input  wire         SPI_CS_N,
     input  wire         SPI_MOSI,
     inout  wire         SPI_MISO,
-    inout  wire         ESTOP_LOOP     // an input: the pad's output driver is off
+    inout  wire         ESTOP_LOOP,    // an input: the pad's output driver is off
+    // J3: limit switches min and max per axis and the probe, inputs pulled up (the
+    // pads' output drivers are off).
+    inout  wire [N-1:0] LIM_MIN,
+    inout  wire [N-1:0] LIM_MAX,
+    inout  wire         PROBE
 );
+
+// The inputs' pads: pulled up, so that an open switch (or a cut wire) reads high.
+wire [2*N:0] in_pins;
+genvar gi;
+generate
+    for (gi = 0; gi <= 2 * N; gi = gi + 1) begin : g_in
+        if (gi < N) begin : g_min
+            SB_IO #(.PIN_TYPE(6'b0000_01), .PULLUP(1'b1)) u_pad (
+                .PACKAGE_PIN(LIM_MIN[gi]), .CLOCK_ENABLE(1'b0), .OUTPUT_CLK(1'b0),
+                .OUTPUT_ENABLE(1'b0), .D_OUT_0(1'b0), .D_IN_0(in_pins[gi]));
+        end else if (gi < 2 * N) begin : g_max
+            SB_IO #(.PIN_TYPE(6'b0000_01), .PULLUP(1'b1)) u_pad (
+                .PACKAGE_PIN(LIM_MAX[gi - N]), .CLOCK_ENABLE(1'b0), .OUTPUT_CLK(1'b0),
+                .OUTPUT_ENABLE(1'b0), .D_OUT_0(1'b0), .D_IN_0(in_pins[gi]));
+        end else begin : g_probe
+            SB_IO #(.PIN_TYPE(6'b0000_01), .PULLUP(1'b1)) u_pad (
+                .PACKAGE_PIN(PROBE), .CLOCK_ENABLE(1'b0), .OUTPUT_CLK(1'b0),
+                .OUTPUT_ENABLE(1'b0), .D_OUT_0(1'b0), .D_IN_0(in_pins[gi]));
+        end
+    end
+endgenerate
 
 wire led_run_n, led_fault_n;
 cp_board #(.PLL_PAD(1'b0), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(PLL_DIVQ),
            .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
            .SAW(SAW), .TW(TW), .CBUF_AW(CBUF_AW),
            .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ),
-           .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW),
+           .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW), .INPUTS(INPUTS),
            .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
     .osc_i(CLK), .btn_n(1'b1),
     .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
     .estop_loop_i(ESTOP_LOOP),
+    .lim_min_i(in_pins[N-1:0]), .lim_max_i(in_pins[2*N-1:N]), .probe_i(in_pins[2*N]),
     .step_o(STEP), .dir_o(DIR), .enable_o(ENABLE), .torch_o(TORCH),
     .led_run_n_o(led_run_n), .led_fault_n_o(led_fault_n));
 

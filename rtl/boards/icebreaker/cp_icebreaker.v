@@ -37,6 +37,8 @@ module cp_icebreaker #(
     // CONIC segments and the conic walker's width (docs/CORE.md "CONIC").
     parameter integer CONIC = 0,
     parameter integer CIW = 40,
+    // Limit switches and the probe: none on this build (its pins are tied off).
+    parameter integer INPUTS = 0,
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
     input  wire         CLK,        // 12 MHz oscillator, pin 35
@@ -64,11 +66,12 @@ cp_board #(.PLL_PAD(1'b1), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(P
            .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
            .SAW(SAW), .TW(TW), .CBUF_AW(CBUF_AW),
            .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ),
-           .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW),
+           .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW), .INPUTS(INPUTS),
            .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
     .osc_i(CLK), .btn_n(BTN_N),
     .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
     .estop_loop_i(ESTOP_LOOP),
+    .lim_min_i({N{1'b0}}), .lim_max_i({N{1'b0}}), .probe_i(1'b0),   // no inputs on this build
     .step_o(STEP), .dir_o(DIR), .enable_o(ENABLE), .torch_o(TORCH),
     .led_run_n_o(LEDG_N), .led_fault_n_o(LEDR_N));
 

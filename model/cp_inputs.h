@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: MIT
+// cp_inputs — cycle-accurate, bit-exact model of rtl/cp_inputs.v: the limit
+// switches and the probe, filtered (three samples in a row that agree, one sample
+// every max(P, 1) clocks, P from CONFIG field 6) and made active by their
+// configured polarity and enables (fields 7 and 8); docs/CORE.md "Inputs".
+// outputs() before the edge, tick() the edge.
+#pragma once
+
+#include <cstdint>
+
+namespace cpstep::model {
+
+struct CpInputsIn {
+  bool rst = false;
+  uint32_t lim_min = 0, lim_max = 0;  // bit a: axis a's synchronized pin
+  bool probe = false;
+  bool cfg_write = false;
+  uint32_t cfg_word = 0;
+};
+
+struct CpInputsOut {
+  uint32_t lim_min = 0, lim_max = 0;  // active (enabled, at their active level)
+  bool probe = false;
+  bool operator==(const CpInputsOut&) const = default;
+};
+
+class CpInputs {
+ public:
+  using In = CpInputsIn;
+  using Out = CpInputsOut;
+
+  using Params = unsigned;  // N, the axes
+  explicit CpInputs(unsigned n = 4);
+  In in;
+  Out outputs() const;  // registered only: no input reaches them
+  void tick();
+  // The clocks from now, with inputs `i` held, in which nothing changes but the
+  // sample counter (at most `limit`): every level agrees with its samples and its
+  // pin. skip(n) advances them.
+  uint64_t quiet_for(const In& i, uint64_t limit) const;
+  void skip(uint64_t cycles);
+
+ private:
+  struct Regs {
+    uint32_t filter = 0, count = 0;
+    uint32_t s1 = 0, s2 = 0, level = 0;  // bits: min[N], max[N], probe
+    uint32_t min_hi = 0, max_hi = 0, min_en = 0, max_en = 0;
+    bool probe_hi = true;
+  };
+  Regs reset_state() const;
+  uint32_t pins(const In& i) const;
+
+  unsigned n_;
+  uint32_t mask_;  // N bits
+  Regs r_;
+};
+
+}  // namespace cpstep::model
