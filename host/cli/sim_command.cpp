@@ -83,6 +83,8 @@ class SimRun {
           spi_.set_estop(e->on);
         } else if (const auto* u = std::get_if<sim::Urgent>(&s.action)) {
           client_.urgent(u->word);
+        } else if (const auto* in = std::get_if<sim::Inputs>(&s.action)) {
+          spi_.set_inputs(in->lim_min, in->lim_max, in->probe);
         }
         check_cycles();
       }

@@ -158,7 +158,8 @@ class Parser {
     }
     const auto fs = fields(toks, 2);
     if (fs.empty()) fail(toks[1].col + unsigned(toks[1].text.size()) + 1,
-                         "config needs at least one field (high, low, setup, hold, step_pol, dir_pol)");
+                         "config needs at least one field (high, low, setup, hold, step_pol, dir_pol, limits, "
+                         "filter, probe_pol, watchdog)");
     std::vector<uint32_t> words;
     std::optional<bool> step_pol, dir_pol;
     for (const Field& f : fs) {
@@ -168,12 +169,17 @@ class Parser {
       else if (f.key == "low") cf = card::ConfigField::step_low;
       else if (f.key == "setup") cf = card::ConfigField::dir_setup;
       else if (f.key == "hold") cf = card::ConfigField::dir_hold;
+      else if (f.key == "limits") cf = card::ConfigField::limits;  // docs/CORE.md "Inputs"
+      else if (f.key == "filter") cf = card::ConfigField::input_filter;
+      else if (f.key == "probe_pol") cf = card::ConfigField::probe;
+      else if (f.key == "watchdog") cf = card::ConfigField::watchdog;  // docs/CORE.md "Watchdog"
       else if (f.key == "step_pol" || f.key == "dir_pol") {
         const bool b = parse_unsigned(f.value, f.value_col, 1, f.key) != 0;
         (f.key == "step_pol" ? step_pol : dir_pol) = b;
         continue;
       } else {
-        fail(f.key_col, "unknown config field '" + f.key + "' (high, low, setup, hold, step_pol, dir_pol)");
+        fail(f.key_col, "unknown config field '" + f.key +
+                            "' (high, low, setup, hold, step_pol, dir_pol, limits, filter, probe_pol, watchdog)");
       }
       const uint32_t v = uint32_t(parse_unsigned(f.value, f.value_col, 0xFFFF, f.key));
       for (unsigned a : axes) card::encode_config(a, cf, v, words);
@@ -292,6 +298,29 @@ class Parser {
       steps_.push_back({line_, Urgent{word}});
       return;
     }
+    if (cmd == "input") {
+      // input x min on | input y max off | input probe on: a pin's raw level, kept.
+      const auto level = [&](size_t t) {
+        if (toks.size() != t + 1 || (toks[t].text != "on" && toks[t].text != "off"))
+          fail(toks.size() <= t ? toks.back().col + unsigned(toks.back().text.size()) + 1 : toks[t].col,
+               "input takes <axis> min|max on|off, or probe on|off");
+        return toks[t].text == "on";
+      };
+      if (toks.size() >= 2 && toks[1].text == "probe") {
+        inputs_.probe = level(2);
+      } else {
+        if (toks.size() < 3) fail(toks[0].col + 5, "input takes <axis> min|max on|off, or probe on|off");
+        unsigned axis = kSimAxes;
+        for (unsigned a = 0; a < kSimAxes; ++a)
+          if (toks[1].text == kSimAxisNames[a]) axis = a;
+        if (axis == kSimAxes) fail(toks[1].col, "unknown axis '" + toks[1].text + "' (x, y, z, a or probe)");
+        if (toks[2].text != "min" && toks[2].text != "max") fail(toks[2].col, "input takes min or max");
+        uint32_t& mask = toks[2].text == "min" ? inputs_.lim_min : inputs_.lim_max;
+        mask = level(3) ? mask | 1u << axis : mask & ~(1u << axis);
+      }
+      steps_.push_back({line_, inputs_});
+      return;
+    }
     if (cmd == "estop") {
       if (toks.size() != 2 || (toks[1].text != "on" && toks[1].text != "off"))
         fail(toks.size() < 2 ? toks[0].col + 5 : toks[1].col, "estop takes 'on' or 'off'");
@@ -299,7 +328,7 @@ class Parser {
       return;
     }
     fail(toks[0].col, "unknown command '" + cmd +
-                          "' (config, segment, chunk, start, wait, run, estop, abort, clear, urgent)");
+                          "' (config, segment, chunk, start, wait, run, estop, input, abort, clear, urgent)");
   }
 
   std::vector<ScriptStep> parse(std::istream& in) {
@@ -320,6 +349,7 @@ class Parser {
   unsigned segment_line_ = 0;
   // Polarity per axis as the script last set it (the card's reset: both 1).
   std::array<std::array<bool, 2>, kSimAxes> polarity_{{{true, true}, {true, true}, {true, true}, {true, true}}};
+  Inputs inputs_;  // the pins the script has set (input)
 };
 
 }  // namespace

@@ -27,6 +27,11 @@ struct RunToStop {};
 struct Estop {
   bool on = false;
 };
+// Set the limit switch and probe pins (raw levels; bit a: axis a).
+struct Inputs {
+  uint32_t lim_min = 0, lim_max = 0;
+  bool probe = false;
+};
 // An URGENT frame (docs/PROTOCOL.md "Out of band"): card::urgent bits.
 struct Urgent {
   uint32_t word = 0;
@@ -34,7 +39,7 @@ struct Urgent {
 
 struct ScriptStep {
   unsigned line = 0;  // 1-based line of the script it came from
-  std::variant<SendWords, Wait, RunToStop, Estop, Urgent> action;
+  std::variant<SendWords, Wait, RunToStop, Estop, Urgent, Inputs> action;
 };
 
 // A syntax error: "<file>:<line>:<column>: error: <message>" in what().
