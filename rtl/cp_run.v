@@ -10,7 +10,9 @@
 // and every stepping axis's cp_pulse is ready; a move that is due and cannot
 // fire is counted late once. At a segment's last move the next built segment is
 // loaded from the run queue (its moving axes take their directions); with none
-// built and none coming, the run underruns.
+// built and none coming, the run underruns. While a segment is under way, an axis
+// it moves toward an active limit switch stops the run at once (lim_hit_o; docs/CORE.md
+// "Inputs").
 //
 // The torch output (docs/CORE.md "Torch") is a register: while the run is on, it
 // holds the out bit of the last segment loaded; it drops when the run stops, at
