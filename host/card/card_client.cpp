@@ -99,6 +99,9 @@ bool CardClient::on_reply(std::span<const uint8_t> miso, const Sent& sent) {
   const Sent before = prev_;
   prev_ = sent;
   const bool ended_before = transfers_done_ > 0;
+  const double now = link_.now_s();
+  if (ended_before) stats_.longest_gap_s = std::max(stats_.longest_gap_s, now - last_frame_end_s_);
+  last_frame_end_s_ = now;
   ++transfers_done_;
   ++stats_.transfers;
   stats_.bytes += miso.size();

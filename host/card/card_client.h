@@ -91,6 +91,9 @@ struct LinkStats {
   uint64_t bad_replies = 0;     // replies with a CRC mismatch or without the magic byte
   uint64_t lost_results = 0;    // COMMANDS frames whose result reply was damaged (settled by the marker)
   uint64_t waits = 0;           // waits between POLLs (poll_interval_s, or longer: first_wait_share)
+  // The longest time on the link's clock from one frame's end to the next's: what the
+  // card's watchdog sees of the host (docs/CORE.md "Watchdog").
+  double longest_gap_s = 0;
 };
 
 class CardClient {
@@ -190,6 +193,7 @@ class CardClient {
   size_t unaccounted_ = 0;        // words sent since the transfer of last_ (its own included)
   Sent prev_;                     // the previous transfer: the next reply reports on it
   uint64_t transfers_done_ = 0;
+  double last_frame_end_s_ = 0;  // the link's clock when the last frame ended
   std::optional<Pending> pending_;
   uint16_t reads_expected_ = 0;   // the card's READ count once every accepted READ has run
   uint8_t next_seq_ = 1;

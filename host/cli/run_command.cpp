@@ -183,8 +183,10 @@ std::string link_line(const run::CardRun& r) {
   std::string busy;
   if (l.sck_div && r.sim_cycles)
     busy = fmt::format(", busy {:.2f}% of the time", 100.0 * double(l.busy_cycles) / double(r.sim_cycles));
-  return fmt::format("{}: {} frames ({} with commands, {} polls), {} bytes{}; {} resent, {} bad replies", where,
-                     s.transfers, s.command_frames, s.polls, s.bytes, busy, s.resent, s.bad_replies);
+  return fmt::format("{}: {} frames ({} with commands, {} polls), {} bytes{}, longest gap between frames "
+                     "{:.1f} ms; {} resent, {} bad replies",
+                     where, s.transfers, s.command_frames, s.polls, s.bytes, busy, 1e3 * s.longest_gap_s, s.resent,
+                     s.bad_replies);
 }
 
 // A Klipper queue_step cost as the `wire` line states it.

@@ -103,6 +103,7 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
   link["frames"] = l.stats.transfers;
   link["command_frames"] = l.stats.command_frames;
   link["polls"] = l.stats.polls;
+  link["longest_gap_s"] = l.stats.longest_gap_s;
   link["bytes"] = l.stats.bytes;
   link["command_words"] = l.stats.words;
   link["marker_words"] = l.stats.markers;

@@ -288,6 +288,10 @@ TEST(CliRun, WatchdogIsKeptAliveOrRefusedBeforeAnythingIsSent) {
   const double job_s = b["job_time_s"].get<double>();
   EXPECT_GE(b["link"]["polls"].get<double>(), job_s / 0.0125 - 2) << "a POLL at least every 12.5 ms of the job";
   EXPECT_GT(b["link"]["polls"].get<uint64_t>(), a["link"]["polls"].get<uint64_t>());
+  // The watchdog sees no gap longer than a quarter of it and a frame (at most 8.2 ms
+  // for the iCEBreaker's 512-word buffer at 2.06 MHz).
+  EXPECT_LE(b["link"]["longest_gap_s"].get<double>(), 0.0125 + 0.0083);
+  EXPECT_GT(b["link"]["longest_gap_s"].get<double>(), 0.0);
 
   for (const auto& [seconds, words] : {std::pair<std::string, std::string>{"100", "the longest the card's field holds"},
                                        {"0.001", "at least four times"}}) {
