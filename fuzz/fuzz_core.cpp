@@ -17,6 +17,8 @@
 //   - while a fault is latched no segment is added to the queues;
 //   - counters (moves, segments, stretches) never go down, positions move at most
 //     one step a cycle;
+//   - WATCHDOG (19) latches only after 4096 clocks or more with no word offered (each
+//     stands for the frame that brought it: the watchdog's kick);
 // and for each SEGMENT sent on an idle core with no fault, at a command boundary:
 //   - the code it latches is the first failing check of CORE.md "Validation
 //     order", computed here from the fields (0: none), or 8: the builder's
@@ -24,6 +26,7 @@
 //     being built;
 //   - a refused segment adds nothing to the queues; an accepted one adds one
 //     segment and its chunks (all but the one the timer may take on loading it).
+//     A watchdog that runs out meanwhile masks the verdict.
 #include <cstdint>
 #include <vector>
 
@@ -139,6 +142,7 @@ struct Harness {
   model::CpCoreOut prev{};
   bool have_prev = false, prev_estop = false, prev_clear = false, prev_rst = false;
   bool aligned = true;  // the parser is at a command boundary (as far as we know)
+  uint64_t since_kick = 0;  // clocks since the last word offered (the watchdog's kick)
 
   bool out_of_time() const { return cycles >= kMaxCycles; }
 
@@ -149,11 +153,18 @@ struct Harness {
     core.in.cmd_data = word;
     core.in.rsp_ready = rsp_ready;
     core.in.estop = estop;
+    // A word handed over stands for a frame that brought it: the watchdog's kick
+    // (CONFIG field 5 may set a timeout; idle spans may outlast it).
+    core.in.kick = valid;
     static constexpr uint32_t kRegs[] = {0x00, 0x10, 0x11, 0x1F, 0x01, 0x02, 0x03};
     core.in.rd_addr = kRegs[rd_addr++ % std::size(kRegs)];
     const model::CpCoreOut o = core.outputs();
     check(o);
     const bool taken = valid && o.cmd_ready && !rst;
+    // WATCHDOG latches only after a whole timeout (4096 clocks at least) with no kick.
+    if (o.err_code == 19 && !(have_prev && prev.err_code == 19))
+      FUZZ_CHECK(since_kick >= 4096, "WATCHDOG after %llu clocks without a kick", (unsigned long long)since_kick);
+    since_kick = valid ? 0 : since_kick + 1;
     prev = o;
     have_prev = true;
     prev_estop = estop;
@@ -247,6 +258,7 @@ struct Harness {
     }
     if (!judge || !stayed_idle || out_of_time()) return;
     const model::CpCoreOut after = core.outputs();
+    if (after.err_code == 19) return;  // the watchdog ran out meanwhile: its latch masks the verdict
     const uint32_t q0 = before.status >> 16 & 0xFF, q1 = after.status >> 16 & 0xFF;
     const uint32_t c0 = before.status >> 24, c1 = after.status >> 24;
     if (want != 0) {
@@ -278,7 +290,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       case 1:
       case 2: h.segment(in); break;
       case 3: {  // CONFIG: axis, field, value
-        const uint32_t w = 2u << 28 | (in.u8() % 3u) << 24 | (in.u8() % 6u) << 20 | in.u16();
+        // Fields 0..8: pulse timing, polarity, the watchdog, the inputs (docs/CORE.md); 9 is refused.
+        const uint32_t w = 2u << 28 | (in.u8() % 3u) << 24 | (in.u8() % 10u) << 20 | in.u16();
         h.send({w});
         break;
       }
