@@ -114,7 +114,9 @@ std::vector<std::string> declared_count_errors(const std::string& text, const st
   };
   std::istringstream in(text);
   std::vector<std::string> lines;
-  for (std::string l; std::getline(in, l);) lines.push_back(trim(l));
+  // Each line as libdxflib sees it: a C string, ended by its first NUL byte (an
+  // entity named "SPLINE\0..." is a SPLINE to it).
+  for (std::string l; std::getline(in, l);) lines.push_back(trim(l.substr(0, l.find('\0'))));
   std::optional<Entity> cur;
   for (std::size_t i = 0; i + 1 < lines.size(); i += 2) {
     const std::string code = std::to_string(std::atoi(lines[i].c_str()));

@@ -364,6 +364,16 @@ TEST(Dxf, DeclaredCountsPastTheEntityAreRefused) {
   EXPECT_NE(hidden.errors[0].find("LWPOLYLINE handle B7: group 90 declares 8777777777 vertices, the entity has 0"),
             std::string::npos)
       << hidden.errors[0];
+  // An entity name with a NUL byte after it is that entity to libdxflib (it reads C
+  // strings): "SPLINE\0..." declaring 53095030 control points is refused too
+  // (fuzz finding 14: an out-of-memory in libdxflib's allocation before the fix).
+  const std::string named = camtest::write(dir / "nul.dxf", std::string("0\nSECTION\n2\nENTITIES\n0\nSPLINE") +
+                                                                std::string(3, '\0') + "\xff\xff\n5\nC3\n73\n53095030\n"
+                                                                "0\nENDSEC\n0\nEOF\n");
+  const DxfResult nul = load_dxf(named);
+  ASSERT_EQ(nul.errors.size(), 1u);
+  EXPECT_NE(nul.errors[0].find("group 73 declares 53095030 control points, the entity has 0"), std::string::npos)
+      << nul.errors[0];
 }
 
 TEST(Dxf, NestedBlocksAndUnevenScaleMakeAnEllipse) {
