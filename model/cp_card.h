@@ -17,6 +17,7 @@
 #include "cpstep/builds.h"
 #include "model/cp_core.h"
 #include "model/cp_core_build.h"
+#include "model/cp_inputs.h"
 #include "model/cp_spi.h"
 
 namespace cpstep::model {
@@ -125,10 +126,7 @@ class CpCard {
   uint32_t estop_q_ = 0;  // [0] first flop, [1] the synchronized level
   // The inputs' synchronizer, {probe, max[N], min[N]}: first flop, second (the core's).
   uint32_t in_q0_ = 0, in_q1_ = 0;
-  uint32_t in_word(const In& i) const {
-    const uint32_t m = (1u << p_.core.n) - 1;
-    return (i.lim_min & m) | (i.lim_max & m) << p_.core.n | uint32_t(i.probe) << (2 * p_.core.n);
-  }
+  uint32_t in_word(const In& i) const { return pack_inputs(p_.core.n, i.lim_min, i.lim_max, i.probe); }
   mutable CpCoreOut core_out_{};
   mutable bool core_valid_ = false;
   mutable bool rd_stale_ = false;  // core_out_ holds but for rd_data (clock_front_end)

@@ -15,7 +15,7 @@ CpInputs::Regs CpInputs::reset_state() const {
 }
 
 uint32_t CpInputs::pins(const In& i) const {
-  return (i.lim_min & mask_) | (i.lim_max & mask_) << n_ | uint32_t(i.probe) << (2 * n_);
+  return pack_inputs(n_, i.lim_min, i.lim_max, i.probe);
 }
 
 CpInputs::Out CpInputs::outputs() const {

@@ -10,6 +10,13 @@
 
 namespace cpstep::model {
 
+// The inputs as one word, {probe, max[N], min[N]} (rtl/cp_inputs.v's `pins`, cp_card's
+// synchronizer).
+inline uint32_t pack_inputs(unsigned n, uint32_t lim_min, uint32_t lim_max, bool probe) {
+  const uint32_t m = (1u << n) - 1;
+  return (lim_min & m) | (lim_max & m) << n | uint32_t(probe) << (2 * n);
+}
+
 struct CpInputsIn {
   bool rst = false;
   uint32_t lim_min = 0, lim_max = 0;  // bit a: axis a's synchronized pin

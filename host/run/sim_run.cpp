@@ -438,8 +438,8 @@ card::CardCaps connect_sim(std::string_view board, Engine engine) {
 
 std::vector<uint32_t> words_with_watchdog(const CardJob& job, double watchdog_s) {
   std::vector<uint32_t> words;
-  if (card::watchdog_units(watchdog_s, uint32_t(job.clock_hz())) != 0)
-    card::encode_watchdog(watchdog_s, uint32_t(job.clock_hz()), words);
+  // 0 s sends nothing; any other value (a bad one throws) its CONFIG.
+  if (watchdog_s != 0) card::encode_watchdog(watchdog_s, uint32_t(job.clock_hz()), words);
   words.insert(words.end(), job.words.begin(), job.words.end());
   return words;
 }
