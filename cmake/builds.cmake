@@ -20,7 +20,7 @@ cmake_minimum_required(VERSION 3.25)
 
 set(CPSTEP_BUILDS_JSON "${CMAKE_CURRENT_LIST_DIR}/../rtl/builds.json")
 # The parameters every build names, in the order the build id hashes them.
-set(CPSTEP_BUILD_PARAM_NAMES N W UMAX KMAX CAW SAW TW CBUF_AW STEP_POL_RESET DIR_POL_RESET CONIC INPUTS)
+set(CPSTEP_BUILD_PARAM_NAMES N W UMAX KMAX CAW SAW TW CBUF_AW STEP_POL_RESET DIR_POL_RESET CONIC INPUTS FEED)
 
 function(cpstep_builds_fail msg)
   message(FATAL_ERROR "rtl/builds.json: ${msg}")
@@ -92,10 +92,10 @@ macro(cpstep_read_builds)
       else()
         list(APPEND _cb_params "${_cb_p}=${_cb_v}")
       endif()
-      # CONIC and INPUTS (added later) join the line only when set, so that the ids of
+      # CONIC, INPUTS and FEED (added later) join the line only when set, so that the ids of
       # the builds without them, and of the cards already flashed with them, stay what
       # they were.
-      if(NOT ((_cb_p STREQUAL "CONIC" OR _cb_p STREQUAL "INPUTS") AND _cb_v EQUAL 0))
+      if(NOT ((_cb_p STREQUAL "CONIC" OR _cb_p STREQUAL "INPUTS" OR _cb_p STREQUAL "FEED") AND _cb_v EQUAL 0))
         string(APPEND _cb_canon " ${_cb_p}=${_cb_v}")
       endif()
     endforeach()
@@ -168,6 +168,7 @@ struct Build {
   unsigned step_pol_reset = 1, dir_pol_reset = 1;
   unsigned conic = 0;          // CONIC segments (docs/CORE.md), the walker of 40 bits
   unsigned inputs = 0;         // limit switches and the probe (docs/CORE.md \"Inputs\")
+  unsigned feed = 0;           // feed hold and override (docs/CORE.md \"Feed hold and override\")
 };
 
 ${defs}inline constexpr const Build* kAll[] = {${all}};

@@ -21,6 +21,19 @@ inline unsigned clog2(uint64_t x) {
 
 inline int64_t sext16(uint32_t x) { return int64_t(int16_t(uint16_t(x))); }
 
+// A 16-bit tick counter (rtl/cp_inputs.v's samples, rtl/cp_feed.v's ramp ticks): a tick
+// when it reads 0, then it starts again at P - 1, a period of max(P, 1) clocks; writing
+// P starts it at 0. Its next value, and its value `cycles` clocks on.
+inline uint32_t tick_next(uint32_t count, uint32_t period, bool written) {
+  if (written) return 0;
+  if (count == 0) return period == 0 ? 0 : period - 1;
+  return (count - 1) & 0xFFFF;
+}
+inline uint32_t tick_skip(uint32_t count, uint32_t period, uint64_t cycles) {
+  const uint64_t p = period == 0 ? 1 : period;
+  return uint32_t((count + p - cycles % p) % p);
+}
+
 inline void put(FifoWord& w, unsigned lo, unsigned n, uint64_t value) {
   for (unsigned b = 0; b < n; ++b) {
     const unsigned at = lo + b;

@@ -38,6 +38,10 @@ const CpCoreOut& CpCard::core_outputs() const {
   c.ctl_flush = (ctl & 4) != 0;
   c.ctl_ack = (ctl & 8) != 0;
   c.kick = (ctl & 16) != 0;
+  c.ctl_hold = (ctl & 32) != 0;
+  c.ctl_resume = (ctl & 64) != 0;
+  c.ctl_ovr = (ctl & 128) != 0;
+  c.ctl_ovr_val = spi_.ctl_ovr_val();
   c.rd_addr = spi_.rd_addr();
   core_out_ = core_.outputs();
   core_valid_ = true;

@@ -10,12 +10,12 @@ namespace cpstep::model {
 
 CpCore::CpCore(Params p)
     : p_(p),
-      cmd_({p.n, p.umax, p.kmax, p.caw, p.tw, p.conic}),
+      cmd_({p.n, p.umax, p.kmax, p.caw, p.tw, p.conic, p.feed}),
       build_({p.n, p.w, p.umax, p.saw, p.conic}),
       run_({p.n, p.w, p.conic, p.ciw}),
       status_({p.n, p.w, p.umax, p.kmax, p.caw, p.saw, p.tw, p.pw, p.step_high_reset, p.step_low_reset,
                p.dir_setup_reset, p.dir_hold_reset, p.step_pol_reset, p.dir_pol_reset, p.cbuf_aw,
-               p.clock_hz, p.build_id, p.conic, p.ciw, p.inputs}),
+               p.clock_hz, p.build_id, p.conic, p.ciw, p.inputs, p.feed}),
       inputs_(p.n),
       seg_fifo_({p.conic ? 32 + p.n : 30 + p.n, p.saw + bits::clog2(p.n + 1)}),
       chunk_fifo_({81, p.caw}),
@@ -61,6 +61,19 @@ CpCore::Wires CpCore::settle() const {
   ii.probe = in.probe;
   ii.cfg_write = false;  // set with the parser's outputs below
   if (p_.inputs) w.inp = inputs_.outputs();
+  // The feed (registered outputs); without FEED the timer runs at scale 1.
+  CpFeedIn& fi = w.f_in;
+  fi.rst = in.rst;
+  fi.hold = in.ctl_hold;
+  fi.resume = in.ctl_resume;
+  fi.ovr = in.ctl_ovr;
+  fi.ovr_val = in.ctl_ovr_val & 0xFFFF;
+  if (p_.feed) {
+    w.fo = feed_.outputs();
+  } else {
+    w.fo.scale = 0x10000;
+    w.fo.feed = w.fo.override = 0;
+  }
   bool pulse_busy = false;
   uint32_t pulse_ready = 0;
   for (unsigned a = 0; a < n; ++a) {
@@ -83,6 +96,8 @@ CpCore::Wires CpCore::settle() const {
   s.run_level = w.run.level;
   s.ch_level = w.chunk.level;
   for (unsigned a = 0; a < n; ++a) s.position[a] = w.pulse[a].position;
+  s.feed = w.fo.feed;  // (registered: the READ port sees them now)
+  s.override = w.fo.override;
   s.rd_addr0 = in.cmd_data & 0xFF;
   s.rd_addr1 = in.rd_addr & 0xFF;
 
@@ -118,6 +133,7 @@ CpCore::Wires CpCore::settle() const {
   r.stop = in.ctl_stop || status_.wd_trip(in.kick);  // STOP, or the watchdog ran out
   r.lim_min = w.inp.lim_min;
   r.lim_max = w.inp.lim_max;
+  r.scale = w.fo.scale;
   r.abort = w.cmd.abort;
   r.fault = status_.fault();
   r.ch_valid = w.chunk.out_valid;
@@ -155,6 +171,8 @@ CpCore::Wires CpCore::settle() const {
   s.cfg_write = w.cmd.cfg_write;
   w.i_in.cfg_write = w.cmd.cfg_write;
   w.i_in.cfg_word = in.cmd_data;
+  w.f_in.cfg_write = w.cmd.cfg_write;
+  w.f_in.cfg_word = in.cmd_data;
   s.cfg_word = in.cmd_data;
   s.cmd_fault = w.cmd.fault;
   s.cmd_code = w.cmd.fault_code;
@@ -182,19 +200,21 @@ const CpCore::Wires& CpCore::wires() const {
 }
 
 bool CpCore::lazy_holds() const {
-  return lazy_left_ > 0 && in.rst == lazy_in_.rst && in.cmd_valid == lazy_in_.cmd_valid &&
-         in.cmd_data == lazy_in_.cmd_data && in.rsp_ready == lazy_in_.rsp_ready && in.estop == lazy_in_.estop &&
-         in.ctl_start == lazy_in_.ctl_start && in.ctl_stop == lazy_in_.ctl_stop &&
-         in.ctl_flush == lazy_in_.ctl_flush && in.ctl_ack == lazy_in_.ctl_ack && in.kick == lazy_in_.kick &&
-         in.lim_min == lazy_in_.lim_min && in.lim_max == lazy_in_.lim_max && in.probe == lazy_in_.probe;
+  // Every input as the quiet found it, but the read port's address (it only chooses
+  // what rd_data shows).
+  if (lazy_left_ == 0) return false;
+  In x = in;
+  x.rd_addr = lazy_in_.rd_addr;
+  return x == lazy_in_;
 }
 
 void CpCore::catch_up() {
   if (lazy_pending_) {
     cmd_.skip(lazy_pending_);
-    run_.skip(lazy_pending_);
+    run_.skip(lazy_pending_, scale());
     status_.skip(lazy_pending_);
     if (p_.inputs) inputs_.skip(lazy_pending_);
+    if (p_.feed) feed_.skip(lazy_pending_);
     for (CpPulse& p : pulses_) p.skip(lazy_pending_);
     wires_valid_ = false;
   }
@@ -295,6 +315,7 @@ uint64_t CpCore::quiet_for(const Wires& w, uint64_t limit) const {
   if (!build_.still(w.b_in)) return 0;
   h = std::min(h, status_.quiet_for(w.st_in, h));  // the watchdog's count counts
   if (p_.inputs) h = std::min(h, inputs_.quiet_for(w.i_in, h));  // and the inputs' sample counter
+  if (p_.feed) h = std::min(h, feed_.quiet_for(w.f_in, h));  // and the feed's tick counter (s settled or still)
   if (h == 0) return 0;
   if (!seg_fifo_.still(seg_in(w)) || !chunk_fifo_.still(chunk_in(w)) || !run_fifo_.still(run_in(w))) return 0;
   // The counters: the move timer and each pulse timer say how far they stay quiet.
@@ -313,9 +334,10 @@ void CpCore::skip(uint64_t cycles) {
   }
   catch_up();
   cmd_.skip(cycles);
-  run_.skip(cycles);
+  run_.skip(cycles, scale());
   status_.skip(cycles);
   if (p_.inputs) inputs_.skip(cycles);
+  if (p_.feed) feed_.skip(cycles);
   for (CpPulse& p : pulses_) p.skip(cycles);
   wires_valid_ = false;
 }
@@ -371,6 +393,10 @@ void CpCore::tick() {
   if (p_.inputs) {
     inputs_.in = w.i_in;
     inputs_.tick();
+  }
+  if (p_.feed) {
+    feed_.in = w.f_in;
+    feed_.tick();
   }
   wires_valid_ = false;
 }

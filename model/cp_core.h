@@ -20,6 +20,7 @@
 #include "model/cp_core_ports.h"
 #include "model/cp_fifo.h"
 #include "model/cp_pulse.h"
+#include "model/cp_feed.h"
 #include "model/cp_inputs.h"
 #include "model/cp_run.h"
 #include "model/cp_status.h"
@@ -82,6 +83,8 @@ class CpCore {
     CpRunOut r;
     CpInputsIn i_in;
     CpInputsOut inp;  // active limits and probe (all 0 without INPUTS)
+    CpFeedIn f_in;
+    CpFeedOut fo;     // the timer's scale (1 without FEED), READ 0x29/0x2A (0 without)
   };
   Wires settle() const;
   // settle() for the current inputs, computed once per clock.
@@ -92,6 +95,8 @@ class CpCore {
   bool lazy_holds() const;
   void catch_up();
   CpPulseIn pulse_in(unsigned axis, bool step) const;
+  // The move timer's scale now (cp_feed's register; 1 without FEED), Q2.16.
+  uint32_t scale() const { return p_.feed ? feed_.outputs().scale : 0x10000; }
   // The three queues' inputs this clock.
   CpFifoIn seg_in(const Wires& w) const;
   CpFifoIn chunk_in(const Wires& w) const;
@@ -103,6 +108,7 @@ class CpCore {
   CpRun run_;
   CpStatus status_;
   CpInputs inputs_;
+  CpFeed feed_;
   CpFifo seg_fifo_, chunk_fifo_, run_fifo_;
   std::vector<CpPulse> pulses_;
 

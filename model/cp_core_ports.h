@@ -25,6 +25,8 @@ struct CpCoreParams {
   unsigned ciw = 40;
   // Limit switches and the probe (cp_inputs; docs/CORE.md "Inputs").
   bool inputs = false;
+  // Feed hold, resume and override on scaled time (cp_feed; docs/CORE.md "Feed hold and override").
+  bool feed = false;
   bool step_pol_reset = true, dir_pol_reset = true;
   // Only reported (READ 0x23..0x25): the command buffer's address width in front
   // of the core (0: none), the clock in Hz, the build id.
@@ -42,6 +44,9 @@ struct CpCoreIn {
   uint32_t rd_addr = 0;  // the read port's register (8 bits)
   // Out of band (rtl/cp_spi.v URGENT frames): START, STOP.
   bool ctl_start = false, ctl_stop = false, ctl_flush = false, ctl_ack = false;
+  // HOLD, RESUME, OVERRIDE (out of band, FEED builds), and the override's value (Q2.14).
+  bool ctl_hold = false, ctl_resume = false, ctl_ovr = false;
+  uint32_t ctl_ovr_val = 0;
   // A whole frame with a good CRC ended (rtl/cp_spi.v frame_ok_o): the watchdog's kick.
   bool kick = false;
   // Limit switches (bit a: axis a) and the probe, synchronized.

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 
+#include "model/bits.h"
+
 namespace cpstep::model {
 
 CpInputs::CpInputs(unsigned n) : n_(n), mask_((1u << n) - 1) { r_ = reset_state(); }
@@ -38,9 +40,7 @@ void CpInputs::tick() {
   const bool tick = was.count == 0;
   const uint32_t field = i.cfg_word >> 20 & 0xF;
   const bool cfg_filter = i.cfg_write && field == 6;
-  q.count = (was.count - 1) & 0xFFFF;
-  if (tick) q.count = was.filter == 0 ? 0 : was.filter - 1;
-  if (cfg_filter) q.count = 0;
+  q.count = bits::tick_next(was.count, was.filter, cfg_filter);
   if (tick) {
     const uint32_t p = pins(i);
     q.s1 = p;
@@ -69,10 +69,7 @@ uint64_t CpInputs::quiet_for(const In& i, uint64_t limit) const {
 }
 
 void CpInputs::skip(uint64_t cycles) {
-  // The counter runs down to 0 and starts again at P - 1: a period of max(P, 1).
-  const uint64_t period = std::max<uint32_t>(r_.filter, 1);
-  const uint64_t back = cycles % period;
-  r_.count = uint32_t((r_.count + period - back) % period);
+  r_.count = bits::tick_skip(r_.count, r_.filter, cycles);
 }
 
 }  // namespace cpstep::model

@@ -43,7 +43,9 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   o.fault_conic = q.running && q.cur_valid && !stopping && due && q.rp_valid && conic_on && wo.move_valid &&
                   wo.move_end != seg_last;
   o.fault = o.fault_conic;
-  o.stretch = q.running && due && !q.late && !stopping && (!o.fire || q.elapsed != q.delay);
+  // On time: elapsed passed delay by less than the last clock's increment (at scale 1: equal).
+  const bool on_time = q.elapsed - q.delay < q.inc;
+  o.stretch = q.running && due && !q.late && !stopping && (!o.fire || !on_time);
   o.seg_done = o.fire && seg_last;
   o.seg_active = q.running && q.cur_valid && !o.seg_done;
   o.step = o.fire ? move_steps : 0;
@@ -56,7 +58,12 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
 
   rp.lane = q.cur_lane;
   rp.next = q.rp_ptr;
-  d.elapsed = q.elapsed == ~0u ? q.elapsed : q.elapsed + 1;
+  // Scaled time: this clock's increment is the carry of the fraction plus the scale.
+  const uint32_t ph_sum = q.ph + (i.scale & 0x3FFFF);
+  const uint32_t inc = ph_sum >> 16;
+  d.ph = ph_sum & 0xFFFF;
+  d.inc = inc;
+  d.elapsed = uint32_t(std::min<uint64_t>(uint64_t(q.elapsed) + inc, 0xFFFFFFFFu));
   auto load_chunk = [&] {
     const FifoWord& head = i.ch_head;
     o.ch_pop = true;
@@ -71,7 +78,7 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
     d.chunk_loaded = true;
   }
   if (o.fire) {
-    d.elapsed = 1;
+    d.elapsed = inc;
     d.dir = (q.dir & ~plane_step) | (plane_dir & plane_step);  // a plane axis keeps its direction
     if (q.moves_left != 1) {
       d.moves_left = (q.moves_left - 1) & 0xFFFF;
@@ -128,7 +135,7 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   }
   if (i.start && !i.fault && !q.running) {
     d.running = true;
-    d.elapsed = 1;
+    d.elapsed = inc;
   }
   // STOP: the run is off; what is loaded and queued stays (a START goes on, the
   // pending move timed from it).
@@ -189,15 +196,30 @@ uint64_t CpRun::quiet_for(const In& i) const {
   const Out o = eval(i, d, rp);
   if (o.fire || o.stretch || o.seg_done || o.ch_pop || o.run_pop || o.fault || o.lim_hit || rp.re) return 0;
   d.elapsed = r_.elapsed;
+  d.ph = r_.ph;
+  d.inc = r_.inc;
   if (!(d == r_)) return 0;
-  // elapsed counts up (saturating); the next thing it can change is the pending
-  // move falling due at elapsed == delay.
-  if (r_.chunk_loaded && r_.elapsed < r_.delay) return r_.delay - r_.elapsed;
+  // elapsed counts up by the scaled time (saturating); the next thing it can change
+  // is the pending move falling due at elapsed >= delay: after c clocks with
+  // ph + c·scale >= (delay - elapsed)·2^16. At scale 0 it never does.
+  const uint64_t sc = i.scale & 0x3FFFF;
+  if (r_.chunk_loaded && r_.elapsed < r_.delay) {
+    if (sc == 0) return kForever;
+    const uint64_t need = (uint64_t(r_.delay - r_.elapsed) << 16) - r_.ph;
+    return (need + sc - 1) / sc;
+  }
   return kForever;
 }
 
-void CpRun::skip(uint64_t cycles) {
-  r_.elapsed = uint32_t(std::min<uint64_t>(uint64_t(r_.elapsed) + cycles, 0xFFFFFFFFu));
+void CpRun::skip(uint64_t cycles, uint32_t scale) {
+  if (cycles == 0) return;
+  const unsigned __int128 sc = scale & 0x3FFFF;
+  const unsigned __int128 total = r_.ph + sc * cycles;
+  const unsigned __int128 before_last = r_.ph + sc * (cycles - 1);
+  r_.inc = uint32_t(((before_last & 0xFFFF) + sc) >> 16);
+  r_.ph = uint32_t(total & 0xFFFF);
+  const unsigned __int128 e = r_.elapsed + (total >> 16);
+  r_.elapsed = e > 0xFFFFFFFFu ? 0xFFFFFFFFu : uint32_t(e);
 }
 
 void CpRun::tick() {
@@ -234,6 +256,8 @@ void CpRun::tick() {
     d.dir = 0;
     d.cur_conic = false;
     d.out = d.torch = false;
+    d.ph = 0;
+    d.inc = 1;
   }
   r_ = d;
 }

@@ -40,6 +40,8 @@ struct CpRunIn {
   uint32_t pulse_ready = 0;  // bit a: axis a's pulse timer is ready
   // Active limit switches (cp_inputs), bit a: axis a.
   uint32_t lim_min = 0, lim_max = 0;
+  // The timer's scale, Q2.16 (cp_feed; 0x10000 = 1): the scaled time each clock adds.
+  uint32_t scale = 0x10000;
   // The conic walker's word port (cp_build).
   bool cw_wr = false;
   uint32_t cw_sel = 0, cw_data = 0;
@@ -78,8 +80,8 @@ class CpRun {
   // due. 0: clock it normally; kForever: nothing here ends the quiet.
   static constexpr uint64_t kForever = ~uint64_t(0);
   uint64_t quiet_for(const In& i) const;
-  // Advances that many quiet clocks at once.
-  void skip(uint64_t cycles);
+  // Advances that many quiet clocks at once, at the timer's scale `scale` (Q2.16).
+  void skip(uint64_t cycles, uint32_t scale);
 
   // Registered outputs, for the core's other parts.
   bool running() const { return r_.running; }
@@ -106,7 +108,9 @@ class CpRun {
     bool cur_end = false;
     bool out = false;    // reset: the out bit of the segment last loaded
     bool torch = false;  // reset: the torch pin
-    uint32_t delay = 0, moves_left = 0, elapsed = 0;
+    uint32_t delay = 0, moves_left = 0, elapsed = 0;  // elapsed: scaled time since the last move
+    uint32_t ph = 0;   // reset: the fraction of scaled time (Q0.16)
+    uint32_t inc = 1;  // reset: what the last clock added to elapsed
     uint32_t timer_inc = 0;   // the running increment, 32 bits (signed, mod 2^32)
     uint32_t timer_add2 = 0;  // 16 bits
     bool timer_last = false;  // the timer's chunk is its segment's last

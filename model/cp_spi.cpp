@@ -47,6 +47,10 @@ CpSpi::Out CpSpi::outputs() const {
   o.ctl_flush = (c & 4) != 0;
   o.ctl_ack = (c & 8) != 0;
   o.frame_ok = (c & 16) != 0;
+  o.ctl_hold = (c & 32) != 0;
+  o.ctl_resume = (c & 64) != 0;
+  o.ctl_ovr = (c & 128) != 0;
+  o.ctl_ovr_val = ctl_ovr_val();
   return o;
 }
 
@@ -60,7 +64,7 @@ uint32_t CpSpi::ctl() const {
   if (!q.urg) return kick;
   const bool in_cmd = q.hdr_left != 0 || q.chunks_left != 0;
   const bool ok = whole && !q.bad_type && !q.no_room && !q.bad_cmd && !in_cmd;
-  return kick | (ok ? q.uw & 15 : 0);
+  return kick | (ok ? (q.uw & 15) | (q.uw >> 4 & 7) << 5 : 0);
 }
 
 bool CpSpi::tick_synchronizers_only() {
@@ -168,7 +172,7 @@ void CpSpi::tick() {
           if (q.left == 1) d.ph = kPhaseCrc;
           if (q.urg) {
             // An URGENT frame's word: not a command, kept for its CS rise.
-            d.uw = rx_word & 15;
+            d.uw = (rx_word >> 16) << 7 | (rx_word & 0x7F);
           } else if (!in_cmd) {
             // A command starts: a SEGMENT has H1, N v words and its chunks to come,
             // a CONIC also K0..K6 before its chunks.

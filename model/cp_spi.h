@@ -40,6 +40,10 @@ struct CpSpiOut {
   uint32_t rd_addr = 0;  // 8 bits
   // An URGENT frame accepted at this CS rise: its START and STOP (docs/PROTOCOL.md).
   bool ctl_start = false, ctl_stop = false, ctl_flush = false, ctl_ack = false;
+  // Its HOLD, RESUME, OVERRIDE (FEED builds), and the override's value (Q2.14, the
+  // last URGENT word's [31:16]).
+  bool ctl_hold = false, ctl_resume = false, ctl_ovr = false;
+  uint32_t ctl_ovr_val = 0;
   // A whole frame with a good CRC ended at this CS rise: the core's watchdog kick.
   bool frame_ok = false;
 };
@@ -62,10 +66,13 @@ class CpSpi {
   bool cmd_valid() const { return cbuf_.out_valid(); }
   uint32_t cmd_data() const { return uint32_t(cbuf_.out_word0()); }
   uint32_t rd_addr() const;
-  // An URGENT frame's word [3:0] in the cycle its CS rise accepts it, and bit 4 in
-  // the cycle of the CS rise ending any whole frame with a good CRC, else 0
-  // (registered state only: rtl/cp_spi.v ctl_start_o .. ctl_ack_o, frame_ok_o).
+  // An URGENT frame's word [3:0] in the cycle its CS rise accepts it, bit 4 in the
+  // cycle of the CS rise ending any whole frame with a good CRC, and the word's
+  // [6:4] (HOLD, RESUME, OVERRIDE) as bits 7:5 when accepted, else 0 (registered
+  // state only: rtl/cp_spi.v ctl_start_o .. ctl_ovr_o, frame_ok_o).
   uint32_t ctl() const;
+  // The last URGENT word's [31:16] (rtl/cp_spi.v ctl_ovr_val_o).
+  uint32_t ctl_ovr_val() const { return r_.uw >> 7 & 0xFFFF; }
   // Every synchronizer stage holds what the current inputs load into it: another
   // cycle with the same pins changes no synchronizer (with rst: the reset values).
   bool pins_settled() const { return pins_settled(in.rst, in.sck, in.cs_n, in.mosi); }
@@ -157,7 +164,7 @@ class CpSpi {
     uint32_t hdr_left = 0, chunks_left = 0, cw = 0;
     bool seg_add2 = false;
     bool urg = false;  // an URGENT frame: its one word is not a command
-    uint32_t uw = 0;   // its word's [3:0]
+    uint32_t uw = 0;   // its word's {[31:16], [6:0]}
     uint32_t sr = 0;
   };
 

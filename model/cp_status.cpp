@@ -48,7 +48,8 @@ uint32_t CpStatus::status_word(const In& i) const {
   const uint32_t segments =
       ((i.segq & bits::mask(sqw + 1)) + uint32_t(i.build_busy) + (i.run_level & 3) + uint32_t(i.cur_valid)) &
       0xFF;
-  return chunks << 24 | segments << 16 | (q.err & 0xFF) << 8 | uint32_t(i.torch) << 5 | uint32_t(q.enable) << 4 |
+  return chunks << 24 | segments << 16 | (q.err & 0xFF) << 8 | uint32_t(p_.feed && !(i.feed >> 30 & 1)) << 7 | (i.feed >> 31 & 1) << 6 |
+         uint32_t(i.torch) << 5 | uint32_t(q.enable) << 4 |
          uint32_t(i.estop) << 3 | uint32_t(q.stretched) << 2 | uint32_t(q.fault) << 1 |
          uint32_t(i.running);
 }
@@ -65,12 +66,14 @@ uint32_t CpStatus::read(const In& i, uint32_t reg) const {
                       (p_.n & 0xFF);
     case 0x21: return p_.w;
     case 0x22: return p_.umax;
-    case 0x23: return uint32_t(p_.inputs) << 24 | kProtocolVersion << 16 | (p_.cbuf_aw & 0xFF) << 8 | (p_.pw & 0xFF);
+    case 0x23: return uint32_t(p_.feed) << 25 | uint32_t(p_.inputs) << 24 | kProtocolVersion << 16 | (p_.cbuf_aw & 0xFF) << 8 | (p_.pw & 0xFF);
     case 0x24: return p_.clock_hz;
     case 0x25: return p_.build_id;
     case 0x26: return p_.conic ? p_.ciw : 0;
     case 0x27: return uint32_t(i.probe) << 16 | (i.lim_max & 0xFF) << 8 | (i.lim_min & 0xFF);
     case 0x28: return (q.lim_max_at & 0xFF) << 8 | (q.lim_min_at & 0xFF);
+    case 0x29: return i.feed;
+    case 0x2A: return i.override & 0xFFFF;
     default: {
       const uint32_t r = reg & 0xFF;
       if (r >= 0x10 && r < 0x10 + p_.n) return uint32_t(i.position[r - 0x10]);

@@ -23,6 +23,7 @@ struct CpStatusParams {
   bool conic = false;
   unsigned ciw = 40;
   bool inputs = false;  // reported only (READ 0x23 [24]): limit and probe inputs
+  bool feed = false;    // reported only (READ 0x23 [25]): feed hold and override
 };
 
 struct CpStatusIn {
@@ -40,6 +41,8 @@ struct CpStatusIn {
   // The inputs, active (cp_inputs): READ 0x27 live, 0x28 the limits at LIMIT.
   uint32_t lim_min = 0, lim_max = 0;
   bool probe = false;
+  // Feed hold and override (cp_feed; 0 without): READ 0x29, 0x2A.
+  uint32_t feed = 0, override = 0;
   bool stretch = false, fire = false, seg_done = false, seg_active = false;
   bool running = false, cur_valid = false;
   bool torch = false;  // the torch output (status bit 5)

@@ -41,7 +41,9 @@ module cp_card #(
     parameter integer CONIC = 0,
     parameter integer CIW = 40,
     // Limit switches and the probe (docs/CORE.md "Inputs").
-    parameter integer INPUTS = 0
+    parameter integer INPUTS = 0,
+    // Feed hold, resume and override (docs/CORE.md "Feed hold and override").
+    parameter integer FEED = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -91,6 +93,8 @@ wire        cmd_valid, cmd_ready, rsp_valid, rsp_ready;
 wire [31:0] cmd_data, rsp_data, rd_data, status, stretch_cnt, moves_done, segs_done;
 wire [7:0]  rsp_addr, rd_addr;
 wire        ctl_start, ctl_stop, ctl_flush, ctl_ack;  // an URGENT frame's bits (docs/PROTOCOL.md)
+wire        ctl_hold, ctl_resume, ctl_ovr;          // its feed bits, and the override value
+wire [15:0] ctl_ovr_val;
 wire        frame_ok;   // a whole frame with a good CRC: the watchdog's kick
 // The core's READ reply data, status and counter outputs: the SPI front end reads
 // the same registers through the core's read port instead.
@@ -104,11 +108,13 @@ cp_spi #(.N(N), .CBUF_AW(CBUF_AW), .CONIC(CONIC)) u_spi (
     .rsp_valid_i(rsp_valid), .rsp_ready_o(rsp_ready), .rsp_addr_i(rsp_addr),
     .rd_addr_o(rd_addr), .rd_data_i(rd_data),
     .estop_i(estop), .enable_i(enable_o),
-    .ctl_start_o(ctl_start), .ctl_stop_o(ctl_stop), .ctl_flush_o(ctl_flush), .ctl_ack_o(ctl_ack), .frame_ok_o(frame_ok));
+    .ctl_start_o(ctl_start), .ctl_stop_o(ctl_stop), .ctl_flush_o(ctl_flush), .ctl_ack_o(ctl_ack),
+    .ctl_hold_o(ctl_hold), .ctl_resume_o(ctl_resume), .ctl_ovr_o(ctl_ovr), .ctl_ovr_val_o(ctl_ovr_val),
+    .frame_ok_o(frame_ok));
 
 cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32),
           .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW),
-          .INPUTS(INPUTS), .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
+          .INPUTS(INPUTS), .FEED(FEED), .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
           .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
           .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET)) u_core (
     .clk(clk), .rst(rst),
@@ -117,6 +123,7 @@ cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
     .rsp_addr_o(rsp_addr), .rd_addr_i(rd_addr), .rd_data_o(rd_data),
     .estop_i(estop), .ctl_start_i(ctl_start), .ctl_stop_i(ctl_stop), .ctl_flush_i(ctl_flush),
     .ctl_ack_i(ctl_ack), .kick_i(frame_ok),
+    .ctl_hold_i(ctl_hold), .ctl_resume_i(ctl_resume), .ctl_ovr_i(ctl_ovr), .ctl_ovr_val_i(ctl_ovr_val),
     .lim_min_i(in_q1[N-1:0]), .lim_max_i(in_q1[2*N-1:N]), .probe_i(in_q1[2*N]),
     .step_o(step_o), .dir_o(dir_o), .torch_o(torch_o),
     .running_o(running_o), .fault_o(fault_o), .err_code_o(err_code_o),

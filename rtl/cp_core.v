@@ -51,7 +51,11 @@ module cp_core #(
     parameter integer CIW = 40,
     // Limit switches and the probe (cp_inputs; docs/CORE.md "Inputs"); 0: the
     // inputs are not looked at (READ 0x27 reads 0, no LIMIT).
-    parameter integer INPUTS = 0
+    parameter integer INPUTS = 0,
+    // Feed hold, resume and override on scaled time (cp_feed; docs/CORE.md "Feed hold
+    // and override"); 0: the timer runs at scale 1, the URGENT feed bits are ignored,
+    // CONFIG field 9 refused, READ 0x29/0x2A read 0.
+    parameter integer FEED = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -83,6 +87,12 @@ module cp_core #(
     // ACK (out of band): clears a latched fault, an E-stop's included (CONTROL's
     // CLEAR does not clear an E-stop), when the E-stop input is released.
     input  wire          ctl_ack_i,
+    // HOLD, RESUME, OVERRIDE (out of band; FEED builds): the feed's target, and the
+    // override's value (Q2.14) with OVERRIDE.
+    input  wire          ctl_hold_i,
+    input  wire          ctl_resume_i,
+    input  wire          ctl_ovr_i,
+    input  wire [15:0]   ctl_ovr_val_i,
     // A whole frame with a good CRC ended (the SPI front end): the watchdog's kick
     // (docs/CORE.md "Watchdog"; CONFIG field 5 sets its timeout, 0 = off).
     input  wire          kick_i,
@@ -158,6 +168,9 @@ wire          wd_trip;     // the watchdog ran out: the runner stops (cp_status)
 wire          lim_hit;     // the runner stopped at an active limit
 wire [N-1:0]  lim_min, lim_max;   // active limits (cp_inputs)
 wire          probe;
+wire [17:0]   scale;       // the timer's scale (cp_feed), Q2.16
+wire [31:0]   feed_word;   // READ 0x29
+wire [15:0]   override;    // READ 0x2A
 // What empties the queues, the builder and the runner: the status's flush (a fault,
 // E-stop, ABORT) or an out-of-band FLUSH.
 wire          flush_all = flush || ctl_flush_i;
@@ -195,7 +208,7 @@ wire [PW-1:0] pulse_pos [0:N-1];
 wire unused = &{1'b0, seg_used, seg_level, ch_used, run_used, run_full};
 
 // ---------------------------------------------------------------- parts
-cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW), .CONIC(CONIC)) u_cmd (
+cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW), .CONIC(CONIC), .FEED(FEED)) u_cmd (
     .clk(clk), .rst(rst), .flush_i(ctl_flush_i),
     .cmd_valid_i(cmd_valid_i), .cmd_ready_o(cmd_ready_o), .cmd_data_i(cmd_data_i),
     .rsp_valid_o(rsp_valid_o), .rsp_ready_i(rsp_ready_i), .rsp_data_o(rsp_data_o),
@@ -239,7 +252,7 @@ cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
     .full_o(run_full), .used_o(run_used), .level_o(run_level),
     .out_valid_o(run_head_valid), .out_ready_i(run_pop), .out_data_o(run_head));
 
-cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW)) u_run (
+cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW), .FEED(FEED)) u_run (
     .clk(clk), .rst(rst), .flush_i(flush_all), .estop_i(estop_i),
     .start_i(start_req || ctl_start_i), .stop_i(ctl_stop_i || wd_trip), .abort_i(abort_req), .fault_i(fault),
     .ch_valid_i(ch_head_valid), .ch_head_i(ch_head), .ch_pop_o(ch_pop),
@@ -253,20 +266,21 @@ cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW)) u_run (
     .pulse_ready_i(pulse_ready), .step_o(pulse_step), .dir_o(run_dir),
     .running_o(running), .torch_o(torch), .cur_valid_o(cur_valid), .fire_o(fire), .seg_done_o(seg_done),
     .stretch_o(stretch), .seg_active_o(seg_active), .fault_o(run_fault),
-    .fault_conic_o(run_conic), .lim_min_i(lim_min), .lim_max_i(lim_max), .lim_hit_o(lim_hit));
+    .fault_conic_o(run_conic), .lim_min_i(lim_min), .lim_max_i(lim_max), .lim_hit_o(lim_hit), .scale_i(scale));
 
 cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(PW),
             .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
             .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
             .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET),
             .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC),
-            .CIW(CIW), .INPUTS(INPUTS)) u_status (
+            .CIW(CIW), .INPUTS(INPUTS), .FEED(FEED)) u_status (
     .clk(clk), .rst(rst), .estop_i(estop_i),
     .abort_i(abort_req), .clear_i(clear_req), .ack_i(ctl_ack_i), .kick_i(kick_i), .drivers_on_i(drivers_on_req),
     .drivers_off_i(drivers_off_req), .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i),
     .cmd_fault_i(cmd_fault), .cmd_code_i(cmd_code), .build_fault_i(build_fault),
     .run_fault_i(run_fault), .run_conic_i(run_conic), .lim_hit_i(lim_hit),
     .lim_min_i(lim_min), .lim_max_i(lim_max), .probe_i(probe),
+    .feed_i(feed_word), .override_i(override),
     .stretch_i(stretch), .fire_i(fire), .seg_done_i(seg_done), .seg_active_i(seg_active),
     .running_i(running), .torch_i(torch), .cur_valid_i(cur_valid), .segq_i(segq), .build_busy_i(build_busy),
     .run_level_i(run_level), .ch_level_i(ch_level), .position_i(position_o),
@@ -291,6 +305,21 @@ generate
         assign lim_max = {N{1'b0}};
         assign probe   = 1'b0;
         wire unused_pins = &{1'b0, lim_min_i, lim_max_i, probe_i};
+    end
+endgenerate
+
+// Feed hold and override: the timer's scale (CONFIG field 9, URGENT bits 4..6).
+generate
+    if (FEED != 0) begin : g_feed
+        cp_feed u_feed (
+            .clk(clk), .rst(rst), .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i),
+            .hold_i(ctl_hold_i), .resume_i(ctl_resume_i), .ovr_i(ctl_ovr_i), .ovr_val_i(ctl_ovr_val_i),
+            .scale_o(scale), .feed_o(feed_word), .override_o(override));
+    end else begin : g_no_feed
+        assign scale     = 18'h10000;
+        assign feed_word = 32'd0;
+        assign override  = 16'd0;
+        wire unused_feed = &{1'b0, ctl_hold_i, ctl_resume_i, ctl_ovr_i, ctl_ovr_val_i};
     end
 endgenerate
 

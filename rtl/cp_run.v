@@ -5,7 +5,10 @@
 // The banks hold two lanes of every axis's pattern: cp_build writes the build
 // lane while the replay reads the running one, one move a clock, into the replay
 // registers. The timer takes chunks from the chunk queue (interval, count, add,
-// add2) and counts the cycles since the last move event. A move fires when the
+// add2) and counts the scaled time since the last move event: each clock adds
+// scale_i (cp_feed, Q2.16; docs/CORE.md "Feed hold and override") to a fraction
+// register and elapsed takes its carry (0, 1 or 2; always 1 at scale 1, so a
+// move's interval is in clocks of scaled time). A move fires when the
 // run is on, a segment is loaded, its move is due, the replay registers hold it
 // and every stepping axis's cp_pulse is ready; a move that is due and cannot
 // fire is counted late once. At a segment's last move the next built segment is
@@ -36,7 +39,10 @@ module cp_run #(
     parameter integer W = 1024,
     parameter integer CONIC = 0,
     // The conic walker's internal width (docs/CONIC.md "The walk, bit-serial").
-    parameter integer CIW = 40
+    parameter integer CIW = 40,
+    // 1: the timer runs on scale_i (cp_feed); 0: scale_i is not looked at, the timer
+    // counts clocks (its scale is 1 and synthesis keeps no fraction register).
+    parameter integer FEED = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -50,6 +56,8 @@ module cp_run #(
     // toward an active limit stops at once (lim_hit_o; docs/CORE.md "Inputs").
     input  wire [N-1:0]  lim_min_i,
     input  wire [N-1:0]  lim_max_i,
+    // The timer's scale, Q2.16 (cp_feed; 0x10000 = 1): the scaled time each clock adds.
+    input  wire [17:0]   scale_i,
 
     // Chunk queue head: {last, add2, count, add, interval}.
     input  wire          ch_valid_i,
@@ -118,7 +126,9 @@ reg [31:0]   delay_q, delay_d;
 reg [15:0]   left_q, left_d;
 reg [31:0]   tinc_q, tinc_d;             // the running increment (signed)
 reg [15:0]   tadd2_q, tadd2_d;
-reg [31:0]   elapsed_q, elapsed_d;
+reg [31:0]   elapsed_q, elapsed_d;       // scaled time since the last move event
+reg [15:0]   ph_q;                       // reset: the fraction of scaled time (Q0.16)
+reg [1:0]    inc_q;                      // reset: what the last clock added to elapsed
 reg          tlast_q, tlast_d;           // the timer's chunk is its segment's last
 reg          due_q, due_d;               // reset: ch_loaded_q && elapsed_q >= delay_q
 reg          cur_conic_q, cur_conic_d;   // the loaded segment is a conic, its plane axes:
@@ -205,7 +215,7 @@ assign wk_ready = fire_o && conic_on;
 assign fault_conic_o = running_q && cur_valid_q && !estop_i && !abort_i && !halt && due && rp_valid_q &&
                        conic_on && wk_valid && wk_end != seg_last;
 assign stretch_o = running_q && due && !late_q && !estop_i && !abort_i && !halt &&
-                   (!fire_o || elapsed_q != delay_q);
+                   (!fire_o || !on_time);
 assign seg_done_o = fire_o && seg_last;
 
 // ---------------------------------------------------------------- next state
@@ -217,15 +227,24 @@ wire unused_run = &{1'b0, run_wide[RFW]};
 
 // The timer's next values, whatever fires: the count one on (saturating), the next
 // interval of the running chunk, the head chunk's first.
-wire [31:0] elapsed_inc = (elapsed_q == 32'hFFFF_FFFF) ? elapsed_q : elapsed_q + 1'b1;
+// Scaled time: this clock's increment inc (the fraction's carry).
+wire [17:0] ph_sum      = {2'b00, ph_q} + scale_i;
+wire [1:0]  inc         = (FEED != 0) ? ph_sum[17:16] : 2'd1;
+wire [32:0] elapsed_sum = {1'b0, elapsed_q} + {31'd0, inc};
+wire [31:0] elapsed_inc = elapsed_sum[32] ? 32'hFFFF_FFFF : elapsed_sum[31:0];
+wire [31:0] inc_word    = {30'd0, inc};
 wire [31:0] delay_sum   = delay_q + tinc_q;
 wire [31:0] head_delay  = ch_head_i[31:0];
 wire        start_now   = start_i && !fault_i && !running_q;  // exclusive with fire_o
 wire        ge_inc_delay = elapsed_inc >= delay_q;
 wire        ge_inc_head  = elapsed_inc >= head_delay;
-wire        le1_delay    = delay_q <= 32'd1;
-wire        le1_head     = head_delay <= 32'd1;
-wire        le1_sum      = delay_sum <= 32'd1;
+wire        le1_delay    = delay_q <= inc_word;
+wire        le1_head     = head_delay <= inc_word;
+wire        le1_sum      = delay_sum <= inc_word;
+// The pending move is on time when it fires in the clock its scaled time reached it:
+// elapsed passed delay by less than the last clock's increment (at scale 1: equal).
+wire [31:0] past_due     = elapsed_q - delay_q;
+wire        on_time      = past_due < {30'd0, inc_q};
 
 always @* begin
     running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
@@ -256,7 +275,7 @@ always @* begin
     end
     if (fire_o) begin
         step_o    = move_steps;
-        elapsed_d = 32'd1;
+        elapsed_d = inc_word;
         // A plane axis that steps keeps the direction it stepped in.
         for (i = 0; i < N; i = i + 1)
             if (plane_step[i]) dir_d[i] = plane_dir[i];
@@ -313,7 +332,7 @@ always @* begin
     end
     if (start_now) begin
         running_d = 1'b1;
-        elapsed_d = 32'd1;
+        elapsed_d = inc_word;
     end
     // STOP: the run is off; what is loaded and queued stays (a START goes on, the
     // pending move timed from it). A limit hit: the same, then its fault's flush.
@@ -331,8 +350,9 @@ always @* begin
     // the cycle after an E-stop or an abort is seen (their flush comes in that cycle).
     torch_d = running_d && out_d;
     // due_d = ch_loaded_d && elapsed_d >= delay_d, case by case. A move that fires
-    // sets elapsed to 1 and either steps to its chunk's next interval or takes the
-    // head chunk (or none); otherwise elapsed counts on (or starts at 1) against the
+    // sets elapsed to this clock's increment and either steps to its chunk's next
+    // interval or takes the head chunk (or none); otherwise elapsed counts on (or
+    // starts at the increment) against the
     // running interval or the head chunk taken now.
     if (flush_i)
         due_d = 1'b0;
@@ -360,6 +380,8 @@ always @(posedge clk) begin
         cur_conic_q <= 1'b0;
         out_q       <= 1'b0;
         torch_q     <= 1'b0;
+        ph_q        <= 16'd0;
+        inc_q       <= 2'd1;
     end else begin
         running_q   <= running_d;
         cur_valid_q <= cur_valid_d;
@@ -373,6 +395,8 @@ always @(posedge clk) begin
         cur_conic_q <= cur_conic_d;
         out_q       <= out_d;
         torch_q     <= torch_d;
+        ph_q        <= (FEED != 0) ? ph_sum[15:0] : 16'd0;
+        inc_q       <= inc;
     end
     cur_au_q <= cur_au_d;  cur_av_q <= cur_av_d;
     cur_end_q <= cur_end_d;  delay_q <= delay_d;  left_q <= left_d;  tinc_q <= tinc_d;

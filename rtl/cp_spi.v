@@ -61,6 +61,12 @@ module cp_spi #(
     output reg           ctl_stop_o,
     output reg           ctl_flush_o,
     output reg           ctl_ack_o,
+    // [4] HOLD, [5] RESUME, [6] OVERRIDE to [31:16] (Q2.14): the feed's target (cp_feed,
+    // FEED builds); the value is the last URGENT word's, valid with ctl_ovr_o.
+    output reg           ctl_hold_o,
+    output reg           ctl_resume_o,
+    output reg           ctl_ovr_o,
+    output wire [15:0]   ctl_ovr_val_o,
     // A whole frame with a good CRC ended at this CS rise, whatever its type or
     // result: the host is alive (the core's watchdog kick, docs/CORE.md "Watchdog").
     output reg           frame_ok_o
@@ -182,7 +188,7 @@ reg           bad_type_q, bad_type_d;
 reg           no_room_q, no_room_d;
 reg           bad_cmd_q, bad_cmd_d;
 reg           urg_q, urg_d;              // an URGENT frame: its one word is not a command
-reg [3:0]     uw_q, uw_d;                // its word's [3:0]
+reg [22:0]    uw_q, uw_d;                // its word's {[31:16], [6:0]}
 // Whole-command tracking: a segment's header words, then its chunks' words.
 reg [4:0]     hdr_left_q, hdr_left_d;
 reg [15:0]    chunks_left_q, chunks_left_d;
@@ -231,6 +237,7 @@ always @* begin
     sr_d = sr_q;
     buf_wr = 1'b0;  buf_commit = 1'b0;  buf_rollback = 1'b0;
     ctl_start_o = 1'b0;  ctl_stop_o = 1'b0;  ctl_flush_o = 1'b0;  ctl_ack_o = 1'b0;
+    ctl_hold_o = 1'b0;  ctl_resume_o = 1'b0;  ctl_ovr_o = 1'b0;
     frame_ok_o = 1'b0;
 
     if (cs_fall) begin
@@ -274,7 +281,7 @@ always @* begin
             if (left_q == 16'd1) ph_d = PH_CRC;
             if (urg_q) begin
                 // An URGENT frame's word: not a command, kept for its CS rise.
-                uw_d = rx_word[3:0];
+                uw_d = {rx_word[31:16], rx_word[6:0]};
             end else if (!in_cmd) begin
                 // A command starts: a SEGMENT has H1, N v words and its chunks to
                 // come, a CONIC also K0..K6 before its chunks.
@@ -329,6 +336,9 @@ always @* begin
         ctl_stop_o   = result_d == R_OK && urg_q && uw_q[1];
         ctl_flush_o  = result_d == R_OK && urg_q && uw_q[2];
         ctl_ack_o    = result_d == R_OK && urg_q && uw_q[3];
+        ctl_hold_o   = result_d == R_OK && urg_q && uw_q[4];
+        ctl_resume_o = result_d == R_OK && urg_q && uw_q[5];
+        ctl_ovr_o    = result_d == R_OK && urg_q && uw_q[6];
         frame_ok_o   = ph_q == PH_DONE && crc_rx_q == 16'd0;
     end
 end
@@ -380,7 +390,7 @@ reg [17:0]   f_cl;             // words still due in the current command
 reg          f_bc;             // a command started with an unknown opcode
 reg [16:0]   f_nwr;            // command words this frame put into the buffer
 reg [CBUF_AW+1:0] f_lvl;       // committed words in the buffer (head included)
-reg [3:0]    f_uw;             // an URGENT frame's word, [3:0]
+reg [22:0]   f_uw;             // an URGENT frame's word, {[31:16], [6:0]}
 
 wire [31:0] f_word    = {f_sr[30:0], bit_in};                // the word ending now
 wire        f_wend    = shift && f_b5 == 5'd31;
@@ -433,7 +443,7 @@ always @(posedge clk) begin
             f_hdr  <= f_word;
             f_free <= f_free_now;
         end
-        if (f_cmdword && f_urgent) f_uw <= f_word[3:0];
+        if (f_cmdword && f_urgent) f_uw <= {f_word[31:16], f_word[6:0]};
         if (f_cmdword && !f_urgent) begin
             if (f_wr_ok) f_nwr <= f_nwr + 1'b1;
             if (f_cl != 18'd0)                f_cl <= f_cl - 1'b1;
@@ -469,6 +479,10 @@ always @* if (f_past_valid) begin
     assert(ctl_stop_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[1]));
     assert(ctl_flush_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[2]));
     assert(ctl_ack_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[3]));
+    assert(ctl_hold_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[4]));
+    assert(ctl_resume_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[5]));
+    assert(ctl_ovr_o == (cs_rise && f_result == R_OK && f_urgent && f_uw[6]));
+    if (ctl_ovr_o) assert(ctl_ovr_val_o == f_uw[22:7]);
     // The watchdog's kick: at a CS rise that ends a whole frame whose CRC checks.
     assert(frame_ok_o == (cs_rise && f_done && f_crc == 16'd0));
     if (cs_rise) begin
@@ -528,6 +542,7 @@ assign spi_miso_oe_o = !spi_cs_n_i;
 // Replies are taken as they come; the register the last one named is word 6.
 assign rsp_ready_o   = 1'b1;
 assign rd_addr_o     = rd_addr;
+assign ctl_ovr_val_o = uw_q[22:7];
 
 endmodule
 

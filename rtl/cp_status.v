@@ -41,7 +41,9 @@ module cp_status #(
     parameter integer CONIC = 0,
     parameter integer CIW = 40,
     // Reported only (READ 0x23 [24]): limit and probe inputs (cp_inputs).
-    parameter integer INPUTS = 0
+    parameter integer INPUTS = 0,
+    // Reported only (READ 0x23 [25]): feed hold and override (cp_feed).
+    parameter integer FEED = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -67,6 +69,9 @@ module cp_status #(
     input  wire [N-1:0]  lim_min_i,
     input  wire [N-1:0]  lim_max_i,
     input  wire          probe_i,
+    // Feed hold and override (cp_feed; 0 without): READ 0x29 and 0x2A.
+    input  wire [31:0]   feed_i,
+    input  wire [15:0]   override_i,
 
     // Events from the runner.
     input  wire          stretch_i,
@@ -273,7 +278,7 @@ wire [7:0]  segs_queued = {{(7 - SQW){1'b0}}, segq_i} + {7'd0, build_busy_i} +
                           {6'd0, run_level_i} + {7'd0, cur_valid_i};
 wire [31:0] status_word = {ch_level32 > 32'd255 ? 8'd255 : ch_level32[7:0],
                            segs_queued,
-                           err_q, 2'd0, torch_i, enable_q, estop_i, stretched_q, fault_q, running_i};
+                           err_q, FEED != 0 && !feed_i[30], feed_i[31], torch_i, enable_q, estop_i, stretched_q, fault_q, running_i};
 // Capabilities (READ 0x20..0x25): what the host must know of this build.
 localparam [31:0] CAPS = {3'd0, TW[4:0], SAW[3:0], CAW[3:0], KMAX[7:0], N[7:0]};
 localparam [31:0] W_WORD = W;
@@ -282,7 +287,8 @@ localparam [31:0] UMAX_WORD = UMAX;
 // the SPI frames (docs/PROTOCOL.md); the host refuses a card of another version.
 localparam [7:0] PROTOCOL_VERSION = 8'd2;
 localparam [0:0] INPUTS_BIT = INPUTS != 0;
-localparam [31:0] CAPS2 = {7'd0, INPUTS_BIT, PROTOCOL_VERSION, CBUF_AW[7:0], PW[7:0]};
+localparam [0:0] FEED_BIT = FEED != 0;
+localparam [31:0] CAPS2 = {6'd0, FEED_BIT, INPUTS_BIT, PROTOCOL_VERSION, CBUF_AW[7:0], PW[7:0]};
 localparam [31:0] CLK_WORD = CLK_HZ;
 localparam [31:0] CONIC_WORD = (CONIC == 0) ? 32'd0 : CIW;
 
@@ -319,6 +325,8 @@ always @* begin
         8'h26: read_value[rp] = CONIC_WORD;
         8'h27: read_value[rp] = inputs_word;
         8'h28: read_value[rp] = limits_at_word;
+        8'h29: read_value[rp] = feed_i;
+        8'h2A: read_value[rp] = {16'd0, override_i};
         default: begin
             for (ri = 0; ri < N; ri = ri + 1)
                 if (read_addr[rp] == 8'h10 + ri[7:0]) read_value[rp] = position_i[PW*ri +: 32];

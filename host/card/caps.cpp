@@ -19,6 +19,7 @@ CardCaps decode_caps(const std::array<uint32_t, kCapsRegisters.size()>& v) {
   c.cbuf_aw = v[4] >> 8 & 0xFF;
   c.protocol = v[4] >> 16 & 0xFF;
   c.inputs = (v[4] >> 24 & 1) != 0;
+  c.feed = (v[4] >> 25 & 1) != 0;
   c.clock_hz = v[5];
   c.build_id = v[6];
   c.ciw = v[7] & 0xFF;
@@ -42,6 +43,7 @@ CardCaps caps_of(const builds::Build& b) {
   c.build_id = b.build_id;
   c.ciw = b.conic ? 40 : 0;  // the walker at the RTL's default width (cp_core's CIW)
   c.inputs = b.inputs != 0;
+  c.feed = b.feed != 0;
   return c;
 }
 
@@ -77,7 +79,8 @@ std::string describe(const CardCaps& c) {
                      card_name(c), c.n, c.w, c.umax, c.kmax, c.chunk_queue(), c.segment_queue(), c.tw,
                      c.command_buffer_words(), c.clock_hz, c.protocol) +
          (c.ciw ? fmt::format(", conic walker {} bits", c.ciw) : std::string()) +
-         (c.inputs ? ", limit and probe inputs" : "");
+         (c.inputs ? ", limit and probe inputs" : "") +
+         (c.feed ? ", feed hold and override" : "");
 }
 
 std::string unusable(const CardCaps& c, unsigned axes) {

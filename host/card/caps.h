@@ -33,6 +33,7 @@ struct CardCaps {
   uint32_t build_id = 0;           // 0x25
   unsigned ciw = 0;                // 0x26: the conic walker's width; 0: no CONIC segments
   bool inputs = false;             // 0x23 [24]: limit and probe inputs (docs/CORE.md "Inputs")
+  bool feed = false;               // 0x23 [25]: feed hold and override (docs/CORE.md "Feed hold and override")
 
   [[nodiscard]] unsigned chunk_queue() const { return 1u << caw; }
   [[nodiscard]] unsigned segment_queue() const { return 1u << saw; }

@@ -26,6 +26,14 @@ constexpr uint32_t start = 1u << 0;  // START, as CONTROL's
 constexpr uint32_t stop = 1u << 1;   // STOP: no move from then on; what is loaded and queued stays
 constexpr uint32_t flush = 1u << 2;  // FLUSH: the run off, the command buffer and every queue emptied
 constexpr uint32_t ack = 1u << 3;    // ACK: clears a latched fault, an E-stop's too (input released)
+// Feed (cards with FEED, docs/CORE.md "Feed hold and override"): the timer's scale ramps
+// to 0 (HOLD), back to the override (RESUME), or to a new override (OVERRIDE, with it).
+constexpr uint32_t hold = 1u << 4;
+constexpr uint32_t resume = 1u << 5;
+constexpr uint32_t override_set = 1u << 6;
+constexpr uint32_t kOverrideOne = 0x4000;  // 100 %, Q2.14; the card takes at most 0x8000 (200 %)
+// OVERRIDE to `q14` (Q2.14, 0x4000 = 100 %).
+constexpr uint32_t override_to(uint32_t q14) { return override_set | (q14 & 0xFFFF) << 16; }
 }  // namespace urgent
 
 constexpr size_t kFrameHeaderBytes = 4;  // type, seq, nwords

@@ -236,6 +236,10 @@ std::vector<uint32_t> encode_job(const plan::Machine& m, const WireJob& job) {
     }
     encode_config(0, ConfigField::probe, uint32_t(m.inputs.probe_active_high), words);
   }
+  // The feed ramp (a card that has it; docs/CORE.md "Feed hold and override").
+  if (m.card.feed) {
+    encode_config(0, ConfigField::feed_tick, m.feed.ramp.tick, words);
+  }
   for (size_t s = 0; s < job.segments.size(); ++s) {
     if (s == job.start_after) encode_control(true, false, false, words);
     encode_segment(job.segments[s], words);

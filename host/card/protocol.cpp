@@ -99,7 +99,7 @@ size_t command_words(uint32_t first, unsigned axes) {
 
 Status decode_status(uint32_t w) {
   return {bool(w & 1), bool(w >> 1 & 1), bool(w >> 2 & 1), bool(w >> 3 & 1),
-          w >> 8 & 0xFF, w >> 16 & 0xFF, w >> 24 & 0xFF, bool(w >> 4 & 1)};
+          w >> 8 & 0xFF, w >> 16 & 0xFF, w >> 24 & 0xFF, bool(w >> 4 & 1), bool(w >> 6 & 1), bool(w >> 7 & 1)};
 }
 
 ErrorName error_name(uint32_t code) {

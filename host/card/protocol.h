@@ -76,6 +76,9 @@ enum class ConfigField : uint32_t {
   input_filter = 6,
   limits = 7,
   probe = 8,
+  // Feed hold and override (cards with FEED): the ramp's tick period in clocks
+  // (docs/CORE.md "Feed hold and override").
+  feed_tick = 9,
 };
 namespace limit_bits {
 constexpr uint32_t min_active_high = 1, max_active_high = 2, min_enabled = 4, max_enabled = 8;
@@ -98,6 +101,8 @@ enum class Register : uint32_t {
   conic_width = 0x26,   // the conic walker's width CIW; 0: no CONIC segments
   inputs = 0x27,        // active now: [7:0] limit min per axis, [15:8] max, [16] probe
   limits_at = 0x28,     // the limits active when LIMIT (20) latched: [7:0] min, [15:8] max
+  feed = 0x29,          // [31] held, [30] settled on its target, [15:0] the timer's scale s (Q2.14)
+  feed_override = 0x2A, // [15:0] the override (Q2.14)
 };
 constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
 
@@ -127,6 +132,9 @@ struct Status {
   bool running, fault, stretched, estop;
   uint32_t err_code, segments_queued, chunks_queued;
   bool drivers_enabled;
+  // Feed (cards with FEED): HOLD taken and no RESUME since; the timer's scale is
+  // still ramping to its target (held and not ramping: the motion stands).
+  bool held = false, feed_ramping = false;
 };
 Status decode_status(uint32_t word);
 

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 #include "cli/run_contours.h"
 #include "cpstep/builds.h"
 #include "run/card_job.h"
+#include "run/feed_ramp.h"
 #include "run/link_run.h"
 #include "run/measure.h"
 #include "run/plots.h"
@@ -215,10 +217,17 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
   if (r.pins_observed) {
     fmt::print("job time   {:.6f} s = {} cycles from START to the last move (planned {:.6f} s)\n", m.job_time_s,
                m.job_time_cycles, j.planned.stats.duration_s);
-    fmt::print("timing     max {:.1f} cycles ({:.3f} us) from the planner's ideal times, at move {}; "
-               "{} moves off their chunk times\n",
-               m.max_timing_error_cycles, m.max_timing_error_cycles / j.clock_hz() * 1e6,
-               m.max_timing_error_move, m.moves_off_chunk_time);
+    if (r.feed_scaled)
+      fmt::print("timing     not compared with the plan: the feed override or hold scaled the card's time\n");
+    else
+      fmt::print("timing     max {:.1f} cycles ({:.3f} us) from the planner's ideal times, at move {}; "
+                 "{} moves off their chunk times\n",
+                 m.max_timing_error_cycles, m.max_timing_error_cycles / j.clock_hz() * 1e6,
+                 m.max_timing_error_move, m.moves_off_chunk_time);
+    for (const run::FeedApplied& f : r.feed)
+      fmt::print("feed       {} taken at {:.6f} s from START{}\n", f.what, f.taken_s,
+                 f.event.kind == run::FeedEvent::Kind::toggle ? " (SIGUSR1)"
+                 : f.event.at_s > 0 ? fmt::format(" (asked for {:.6f} s)", f.event.at_s) : "");
     fmt::print("checked    position_o at {} of {} card segment ends, {} off the plan\n", r.checked_segments,
                j.checkpoints.size(), r.position_mismatches);
     if (m.curve.positions)
@@ -229,6 +238,13 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
   } else {
     fmt::print("card       {} moves, {} segments done (the card's counters over the job)\n", r.moves_done,
                r.segments_done);
+  }
+  if (j.machine.card.feed) {
+    const plan::FeedRamp& fr = j.machine.feed.ramp;
+    fmt::print("feed ramp  a tick every {} cycles, tau {:.4f} s: for a change of {:g} |ds/dt| <= {:.3f}/s, "
+               "|d2s/dt2| <= {:.2f}/s^2; a hold from 100 % stands after {:.3f} s{}\n",
+               fr.tick, fr.tau_s, fr.span, fr.rate_per_s(), fr.accel_per_s2(), fr.hold_s(),
+               j.feed_ramp_note.empty() ? std::string() : "; " + j.feed_ramp_note);
   }
   fmt::print("stretches  {}\n", r.stretch_count);
   if (r.pins_observed)
@@ -325,6 +341,49 @@ bool watchdog_fits(const RunOptions& o, const run::CardJob& j, double sck_hz) {
   return true;
 }
 
+// SIGUSR1: a HOLD, or a RESUME when held (cards with feed hold, docs/HOST.md).
+volatile std::sig_atomic_t g_feed_toggles = 0;
+void on_feed_toggle(int) { g_feed_toggles = g_feed_toggles + 1; }
+
+// --override and --feed against the card and the machine file; SIGUSR1 on a card
+// with feed hold. false: refused (said why), nothing sent.
+bool feed_options(const RunOptions& o, const run::CardJob& j, run::SimRunOptions& so) {
+  const double max_pct = j.machine.feed.max_override * 100;
+  std::vector<run::FeedEvent> events;
+  try {
+    events = run::parse_feed_events(o.feed);
+  } catch (const std::invalid_argument& e) {
+    fmt::print(stderr, "cpstep run: {}; nothing was sent\n", e.what());
+    return false;
+  }
+  const bool asked = o.override_pct != 100 || !events.empty();
+  if (asked && !j.caps.feed) {
+    fmt::print(stderr, "cpstep run: --override/--feed: the card, {}, has no feed hold or override (a board "
+               "with it: --board hx8k); nothing was sent\n", card::card_name(j.caps));
+    return false;
+  }
+  const auto over = [&](double pct) {
+    if (pct <= max_pct) return false;
+    fmt::print(stderr, "cpstep run: an override of {} % is above the machine's {} % ({}: feed.max_override_pct); "
+               "nothing was sent\n", pct, max_pct, o.machine);
+    return true;
+  };
+  if (over(o.override_pct)) return false;
+  for (const run::FeedEvent& e : events)
+    if (e.kind == run::FeedEvent::Kind::override_pct && over(e.pct)) return false;
+  so.override_pct = o.override_pct;
+  so.feed = std::move(events);
+  if (j.caps.feed) {
+    std::signal(SIGUSR1, on_feed_toggle);
+    so.feed_toggle = [seen = 0]() mutable {
+      if (seen == g_feed_toggles) return false;
+      ++seen;
+      return true;
+    };
+  }
+  return true;
+}
+
 int run_sim_transport(const RunOptions& o) {
   // The simulated card of the board, asked what it is, as a real one is.
   const std::string board = o.board.empty() ? std::string(builds::kDefaultBoard) : o.board;
@@ -343,14 +402,16 @@ int run_sim_transport(const RunOptions& o) {
   }
   ContourRun contours(o);  // --state, --resume, --stop-after-contours
   if (const auto rc = contours.open()) return *rc;
-  const auto job = prepare(o.job, o.machine, run::connect_sim(board, *engine), {}, &contours);
+  auto job = prepare(o.job, o.machine, run::connect_sim(board, *engine), {}, &contours);
   if (!job) return contours.nothing_left() ? 0 : kExitRefused;
+  if (job->caps.feed) run::fit_feed_ramp(*job);  // the card's feed ramp, fitted to the job's fastest point
   const run::CardJob& j = *job;
   if (!watchdog_fits(o, j, j.clock_hz() / o.sck_div)) return kExitRefused;
+  run::SimRunOptions so;
+  if (!feed_options(o, j, so)) return kExitRefused;
   std::ofstream report_file;
   if (const int rc = open_outputs(o, report_file)) return rc;
   Progress progress(!o.no_progress);
-  run::SimRunOptions so;
   so.watchdog_s = o.watchdog_s;
   so.vcd = o.vcd;
   so.max_cycles = o.max_cycles;
@@ -388,8 +449,9 @@ int run_spidev_transport(const RunOptions& o) {
     return kExitRefused;
   }
   if (!contours.card_matches(at)) return kExitRefused;
-  const auto job = prepare(o.job, o.machine, *caps, at, &contours);
+  auto job = prepare(o.job, o.machine, *caps, at, &contours);
   if (!job) return contours.nothing_left() ? 0 : kExitRefused;
+  if (job->caps.feed) run::fit_feed_ramp(*job);  // the card's feed ramp, fitted to the job's fastest point
   const run::CardJob& j = *job;
   const uint64_t limit = uint64_t(j.clock_hz() / 8);
   const uint64_t hz = o.spi_hz ? o.spi_hz : limit;
@@ -475,6 +537,14 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& o) {
                 "off (docs/CORE.md \"Watchdog\")")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  c->add_option("--override", o.override_pct,
+                "sim: the feed override in percent from the job's start (cards with feed hold: docs/CORE.md "
+                "\"Feed hold and override\"); at most the machine file's feed.max_override_pct (default 100)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 200.0));
+  c->add_option("--feed", o.feed,
+                "sim: feed events at seconds from START, e.g. \"2.5:hold,4:resume,6:override=50\"; and while "
+                "a job runs on a card with feed hold, SIGUSR1 toggles HOLD and RESUME");
   c->add_option("--state", o.state,
                 "sim, spidev: after the run write its state here (JSON: contours completed, the card's "
                 "position; docs/PLASMA.md \"Resume\")");
@@ -536,6 +606,11 @@ int run_job(const RunOptions& o) {
   if (o.transport != "sim" && o.stop_after_contours > 0) {
     fmt::print(stderr, "cpstep run: --stop-after-contours is for --transport sim (on a real card, stop between "
                        "contours with its controls; --state records where)\n");
+    return kExitRefused;
+  }
+  if (o.transport != "sim" && (o.override_pct != 100 || !o.feed.empty())) {
+    fmt::print(stderr, "cpstep run: --override and --feed are for --transport sim (on a real card's run, "
+                       "SIGUSR1 is not yet sent either: docs/HOST.md)\n");
     return kExitRefused;
   }
   if (o.transport == "spidev") return run_spidev_transport(o);

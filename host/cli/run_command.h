@@ -27,6 +27,10 @@ struct RunOptions {
   bool no_progress = false;
   bool ack_estop = false;  // spidev: acknowledge an E-stop the card latched (its input released)
   double watchdog_s = 0.1;  // sim, spidev: the card's watchdog while the job runs (0: off)
+  // Feed (cards with FEED, docs/CORE.md "Feed hold and override"): the override from
+  // the start, and sim events "T:hold,T:resume,T:override=P" (seconds from START).
+  double override_pct = 100;
+  std::string feed;
   // A cut job by contours (docs/PLASMA.md "Resume"): sim and spidev.
   std::string state;               // write the run's state here (contours completed, position)
   std::string resume;              // continue the run this state file records

@@ -321,7 +321,16 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
 
     Machine m;
     m.file = std::string(file);
-    r.only_keys(root, "", {"card", "planner", "axes", "gcode", "inputs"});
+    r.only_keys(root, "", {"card", "planner", "axes", "gcode", "inputs", "feed"});
+    if (const toml::table* fd = r.table(root, "feed", "feed", false)) {
+        r.only_keys(*fd, "feed", {"max_override_pct"});
+        m.feed.loc = loc_of(*fd);
+        m.feed.max_override =
+            r.number(*fd, "feed", "max_override_pct", false, [](double v) { return v >= 100 && v <= 200; },
+                     "from 100 to 200")
+                .value_or(100) /
+            100.0;
+    }
     if (const toml::table* in = r.table(root, "inputs", "inputs", false)) {
         r.only_keys(*in, "inputs", {"filter_us", "probe"});
         m.inputs.loc = loc_of(*in);
@@ -490,7 +499,21 @@ std::vector<Diagnostic> bind_card(Machine& m, const CardFacts& card) {
         error(m.inputs.loc, fmt::format("inputs.filter_us: {} us is {:.0f} cycles at the card's {} Hz; the filter "
                                         "holds at most 65535",
                                         m.inputs.filter_us, filter_cycles, card.clock_hz));
+    // Feed hold and override: a card that has them, and a ramp its fields hold.
+    std::optional<FeedRamp> ramp;
+    if (!card.feed && m.feed.loc.line != 0)
+        error(m.feed.loc, fmt::format("feed: the card, {}, has no feed hold or override", card.name));
+    if (card.feed) {
+        const FeedLimits l = feed_limits(m);
+        ramp = feed_ramp(card.clock_hz, l.rate_per_s, l.accel_per_s2, l.span);
+        if (!ramp)
+            error(m.feed.loc, fmt::format("feed: the axes' limits ask a scale rate of at most {:.4g}/s and "
+                                          "{:.4g}/s^2, a ramp slower than the card's tick field holds at {} Hz",
+                                          l.rate_per_s, l.accel_per_s2, card.clock_hz));
+    }
     if (!errors.empty()) return errors;
+    m.card.feed = card.feed;
+    m.feed.ramp = ramp.value_or(FeedRamp{});
     m.inputs.filter_cycles = static_cast<std::uint32_t>(filter_cycles);
     m.card.inputs = card.inputs;
     m.card.clock_hz = card.clock_hz;

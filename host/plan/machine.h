@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "plan/common.h"
+#include "plan/feed.h"
 
 namespace cpstep::plan {
 
@@ -84,6 +85,7 @@ struct CardConfig {
     std::uint32_t max_moves = 1048575;      // UMAX: most moves of one card segment
     unsigned conic_width = 0;               // CIW: the card's conic walker (0: none, arcs are chords)
     bool inputs = false;                    // the card has limit and probe inputs
+    bool feed = false;                      // the card has feed hold and override
     bool bound = false;                     // set by bind_card()
     // What the machine file says, and where (line 0: not given).
     double stated_clock_hz = 0;
@@ -101,6 +103,14 @@ struct CardFacts {
     std::uint32_t max_moves = 1048575;   // UMAX
     unsigned conic_width = 0;            // CIW (READ 0x26): CONIC segments, 0: none
     bool inputs = false;                 // limit and probe inputs (READ 0x23 [24])
+    bool feed = false;                   // feed hold and override (READ 0x23 [25])
+};
+
+// [feed]: feed hold and override on the card (docs/CORE.md "Feed hold and override").
+struct FeedConfig {
+    double max_override = 1.0;  // the largest override (max_override_pct / 100; 1..2)
+    FeedRamp ramp;              // derived by bind_card on a card with FEED (CONFIG field 9)
+    SourceLoc loc;              // where [feed] starts (line 0: not given)
 };
 
 // [inputs]: the card's input filter and the probe's level (docs/CORE.md "Inputs").
@@ -158,6 +168,7 @@ struct Machine {
     PlannerConfig planner;
     GcodeConfig gcode;
     InputsConfig inputs;
+    FeedConfig feed;
 
     [[nodiscard]] double chunk_tolerance_cycles() const {
         return planner.chunk_tolerance_s * card.clock_hz;

@@ -37,7 +37,7 @@ uint64_t CardJob::wire_chunks() const {
 }
 
 plan::CardFacts card_facts(const card::CardCaps& caps) {
-  return {card::card_name(caps), double(caps.clock_hz), caps.w, caps.kmax, caps.tw, caps.umax, caps.ciw, caps.inputs};
+  return {card::card_name(caps), double(caps.clock_hz), caps.w, caps.kmax, caps.tw, caps.umax, caps.ciw, caps.inputs, caps.feed};
 }
 
 plan::Result<plan::Machine> load_card_machine(const std::filesystem::path& machine_file,

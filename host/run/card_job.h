@@ -41,6 +41,7 @@ struct CardJob {
   std::vector<uint64_t> segment_end_cycle;
   std::vector<uint64_t> segment_end_moves;
   std::vector<plan::Diagnostic> warnings;  // the planner's (also in the Result)
+  std::string feed_ramp_note;              // how the feed ramp was fitted (run::fit_feed_ramp)
 
   [[nodiscard]] uint64_t moves() const { return planned.stats.moves; }
   // Every move the card makes and counts: those that step and the pause moves.

@@ -72,6 +72,20 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
                               {"worst_y_mm", m.curve.worst_y_mm}};
     }
   }
+  // Feed hold and override (docs/CORE.md "Feed hold and override"): what the host sent,
+  // when the card took it; with feed_scaled the timing figures above are not the plan's.
+  r["feed_scaled"] = run.feed_scaled;
+  nlohmann::json feed = nlohmann::json::array();
+  for (const FeedApplied& f : run.feed)
+    feed.push_back({{"what", f.what}, {"asked_s", f.event.at_s}, {"taken_s", f.taken_s}});
+  r["feed"] = feed;
+  if (job.machine.card.feed) {
+    const plan::FeedRamp& ramp = job.machine.feed.ramp;
+    r["feed_ramp"] = {{"tick_cycles", ramp.tick},         {"tau_s", ramp.tau_s},
+                      {"span", ramp.span},                {"rate_per_s", ramp.rate_per_s()},
+                      {"accel_per_s2", ramp.accel_per_s2()}, {"hold_s", ramp.hold_s()},
+                      {"note", job.feed_ramp_note}};
+  }
   r["stretches"] = run.stretch_count;
   r["stretched"] = run.status.stretched;
   if (run.pins_observed) {

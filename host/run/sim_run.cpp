@@ -111,7 +111,10 @@ void check_torch_pin(const CardJob& job, CardRun& run, const std::vector<uint64_
   std::vector<double> moves;
   moves.reserve(run.move_cycles.size());
   for (uint64_t c : run.move_cycles) moves.push_back(from_start(c + 1));  // the pin's edge
-  run.torch_verdict = check_torch(job, run.torch, moves, 0);
+  // Under a feed override or hold the card's time is not the plan's: the edges are
+  // checked in order and number (and each pierce measured), not against planned cycles.
+  run.torch_verdict =
+      check_torch(job, run.torch, moves, run.feed_scaled ? std::numeric_limits<double>::infinity() : 0);
   // A run already failed ends early: its torch follows where it stopped, not the plan.
   if (!run.faults.empty()) return;
   for (const std::string& e : run.torch_verdict.errors) run.faults.push_back(host_fault(HostFault::torch, e));
@@ -196,6 +199,7 @@ class Recorder {
   const plan::PerAxis<int64_t>& pin_position() const { return pins_; }
   // The torch pin's changes (absolute cycles; the first is on).
   const std::vector<uint64_t>& torch_cycles() const { return torch_cycles_; }
+  bool started() const { return started_; }
   // One past the first cycle running_o was low after START; 0 while it runs or never ran.
   uint64_t end_cycle() const { return end_cycle_; }
 
@@ -268,6 +272,10 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   const std::vector<uint32_t> words = words_with_watchdog(job, o.watchdog_s);
   const uint64_t before_job = words.size() - job.words.size();  // the watchdog's CONFIG
   card::ClientOptions co = keeping_alive(o.client, o.watchdog_s);
+  // Feed events land within 5 ms of their time, a SIGUSR1 toggle within 50 ms: no wait
+  // is longer (docs/HOST.md).
+  const double feed_wait_s = !o.feed.empty() ? 0.005 : o.feed_toggle ? 0.05 : 0.0;
+  if (feed_wait_s > 0) co.keepalive_s = co.keepalive_s > 0 ? std::min(co.keepalive_s, feed_wait_s) : feed_wait_s;
   co.axes = plan::kAxes;
   co.buffer_words = job.caps.command_buffer_words();
   card::CardClient client(wrapped ? *wrapped : sim_link, co);
@@ -278,7 +286,15 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   });
 
   const double planned_cycles = job.planned.stats.duration_s * job.clock_hz();
-  const uint64_t budget = o.max_cycles ? o.max_cycles : uint64_t(2 * planned_cycles) + 10'000'000;
+  // Under a feed override the job takes planned / override, and a held card stands
+  // until its event resumes it: the budget counts both.
+  double slowest = o.override_pct / 100;
+  for (const FeedEvent& e : o.feed)
+    if (e.kind == FeedEvent::Kind::override_pct) slowest = std::min(slowest, e.pct / 100);
+  const double events_cycles = o.feed.empty() ? 0 : o.feed.back().at_s * job.clock_hz();
+  const uint64_t budget =
+      o.max_cycles ? o.max_cycles
+                   : uint64_t(2 * planned_cycles / std::max(slowest, 0.01) + events_cycles) + 10'000'000;
   sim_link.set_deadline(budget);
 
   // While the host waits (for room, or for the end): give up at the budget, or
@@ -303,11 +319,61 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
     if (caps != job.caps)
       throw card::CardError(fmt::format("the job was planned for {}, but the card is {}; nothing was sent",
                                         card::describe(job.caps), card::describe(caps)));
-    sent = client.send(words, keep_waiting);
-    if (sent == words.size()) {
-      client.wait_until_stopped(keep_waiting);
-      watchdog_off(client, o.watchdog_s, keep_waiting);
+    // Feed: the override before the job's words (its ramp's CONFIG then sets the scale
+    // on it), events as their time from START comes, toggles as they are asked.
+    const bool feeding = o.override_pct != 100 || !o.feed.empty() || o.feed_toggle;
+    if (feeding && !caps.feed)
+      throw card::CardError(fmt::format("the card, {}, has no feed hold or override; nothing was sent",
+                                        card::card_name(caps)));
+    bool held = false;
+    size_t next_event = 0;
+    int toggles = 0;
+    const auto from_start_s = [&] { return (double(dut.cycle()) - double(run.start_cycle)) / job.clock_hz(); };
+    const auto send_feed = [&](const FeedEvent& e, std::string what) {
+      const uint32_t word = feed_word(e, held);
+      if (!client.urgent(word, keep_waiting)) return;
+      if (word & card::urgent::hold) held = true;
+      if (word & card::urgent::resume) held = false;
+      if (e.kind == FeedEvent::Kind::toggle) what = held ? "hold" : "resume";
+      run.feed.push_back({e, rec.started() ? from_start_s() : 0.0, std::move(what)});
+      run.feed_scaled = true;
+    };
+    if (o.override_pct != 100) {
+      FeedEvent e{0, FeedEvent::Kind::override_pct, o.override_pct};
+      send_feed(e, fmt::format("override {} %", o.override_pct));
     }
+    const auto feed_due = [&] {
+      if (o.feed_toggle && o.feed_toggle()) ++toggles;
+      if (toggles > 0) return true;
+      return next_event < o.feed.size() && rec.started() && from_start_s() >= o.feed[next_event].at_s;
+    };
+    const auto apply_due = [&] {
+      if (toggles > 0) {
+        --toggles;
+        send_feed({0, FeedEvent::Kind::toggle, 100}, "toggle");
+        return;
+      }
+      const FeedEvent& e = o.feed[next_event++];
+      send_feed(e, e.kind == FeedEvent::Kind::hold     ? std::string("hold")
+                   : e.kind == FeedEvent::Kind::resume ? std::string("resume")
+                                                       : fmt::format("override {} %", e.pct));
+    };
+    // While feeding, a wait also gives up when a feed event falls due: it is sent, and
+    // the words and the wait go on.
+    const auto keep_feeding = [&](const card::Reply& r) { return keep_waiting(r) && !(feeding && feed_due()); };
+    for (;;) {
+      if (sent < words.size()) sent += client.send(std::span(words).subspan(sent), keep_feeding);
+      if (gave_up != GaveUp::no) break;
+      if (feeding && feed_due()) {
+        apply_due();
+        continue;
+      }
+      if (sent < words.size()) break;
+      if (client.wait_until_stopped(keep_feeding)) break;
+      if (gave_up != GaveUp::no || !(feeding && feed_due())) break;
+      apply_due();
+    }
+    if (sent == words.size() && gave_up == GaveUp::no) watchdog_off(client, o.watchdog_s, keep_waiting);
   } catch (const card::CardError& e) {
     run.faults.push_back(host_fault(HostFault::link, e.what()));
   }

@@ -17,6 +17,7 @@
 #include "card/link.h"
 #include "card/protocol.h"
 #include "plan/common.h"
+#include "run/feed.h"
 #include "run/card_job.h"
 #include "run/torch.h"
 
@@ -86,6 +87,11 @@ struct CardRun {
   std::vector<TorchEdge> torch;          // the torch pin's changes, cycles from START (pin time)
   TorchVerdict torch_verdict;            // the torch pin against the plan
   std::vector<Fault> faults;             // the card's, then the host's
+  // Feed hold / override (docs/CORE.md "Feed hold and override"): what the host sent
+  // and when the card took it; scaled: the card's time ran at other than 100 % (the
+  // planned times then do not apply; positions and move counts still do).
+  std::vector<FeedApplied> feed;
+  bool feed_scaled = false;
 
   [[nodiscard]] bool ok() const { return faults.empty(); }
 };
@@ -101,6 +107,12 @@ struct SimRunOptions {
   // The card's watchdog for the job (docs/CORE.md "Watchdog"): set before it, kept
   // alive by a frame at least every quarter of it, off again at its end; 0: off.
   double watchdog_s = 0;
+  // Feed (cards with FEED): the override from the job's start (100: none sent),
+  // events at times from START, and a toggle source (cpstep run: SIGUSR1) asked
+  // while the host waits, true once per toggle (HOLD, then RESUME, ...).
+  double override_pct = 100;
+  std::vector<FeedEvent> feed;
+  std::function<bool()> feed_toggle;
   // Called with (moves done, moves planned) about every 65536 cycles.
   std::function<void(uint64_t, uint64_t)> progress;
   // Tests: every cycle's STEP and DIR pins (bit i: axis i).

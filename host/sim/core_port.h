@@ -30,6 +30,10 @@ struct CorePortBase {
     r.ctl_flush_i = i.ctl_flush;
     r.ctl_ack_i = i.ctl_ack;
     r.kick_i = i.kick;
+    r.ctl_hold_i = i.ctl_hold;
+    r.ctl_resume_i = i.ctl_resume;
+    r.ctl_ovr_i = i.ctl_ovr;
+    r.ctl_ovr_val_i = i.ctl_ovr_val;
     r.lim_min_i = i.lim_min;
     r.lim_max_i = i.lim_max;
     r.probe_i = i.probe;

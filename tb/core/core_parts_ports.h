@@ -14,12 +14,14 @@
 #include "Vcp_part_build_conic.h"
 #include "Vcp_part_run_conic.h"
 #include "Vcp_part_run.h"
+#include "Vcp_part_feed.h"
 #include "Vcp_part_inputs.h"
 #include "Vcp_part_status.h"
 #include "core/core_bench.h"
 #include "model/bits.h"
 #include "model/cp_build.h"
 #include "model/cp_cmd.h"
+#include "model/cp_feed.h"
 #include "model/cp_inputs.h"
 #include "model/cp_run.h"
 #include "model/cp_status.h"
@@ -36,7 +38,7 @@ struct CmdPortT {
   using Model = model::CpCmd;
   using In = model::CpCmdIn;
   using Out = model::CpCmdOut;
-  static Model::Params model_params() { return {3, 4095, 3, 3, 8, Conic}; }
+  static Model::Params model_params() { return {3, 4095, 3, 3, 8, Conic, Conic}; }
   static void drive(Rtl& r, const In& i) {
     r.rst = i.rst;
     r.cmd_valid_i = i.cmd_valid;
@@ -188,6 +190,7 @@ struct RunPortT {
     r.pulse_ready_i = i.pulse_ready;
     r.lim_min_i = i.lim_min;
     r.lim_max_i = i.lim_max;
+    r.scale_i = i.scale;
   }
   static Out sample(const Rtl& r) {
     Out o;
@@ -253,6 +256,7 @@ struct StatusPort {
     p.conic = true;
     p.ciw = 36;
     p.inputs = true;
+    p.feed = true;
     return p;
   }
   static void drive(Rtl& r, const In& i) {
@@ -266,6 +270,8 @@ struct StatusPort {
     r.lim_min_i = i.lim_min;
     r.lim_max_i = i.lim_max;
     r.probe_i = i.probe;
+    r.feed_i = i.feed;
+    r.override_i = i.override;
     r.drivers_on_i = i.drivers_on;
     r.drivers_off_i = i.drivers_off;
     r.cfg_write_i = i.cfg_write;
@@ -368,11 +374,41 @@ struct InputsPort {
         CPSTEP_FIELD("lim_min_o", o.lim_min), CPSTEP_FIELD("lim_max_o", o.lim_max),
         CPSTEP_FIELD("probe_o", o.probe),
     };
-
-#undef CPSTEP_FIELD
-
     return f;
   }
 };
+
+struct FeedPort {
+  using Rtl = AfterOneResetEdge<Vcp_part_feed>;
+  using Model = model::CpFeed;
+  using In = model::CpFeedIn;
+  using Out = model::CpFeedOut;
+  static Model::Params model_params() { return {}; }
+  static void drive(Rtl& r, const In& i) {
+    r.rst = i.rst;
+    r.cfg_write_i = i.cfg_write;
+    r.cfg_word_i = i.cfg_word;
+    r.hold_i = i.hold;
+    r.resume_i = i.resume;
+    r.ovr_i = i.ovr;
+    r.ovr_val_i = i.ovr_val;
+  }
+  static Out sample(const Rtl& r) {
+    Out o;
+    o.scale = r.scale_o;
+    o.feed = r.feed_o;
+    o.override = r.override_o;
+    return o;
+  }
+  static const std::vector<sim::Field<Out>>& fields() {
+    static const std::vector<sim::Field<Out>> f = {
+        CPSTEP_FIELD("scale_o", o.scale), CPSTEP_FIELD("feed_o", o.feed),
+        CPSTEP_FIELD("override_o", o.override),
+    };
+    return f;
+  }
+};
+
+#undef CPSTEP_FIELD
 
 }  // namespace cpstep::tb

@@ -88,8 +88,10 @@ inline std::vector<BadInput> bad_inputs(const model::CpCoreParams& p) {
       {"config_step_high_0", 14, [] { return config_word(1, 0, 0); }},
       {"config_step_low_0", 14, [] { return config_word(2, 1, 0); }},
       {"config_axis_out_of_range", 14, [] { return config_word(4, 0, 3); }},
-      {"config_unknown_field", 14, [] { return config_word(0, 9, 3); }},
+      {"config_unknown_field", 14, [] { return config_word(0, 10, 3); }},
   };
+  // Field 9 (the feed ramp's tick) is a CONFIG only in a core built with FEED = 1.
+  if (!p.feed) cases.push_back({"config_feed_field_without_feed", 14, [] { return config_word(0, 9, 3); }});
   // CONIC (opcode 5) is a command only in a core built with CONIC = 1.
   if (!p.conic) cases.push_back({"opcode_5_without_conic", 12, [] { return std::vector<uint32_t>{0x50000001u}; }});
   // A CONIC continuing a walk (H0[18]) with no CONIC before it (docs/CORE.md "CONIC").

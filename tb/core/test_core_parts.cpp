@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <random>
 #include <set>
@@ -261,9 +262,15 @@ void run_traffic(uint64_t seed, bool conic) {
   ls.reset();
   model::CpRunIn in;
   uint64_t fires = 0, seg_done = 0, stretches = 0, underruns = 0, conic_faults = 0;
-  uint64_t torch_edges = 0, lim_hits = 0;
+  uint64_t torch_edges = 0, lim_hits = 0, scaled_fires = 0;
   bool torch = false;
-  for (int c = 0; c < 400000; ++c) {
+  for (int c = 0; c < 500000; ++c) {
+    // The timer's scale (cp_feed): mostly 1, now and then held (0), slowed, sped up
+    // to 2, or any value, for a while.
+    if (pick(rng, 0, 1999) == 0) {
+      const uint32_t k = pick(rng, 0, 9);
+      in.scale = k <= 3 ? 0x10000 : k == 4 ? 0 : k <= 6 ? 0x20000 : pick(rng, 1, 0x20000);
+    }
     // Limits: mostly none active; now and then one or two for a while.
     if (pick(rng, 0, 999) < 3) {
       in.lim_min = chance(rng, 90) ? 0 : pick(rng, 0, 7);
@@ -303,6 +310,7 @@ void run_traffic(uint64_t seed, bool conic) {
       in.cw_start = pick(rng, 0, 999) < 15;
     }
     const model::CpRunOut o = ls.step(in);
+    scaled_fires += o.fire && in.scale != 0x10000;
     conic_faults += o.fault_conic;
     fires += o.fire;
     seg_done += o.seg_done;
@@ -316,6 +324,7 @@ void run_traffic(uint64_t seed, bool conic) {
     }
   }
   EXPECT_GT(lim_hits, 100u) << "segments should run into active limits now and then";
+  EXPECT_GT(scaled_fires, 1000u) << "moves should fire on scaled time too";
   EXPECT_GT(fires, 5000u);
   EXPECT_GT(torch_edges, 1000u) << "the torch output should follow the segments' out bits";
   EXPECT_GT(seg_done, conic ? 200u : 500u);
@@ -378,8 +387,10 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
     in.ch_level = pick(rng, 0, 9);
     for (unsigned a = 0; a < 3; ++a) in.position[a] = rng() & ((uint64_t(1) << 40) - 1);
     // READ every register there is, and some that are not.
-    in.rd_addr0 = chance(rng, 50) ? pick(rng, 0, 0x29) : pick(rng, 0, 255);
-    in.rd_addr1 = chance(rng, 50) ? pick(rng, 0, 0x29) : pick(rng, 0, 255);
+    in.feed = uint32_t(c) * 2654435761u;  // (not from rng: the sequence of the rest stays)
+    in.override = uint32_t(c) & 0xFFFF;
+    in.rd_addr0 = chance(rng, 50) ? pick(rng, 0, 0x2B) : pick(rng, 0, 255);
+    in.rd_addr1 = chance(rng, 50) ? pick(rng, 0, 0x2B) : pick(rng, 0, 255);
     const model::CpStatusOut o = ls.step(in);
     if (o.fault) codes.insert(o.err);
     flushes += o.flush;
@@ -397,6 +408,113 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
   EXPECT_GT(trip_cycles, 1000u);
   EXPECT_TRUE(codes.count(19)) << "WATCHDOG latched";
   EXPECT_TRUE(codes.count(20)) << "LIMIT latched";
+}
+
+// ---------------------------------------------------------------- cp_feed
+// Random HOLD / RESUME / OVERRIDE (values past 2 included) and random ramp tick
+// periods (CONFIG field 9) against the model.
+TEST(CorePartFeed, RandomCommandsAndRampsMatchTheModel) {
+  Rng rng(71);
+  Lockstep<FeedPort> ls;
+  ls.reset();
+  model::CpFeedIn in;
+  uint64_t moving = 0, holds_reached = 0;
+  model::CpFeedOut last;
+  for (int c = 0; c < 1000000; ++c) {
+    in.rst = pick(rng, 0, 499999) == 0;
+    in.cfg_write = pick(rng, 0, 49999) == 0;
+    const uint32_t field = pick(rng, 8, 12);
+    in.cfg_word = 0x2u << 28 | field << 20 | pick(rng, 0, 3);
+    in.hold = pick(rng, 0, 39999) == 0;
+    in.resume = pick(rng, 0, 39999) == 0;
+    in.ovr = pick(rng, 0, 39999) == 0;
+    in.ovr_val = chance(rng, 10) ? pick(rng, 0x8000, 0xFFFF) : pick(rng, 0, 0x8000);
+    const model::CpFeedOut o = ls.step(in);
+    moving += o.scale != last.scale;
+    holds_reached += (o.feed >> 30 & 1) && (o.feed >> 31) && !((last.feed >> 30 & 1) && (last.feed >> 31));
+    last = o;
+  }
+  EXPECT_GT(moving, 10000u);
+  EXPECT_GT(holds_reached, 3u);
+}
+
+namespace {
+// The ramp's contract, checked on the model clocked through a run of targets, each
+// from rest (docs/CORE.md "Feed hold and override"): s moves only at a tick; toward
+// its target, never past it; at a rate of at most |D| / (e·2^10) a tick and a change
+// of rate of at most |D| / 2^20 a tick (D the target's step; a unit of rounding
+// each); it arrives on the target exactly. Returns the ticks each target took.
+std::vector<uint64_t> check_ramp(uint32_t period, const std::vector<uint32_t>& overrides_q14, bool hold_first) {
+  model::CpFeed f;
+  const auto clock = [&](model::CpFeedIn i) {
+    f.in = i;
+    f.tick();
+  };
+  model::CpFeedIn cfg;
+  cfg.cfg_write = true;
+  cfg.cfg_word = 0x2u << 28 | 9u << 20 | period;
+  clock(cfg);
+  std::vector<uint64_t> ticks_taken;
+  std::vector<uint32_t> targets;
+  if (hold_first) targets.push_back(0);
+  for (uint32_t v : overrides_q14) targets.push_back(v << 16);
+  for (size_t t = 0; t < targets.size(); ++t) {
+    model::CpFeedIn cmd;
+    if (hold_first && t == 0) {
+      cmd.hold = true;
+    } else {
+      cmd.resume = true;
+      cmd.ovr = true;
+      cmd.ovr_val = overrides_q14[t - (hold_first ? 1 : 0)];
+    }
+    const uint32_t from = f.s();
+    clock(cmd);
+    const double span = std::abs(double(targets[t]) - double(from));
+    // (The discrete stages' peaks come within 1 % of the continuous ramp's.)
+    const double max_rate = 1.01 * span / (std::exp(1.0) * 1024) + 2,
+                 max_change = 1.01 * span / (1024.0 * 1024) + 2;
+    int64_t rate = 0;
+    uint32_t s = f.s();
+    uint64_t ticks = 0;
+    for (uint64_t c = 0; c < 50'000'000 && !(f.s() == targets[t] && f.u() == targets[t]); ++c) {
+      const bool tick = f.tick_now();
+      clock({});
+      if (!tick) {
+        EXPECT_EQ(f.s(), s) << "s moves only at a tick";
+        continue;
+      }
+      ++ticks;
+      const int64_t r = int64_t(f.s()) - int64_t(s);
+      // The last step may take what is left (within 2^10 units of rounding).
+      if (f.s() != targets[t]) {
+        EXPECT_LE(double(std::llabs(r)), max_rate) << "tick " << ticks;
+        EXPECT_LE(double(std::llabs(r - rate)), max_change) << "tick " << ticks;
+      }
+      EXPECT_LE(std::abs(double(targets[t]) - double(f.s())), std::abs(double(targets[t]) - double(s)))
+          << "toward the target, never past it";
+      EXPECT_LE(std::min<double>(from, targets[t]), double(f.s()));
+      EXPECT_LE(double(f.s()), std::max<double>(from, targets[t]));
+      rate = r;
+      s = f.s();
+      if (::testing::Test::HasFailure()) return ticks_taken;
+    }
+    EXPECT_EQ(f.s(), targets[t]) << "target " << t;
+    ticks_taken.push_back(ticks);
+  }
+  return ticks_taken;
+}
+}  // namespace
+
+TEST(CorePartFeed, TheRampKeepsItsLimitsAndArrivesExactly) {
+  // Hold from 1, resume to 1, 50 %, 200 %, 10 %, 120 %, a tick every clock and every 7.
+  for (uint32_t period : {0u, 7u}) {
+    const std::vector<uint64_t> ticks = check_ramp(period, {0x4000, 0x2000, 0x8000, 0x0666, 0x4CCC}, true);
+    ASSERT_FALSE(::testing::Test::HasFailure()) << "period " << period;
+    // From 1 to 0: (1 + x) e^-x falls to 2^-20 (the last stage's snap) at x = 16.9, in
+    // units of 2^10 ticks, and a few ticks of rounding.
+    EXPECT_GE(ticks[0], 16u * 1024);
+    EXPECT_LE(ticks[0], 19u * 1024);
+  }
 }
 
 // ---------------------------------------------------------------- cp_inputs

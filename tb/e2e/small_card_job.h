@@ -72,6 +72,7 @@ struct Card {
   uint64_t shortest_high = UINT64_MAX;
   std::array<uint64_t, 2> rose{};
   uint64_t last_step = 0;   // the cycle of the last leading STEP edge, any axis
+  std::vector<uint64_t> move_cycles;  // the cycles with a leading STEP edge (a move event each)
   uint64_t enable_fell = 0; // the cycle the ENABLE pin last went low (0: never)
   uint64_t cs_rose = 0;     // the cycle CS last went high (a frame's end)
   uint32_t prev = 0;        // STEP pins active, last seen
@@ -85,6 +86,7 @@ struct Card {
         if (now && !was) {
           pins[a] += (o.dir >> a & 1) ? -1 : 1;
           rose[a] = c;
+          if (move_cycles.empty() || move_cycles.back() != c) move_cycles.push_back(c);
           last_step = c;
         }
         if (!now && was) shortest_high = std::min(shortest_high, c - rose[a]);

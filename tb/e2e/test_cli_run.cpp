@@ -17,6 +17,7 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "common/process.h"
@@ -299,6 +300,60 @@ TEST(CliRun, WatchdogIsKeptAliveOrRefusedBeforeAnythingIsSent) {
     EXPECT_EQ(r.rc, 2) << seconds;
     EXPECT_NE(r.err.find("--watchdog"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("nothing was sent"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(report)) << report;
+  }
+}
+
+// Feed override and hold (docs/CORE.md "Feed hold and override", docs/HOST.md): on
+// the HX8K card --override 50 makes every move take twice its time (the job time
+// doubles, the moves and end are the same); --feed holds and resumes (the job takes
+// the time it stood longer); both are refused before anything is sent on the
+// iCEBreaker card (no feed hold), above the machine's max_override_pct, or malformed.
+TEST(CliRun, FeedOverrideAndHoldOrRefusedBeforeAnythingIsSent) {
+  const fs::path job = write_job("small.ngc", kJob);
+  const auto run = [&](const std::string& name, std::vector<std::string> extra) {
+    const fs::path report = kDir / ("feed_" + name + ".json");
+    fs::remove(report);
+    std::vector<std::string> args = {"run", job.string(), "--machine", kMachine, "--report", report.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Outcome r = cpstep(args, "feed_" + name);
+    return std::pair{r, report};
+  };
+  const auto [plain, plain_report] = run("plain", {"--board", "hx8k"});
+  const auto [half, half_report] = run("half", {"--board", "hx8k", "--override", "50"});
+  const auto [held, held_report] = run("held", {"--board", "hx8k", "--feed", "0.01:hold,0.6:resume"});
+  ASSERT_EQ(plain.rc, 0) << plain.err;
+  ASSERT_EQ(half.rc, 0) << half.err;
+  ASSERT_EQ(held.rc, 0) << held.err;
+  const json p = json::parse(slurp(plain_report)), h = json::parse(slurp(half_report)),
+             d = json::parse(slurp(held_report));
+  for (const json* r : {&h, &d}) {
+    EXPECT_EQ((*r)["faults"], json::array());
+    EXPECT_EQ((*r)["moves"], p["moves"]);
+    EXPECT_EQ((*r)["move_events"], p["move_events"]);
+    for (const auto& [axis, a] : p["axes"].items())
+      EXPECT_EQ((*r)["axes"][axis]["final_steps"], a["final_steps"]) << axis;
+    EXPECT_TRUE((*r)["feed_scaled"].get<bool>());
+  }
+  EXPECT_FALSE(p["feed_scaled"].get<bool>());
+  const double t = p["job_time_s"].get<double>();
+  EXPECT_NEAR(h["job_time_s"].get<double>() / t, 2.0, 0.01) << "every interval doubled";
+  ASSERT_EQ(d["feed"].size(), 2u);
+  EXPECT_EQ(d["feed"][0]["what"], "hold");
+  EXPECT_EQ(d["feed"][1]["what"], "resume");
+  const double stood = d["feed"][1]["taken_s"].get<double>() - d["feed"][0]["taken_s"].get<double>();
+  EXPECT_GT(d["job_time_s"].get<double>(), t + stood - 2 * d["feed_ramp"]["hold_s"].get<double>());
+  EXPECT_NE(held.out.find("feed       hold taken at"), std::string::npos) << held.out;
+
+  for (const auto& [name, extra, words] :
+       {std::tuple<std::string, std::vector<std::string>, std::string>{
+            "icebreaker", {"--override", "50"}, "has no feed hold or override"},
+        {"above", {"--board", "hx8k", "--override", "150"}, "feed.max_override_pct"},
+        {"malformed", {"--board", "hx8k", "--feed", "soon:hold"}, "--feed"}}) {
+    const auto [r, report] = run(name, extra);
+    EXPECT_EQ(r.rc, 2) << name;
+    EXPECT_NE(r.err.find(words), std::string::npos) << name << ": " << r.err;
     EXPECT_NE(r.err.find("nothing was sent"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(report)) << report;
   }
