@@ -7,9 +7,11 @@
 // The input is a list of operations: a SEGMENT built from the bytes (near-valid
 // by construction, with any field possibly out of range), a CONFIG, a CONTROL, a
 // READ, a raw word, idle cycles (the reply port possibly stalled), the E-stop input
-// held for a while, a reset. Checked every cycle (docs/CORE.md):
+// held for a while, a reset, an URGENT feed HOLD / RESUME / OVERRIDE (the small build
+// has FEED). Checked every cycle (docs/CORE.md):
 //   - the status word is the live outputs (running, fault, stretched, E-stop,
-//     drivers, code), fault <=> code != 0, bits [7:5] zero; the read port shows
+//     drivers, code), fault <=> code != 0, bit 5 (torch) zero, bit 6 held as the
+//     HOLD and RESUME sent say; held and no longer ramping, no move fires; the read port shows
 //     the status, positions and the id; no reply data while no reply is valid; no
 //     command taken while a reply waits;
 //   - a latched code changes only through CLEAR (or reset); E-stop in t latches a
@@ -143,6 +145,8 @@ struct Harness {
   bool have_prev = false, prev_estop = false, prev_clear = false, prev_rst = false;
   bool aligned = true;  // the parser is at a command boundary (as far as we know)
   uint64_t since_kick = 0;  // clocks since the last word offered (the watchdog's kick)
+  uint32_t feed = 0;        // this clock's URGENT feed bits: 1 HOLD, 2 RESUME, 4 OVERRIDE (value in [31:16])
+  bool held = false;        // HOLD sent and no RESUME since (nor reset)
 
   bool out_of_time() const { return cycles >= kMaxCycles; }
 
@@ -156,6 +160,10 @@ struct Harness {
     // A word handed over stands for a frame that brought it: the watchdog's kick
     // (CONFIG field 5 may set a timeout; idle spans may outlast it).
     core.in.kick = valid;
+    core.in.ctl_hold = feed & 1;
+    core.in.ctl_resume = feed >> 1 & 1;
+    core.in.ctl_ovr = feed >> 2 & 1;
+    core.in.ctl_ovr_val = feed >> 16;
     static constexpr uint32_t kRegs[] = {0x00, 0x10, 0x11, 0x1F, 0x01, 0x02, 0x03};
     core.in.rd_addr = kRegs[rd_addr++ % std::size(kRegs)];
     const model::CpCoreOut o = core.outputs();
@@ -169,6 +177,10 @@ struct Harness {
     have_prev = true;
     prev_estop = estop;
     prev_rst = rst;
+    if (rst) held = false;
+    if (!rst && (feed & 2)) held = false;
+    if (!rst && (feed & 1)) held = true;
+    feed = 0;
     prev_clear = taken && word >> 28 == 3 && (word >> 2 & 1);
     core.tick();
     ++cycles;
@@ -178,7 +190,7 @@ struct Harness {
   void check(const model::CpCoreOut& o) const {
     const uint32_t st = o.status;
     FUZZ_CHECK((st & 1) == o.running && (st >> 1 & 1) == o.fault && (st >> 2 & 1) == o.stretched &&
-                   (st >> 3 & 1) == estop && (st >> 4 & 1) == o.enable && (st >> 5 & 7) == 0 &&
+                   (st >> 3 & 1) == estop && (st >> 4 & 1) == o.enable && (st >> 5 & 1) == 0 &&
                    (st >> 8 & 0xFF) == o.err_code,
                "status 0x%08x vs the outputs", st);
     FUZZ_CHECK(o.fault == (o.err_code != 0), "fault %d with code %u", o.fault, o.err_code);
@@ -202,6 +214,10 @@ struct Harness {
     if (prev.fault && !prev_clear)
       FUZZ_CHECK((o.status >> 16 & 0xFF) <= (prev.status >> 16 & 0xFF), "segments queued %u -> %u with a fault",
                  prev.status >> 16 & 0xFF, o.status >> 16 & 0xFF);
+    FUZZ_CHECK((o.status >> 6 & 1) == held, "status held %u, but HOLD/RESUME say %d", o.status >> 6 & 1, held);
+    // Held and at a stand (the scale 0): nothing falls due.
+    if ((prev.status >> 6 & 3) == 1)
+      FUZZ_CHECK(o.moves_done == prev.moves_done, "a move fired while held at a stand");
     FUZZ_CHECK(o.moves_done >= prev.moves_done && o.segments_done >= prev.segments_done &&
                    o.stretch_count >= prev.stretch_count,
                "a counter went down");
@@ -290,13 +306,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       case 1:
       case 2: h.segment(in); break;
       case 3: {  // CONFIG: axis, field, value
-        // Fields 0..8: pulse timing, polarity, the watchdog, the inputs (docs/CORE.md); 9 is refused.
+        // Fields 0..9: pulse timing, polarity, the watchdog, the inputs, the feed ramp's tick
+        // (docs/CORE.md; the small build has FEED).
         const uint32_t w = 2u << 28 | (in.u8() % 3u) << 24 | (in.u8() % 10u) << 20 | in.u16();
         h.send({w});
         break;
       }
-      case 4: {  // CONTROL: start, abort, clear, drivers on, off
-        h.send({3u << 28 | (in.u8() & 0x1F)});
+      case 4: {  // CONTROL: start, abort, clear, drivers on, off; with bits 7:5, URGENT feed bits instead
+        const uint8_t b = in.u8();
+        if (b & 0xE0) {
+          h.feed = uint32_t(b >> 5) | uint32_t(b & 0x1F) << 26;  // OVERRIDE values 0..0x7C00
+          h.idle(1);
+        } else {
+          h.send({3u << 28 | b});
+        }
         break;
       }
       case 5: {  // READ
