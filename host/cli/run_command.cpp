@@ -347,7 +347,8 @@ void on_feed_toggle(int) { g_feed_toggles = g_feed_toggles + 1; }
 
 // --override and --feed against the card and the machine file; SIGUSR1 on a card
 // with feed hold. false: refused (said why), nothing sent.
-bool feed_options(const RunOptions& o, const run::CardJob& j, run::SimRunOptions& so) {
+template <class Options>
+bool feed_options(const RunOptions& o, const run::CardJob& j, Options& so) {
   const double max_pct = j.machine.feed.max_override * 100;
   std::vector<run::FeedEvent> events;
   try {
@@ -461,6 +462,8 @@ int run_spidev_transport(const RunOptions& o) {
     return kExitRefused;
   }
   if (!watchdog_fits(o, j, double(hz))) return kExitRefused;
+  run::LinkRunOptions lo;
+  if (!feed_options(o, j, lo)) return kExitRefused;
   std::ofstream report_file;
   if (const int rc = open_outputs(o, report_file)) return rc;
   try {
@@ -472,7 +475,6 @@ int run_spidev_transport(const RunOptions& o) {
     return kExitRefused;
   }
   Progress progress(!o.no_progress);
-  run::LinkRunOptions lo;
   lo.sck_hz = double(hz);
   lo.ack_estop = o.ack_estop;
   lo.watchdog_s = o.watchdog_s;
@@ -538,13 +540,14 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& o) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   c->add_option("--override", o.override_pct,
-                "sim: the feed override in percent from the job's start (cards with feed hold: docs/CORE.md "
+                "sim, spidev: the feed override in percent from the job's start (cards with feed hold: docs/CORE.md "
                 "\"Feed hold and override\"); at most the machine file's feed.max_override_pct (default 100)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 200.0));
   c->add_option("--feed", o.feed,
-                "sim: feed events at seconds from START, e.g. \"2.5:hold,4:resume,6:override=50\"; and while "
-                "a job runs on a card with feed hold, SIGUSR1 toggles HOLD and RESUME");
+                "sim, spidev: feed events at seconds from START (spidev: from the first reply that shows the "
+                "card running), e.g. \"2.5:hold,4:resume,6:override=50\"; and while a job runs on a card with "
+                "feed hold, SIGUSR1 toggles HOLD and RESUME");
   c->add_option("--state", o.state,
                 "sim, spidev: after the run write its state here (JSON: contours completed, the card's "
                 "position; docs/PLASMA.md \"Resume\")");
@@ -608,9 +611,8 @@ int run_job(const RunOptions& o) {
                        "contours with its controls; --state records where)\n");
     return kExitRefused;
   }
-  if (o.transport != "sim" && (o.override_pct != 100 || !o.feed.empty())) {
-    fmt::print(stderr, "cpstep run: --override and --feed are for --transport sim (on a real card's run, "
-                       "SIGUSR1 is not yet sent either: docs/HOST.md)\n");
+  if (o.transport == "file" && (o.override_pct != 100 || !o.feed.empty())) {
+    fmt::print(stderr, "cpstep run: --override and --feed need a card: --transport sim or spidev\n");
     return kExitRefused;
   }
   if (o.transport == "spidev") return run_spidev_transport(o);

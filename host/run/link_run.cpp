@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "card/frame.h"
+#include "run/feed_driver.h"
 
 namespace cpstep::run {
 
@@ -21,7 +22,7 @@ constexpr double kStallSeconds = 0.02;
 CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& o) {
   CardRun run;
   run.pins_observed = false;
-  card::ClientOptions co = keeping_alive(o.client, o.watchdog_s);
+  card::ClientOptions co = feed_waits(keeping_alive(o.client, o.watchdog_s), !o.feed.empty(), bool(o.feed_toggle));
   co.axes = plan::kAxes;
   co.buffer_words = job.caps.command_buffer_words();
   card::CardClient client(link, co);
@@ -107,10 +108,24 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
     return gave_up == GaveUp::no;
   };
   size_t sent = 0;
+  // START: the first reply that shows the card running (the feed's events are timed from it).
+  std::optional<double> started_at;
+  const auto watching = [&](const card::Reply& r) {
+    if (!started_at && card::decode_status(r.status).running) started_at = link.now_s();
+    return keep_waiting(r);
+  };
   try {
-    sent = client.send(words, keep_waiting);
-    if (sent == words.size() && client.wait_until_stopped(keep_waiting))
-      watchdog_off(client, o.watchdog_s, keep_waiting);
+    const FeedPlan plan{o.override_pct, o.feed, o.feed_toggle};
+    if (plan.any() && !job.caps.feed)
+      throw card::CardError(fmt::format("the card, {}, has no feed hold or override", card::card_name(job.caps)));
+    FeedOutcome fed = send_with_feed(client, words, plan, watching, [&]() -> std::optional<double> {
+      if (!started_at) return std::nullopt;
+      return link.now_s() - *started_at;
+    });
+    sent = fed.sent;
+    run.feed = std::move(fed.applied);
+    run.feed_scaled = !run.feed.empty();
+    if (sent == words.size() && fed.stopped) watchdog_off(client, o.watchdog_s, keep_waiting);
     if (gave_up == GaveUp::out_of_time) {
       std::vector<uint32_t> abort;
       card::encode_control(false, true, false, abort);

@@ -26,6 +26,11 @@ struct LinkRunOptions {
   // (docs/CORE.md "Faults"): with this set the host sends it (an URGENT ACK frame)
   // once the input is released; without it such a card is refused.
   bool ack_estop = false;
+  // Feed (cards with FEED): as SimRunOptions's; the events' times count from the first
+  // reply that shows the card running.
+  double override_pct = 100;
+  std::vector<FeedEvent> feed;
+  std::function<bool()> feed_toggle;
 };
 
 // Polls the card; refuses to start (a LINK fault, nothing sent) when no card

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "run/feed_driver.h"
 #include "sim/card_configs.h"
 #include "sim/fast_card.h"
 #include "sim/sim_link.h"
@@ -271,11 +272,7 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   const std::unique_ptr<card::Link> wrapped = o.wrap_link ? o.wrap_link(sim_link) : nullptr;
   const std::vector<uint32_t> words = words_with_watchdog(job, o.watchdog_s);
   const uint64_t before_job = words.size() - job.words.size();  // the watchdog's CONFIG
-  card::ClientOptions co = keeping_alive(o.client, o.watchdog_s);
-  // Feed events land within 5 ms of their time, a SIGUSR1 toggle within 50 ms: no wait
-  // is longer (docs/HOST.md).
-  const double feed_wait_s = !o.feed.empty() ? 0.005 : o.feed_toggle ? 0.05 : 0.0;
-  if (feed_wait_s > 0) co.keepalive_s = co.keepalive_s > 0 ? std::min(co.keepalive_s, feed_wait_s) : feed_wait_s;
+  card::ClientOptions co = feed_waits(keeping_alive(o.client, o.watchdog_s), !o.feed.empty(), bool(o.feed_toggle));
   co.axes = plan::kAxes;
   co.buffer_words = job.caps.command_buffer_words();
   card::CardClient client(wrapped ? *wrapped : sim_link, co);
@@ -321,58 +318,18 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
                                         card::describe(job.caps), card::describe(caps)));
     // Feed: the override before the job's words (its ramp's CONFIG then sets the scale
     // on it), events as their time from START comes, toggles as they are asked.
-    const bool feeding = o.override_pct != 100 || !o.feed.empty() || o.feed_toggle;
-    if (feeding && !caps.feed)
+    const FeedPlan plan{o.override_pct, o.feed, o.feed_toggle};
+    if (plan.any() && !caps.feed)
       throw card::CardError(fmt::format("the card, {}, has no feed hold or override; nothing was sent",
                                         card::card_name(caps)));
-    bool held = false;
-    size_t next_event = 0;
-    int toggles = 0;
-    const auto from_start_s = [&] { return (double(dut.cycle()) - double(run.start_cycle)) / job.clock_hz(); };
-    const auto send_feed = [&](const FeedEvent& e, std::string what) {
-      const uint32_t word = feed_word(e, held);
-      if (!client.urgent(word, keep_waiting)) return;
-      if (word & card::urgent::hold) held = true;
-      if (word & card::urgent::resume) held = false;
-      if (e.kind == FeedEvent::Kind::toggle) what = held ? "hold" : "resume";
-      run.feed.push_back({e, rec.started() ? from_start_s() : 0.0, std::move(what)});
-      run.feed_scaled = true;
+    const auto since_start = [&]() -> std::optional<double> {
+      if (!rec.started()) return std::nullopt;
+      return (double(dut.cycle()) - double(run.start_cycle)) / job.clock_hz();
     };
-    if (o.override_pct != 100) {
-      FeedEvent e{0, FeedEvent::Kind::override_pct, o.override_pct};
-      send_feed(e, fmt::format("override {} %", o.override_pct));
-    }
-    const auto feed_due = [&] {
-      if (o.feed_toggle && o.feed_toggle()) ++toggles;
-      if (toggles > 0) return true;
-      return next_event < o.feed.size() && rec.started() && from_start_s() >= o.feed[next_event].at_s;
-    };
-    const auto apply_due = [&] {
-      if (toggles > 0) {
-        --toggles;
-        send_feed({0, FeedEvent::Kind::toggle, 100}, "toggle");
-        return;
-      }
-      const FeedEvent& e = o.feed[next_event++];
-      send_feed(e, e.kind == FeedEvent::Kind::hold     ? std::string("hold")
-                   : e.kind == FeedEvent::Kind::resume ? std::string("resume")
-                                                       : fmt::format("override {} %", e.pct));
-    };
-    // While feeding, a wait also gives up when a feed event falls due: it is sent, and
-    // the words and the wait go on.
-    const auto keep_feeding = [&](const card::Reply& r) { return keep_waiting(r) && !(feeding && feed_due()); };
-    for (;;) {
-      if (sent < words.size()) sent += client.send(std::span(words).subspan(sent), keep_feeding);
-      if (gave_up != GaveUp::no) break;
-      if (feeding && feed_due()) {
-        apply_due();
-        continue;
-      }
-      if (sent < words.size()) break;
-      if (client.wait_until_stopped(keep_feeding)) break;
-      if (gave_up != GaveUp::no || !(feeding && feed_due())) break;
-      apply_due();
-    }
+    FeedOutcome fed = send_with_feed(client, words, plan, keep_waiting, since_start);
+    sent = fed.sent;
+    run.feed = std::move(fed.applied);
+    run.feed_scaled = !run.feed.empty();
     if (sent == words.size() && gave_up == GaveUp::no) watchdog_off(client, o.watchdog_s, keep_waiting);
   } catch (const card::CardError& e) {
     run.faults.push_back(host_fault(HostFault::link, e.what()));

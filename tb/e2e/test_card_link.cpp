@@ -11,6 +11,8 @@
 // (docs/PROTOCOL.md), never from the client's own account.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <limits>
 #include <unistd.h>
 
@@ -30,6 +32,7 @@
 #include "card/frame.h"
 #include "card/protocol.h"
 #include "run/card_job.h"
+#include "run/feed.h"
 #include "run/link_run.h"
 #include "run/sim_run.h"
 #include "sim/card_configs.h"
@@ -442,6 +445,31 @@ TEST_F(CardLink, TheSpidevPathOverTheSimulatedCard) {
   EXPECT_TRUE(again.ok()) << (again.faults.empty() ? "" : again.faults.front().message);
   EXPECT_EQ(again.moves_done, job_->moves());
   EXPECT_EQ(again.position, job_->checkpoints.back().position);
+}
+
+// The feed on the spidev path (docs/HOST.md "Feed hold and override"): the override
+// before the job's words and a HOLD and a RESUME timed from the first reply that shows
+// the card running reach the (Verilated default, HX8K) card as URGENT frames; the job
+// ends exactly, its moves all made, at 50 % in about twice its planned time.
+TEST_F(CardLink, TheSpidevPathSendsTheFeed) {
+  ASSERT_TRUE(job_->caps.feed) << "the default card has feed hold";
+  DefaultCard card(job_->clock_hz());
+  run::LinkRunOptions o;
+  o.override_pct = 50;
+  const double planned = job_->planned.stats.duration_s;
+  o.feed = run::parse_feed_events(fmt::format("{}:hold,{}:resume", 0.2 * planned, 0.4 * planned));
+  const run::CardRun r = run::run_on_link(*job_, card.link, o);
+  EXPECT_TRUE(r.ok()) << (r.faults.empty() ? "" : r.faults.front().message);
+  ASSERT_EQ(r.feed.size(), 3u);
+  EXPECT_EQ(r.feed[0].what, "override 50 %");
+  EXPECT_EQ(r.feed[1].what, "hold");
+  EXPECT_EQ(r.feed[2].what, "resume");
+  EXPECT_GE(r.feed[1].taken_s, 0.2 * planned);
+  EXPECT_TRUE(r.feed_scaled);
+  EXPECT_EQ(r.moves_done, job_->moves());
+  EXPECT_EQ(r.position, job_->checkpoints.back().position);
+  EXPECT_GT(r.link.seconds, 2 * planned) << "at 50 %, and held a while";
+  for (int a = 0; a < 4; ++a) EXPECT_EQ(card.spi.last().position[size_t(a)], r.position[a]) << a;
 }
 
 TEST_F(CardLink, TheSpidevPathPlansFromWhereTheCardIs) {

@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: MIT
+#include "run/feed_driver.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <string>
+
+#include "card/frame.h"
+
+namespace cpstep::run {
+
+card::ClientOptions feed_waits(card::ClientOptions client, bool events, bool toggle) {
+  const double wait = events ? 0.005 : toggle ? 0.05 : 0.0;
+  if (wait > 0) client.keepalive_s = client.keepalive_s > 0 ? std::min(client.keepalive_s, wait) : wait;
+  return client;
+}
+
+FeedOutcome send_with_feed(card::CardClient& client, std::span<const uint32_t> words, const FeedPlan& plan,
+                           const card::CardClient::KeepWaiting& keep_waiting,
+                           const std::function<std::optional<double>()>& since_start_s) {
+  FeedOutcome out;
+  bool held = false, gave_up = false;
+  size_t next = 0;
+  int toggles = 0;
+  const auto send = [&](const FeedEvent& e, std::string what) {
+    const uint32_t word = feed_word(e, held);
+    if (!client.urgent(word, keep_waiting)) return;
+    if (word & card::urgent::hold) held = true;
+    if (word & card::urgent::resume) held = false;
+    if (e.kind == FeedEvent::Kind::toggle) what = held ? "hold" : "resume";
+    out.applied.push_back({e, since_start_s().value_or(0.0), std::move(what)});
+  };
+  if (plan.override_pct != 100)
+    send({0, FeedEvent::Kind::override_pct, plan.override_pct}, fmt::format("override {} %", plan.override_pct));
+  const auto due = [&] {
+    if (plan.toggle && plan.toggle()) ++toggles;
+    if (toggles > 0) return true;
+    if (next >= plan.events.size()) return false;
+    const std::optional<double> t = since_start_s();
+    return t && *t >= plan.events[next].at_s;
+  };
+  const auto apply = [&] {
+    if (toggles > 0) {
+      --toggles;
+      send({0, FeedEvent::Kind::toggle, 100}, "toggle");
+      return;
+    }
+    const FeedEvent& e = plan.events[next++];
+    send(e, e.kind == FeedEvent::Kind::hold     ? std::string("hold")
+            : e.kind == FeedEvent::Kind::resume ? std::string("resume")
+                                                : fmt::format("override {} %", e.pct));
+  };
+  // A wait also gives up when a feed event falls due: it is sent, and the words and
+  // the wait go on. (keep_waiting giving up ends it all.)
+  const bool feeding = plan.any();
+  const auto keep = [&](const card::Reply& r) {
+    if (!keep_waiting(r)) {
+      gave_up = true;
+      return false;
+    }
+    return !(feeding && due());
+  };
+  for (;;) {
+    if (out.sent < words.size()) out.sent += client.send(words.subspan(out.sent), keep);
+    if (gave_up) break;
+    if (feeding && due()) {
+      apply();
+      continue;
+    }
+    if (out.sent < words.size()) break;
+    if (client.wait_until_stopped(keep)) {
+      out.stopped = true;
+      break;
+    }
+    if (gave_up || !(feeding && due())) break;
+    apply();
+  }
+  return out;
+}
+
+}  // namespace cpstep::run

@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: MIT
+// The loop both runners share (run_on_sim, run_on_link): send a job's words and wait
+// for its end, sending the feed's URGENT frames (docs/CORE.md "Feed hold and
+// override") as they fall due — the override before the words, each event when the
+// time since START reaches it, each toggle (SIGUSR1) when asked — and recording them.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "card/card_client.h"
+#include "run/feed.h"
+
+namespace cpstep::run {
+
+struct FeedPlan {
+  double override_pct = 100;     // 100: none sent
+  std::vector<FeedEvent> events;  // at seconds from START, in order
+  std::function<bool()> toggle;   // true once per toggle asked (HOLD, then RESUME, ...)
+  [[nodiscard]] bool any() const { return override_pct != 100 || !events.empty() || toggle; }
+};
+
+struct FeedOutcome {
+  size_t sent = 0;       // words handed to frames
+  bool stopped = false;  // the wait for the end completed
+  std::vector<FeedApplied> applied;
+};
+
+// The client's options with no wait longer than the feed needs: 5 ms while events are
+// planned (each lands within 5 ms of its time), 50 ms with a toggle (SIGUSR1).
+card::ClientOptions feed_waits(card::ClientOptions client, bool events, bool toggle);
+
+// Sends `words` with `client` and waits until the card stopped, as CardClient::send and
+// wait_until_stopped do with `keep_waiting`, sending the plan's feed frames on the way.
+// since_start_s: the card's seconds since START, nullopt before it started (events wait
+// for it). The override goes before the words; an event due after the end is not sent.
+// Throws what CardClient throws.
+FeedOutcome send_with_feed(card::CardClient& client, std::span<const uint32_t> words, const FeedPlan& plan,
+                           const card::CardClient::KeepWaiting& keep_waiting,
+                           const std::function<std::optional<double>()>& since_start_s);
+
+}  // namespace cpstep::run
