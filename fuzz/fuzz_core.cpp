@@ -7,8 +7,9 @@
 // The input is a list of operations: a SEGMENT built from the bytes (near-valid
 // by construction, with any field possibly out of range), a CONFIG, a CONTROL, a
 // READ, a raw word, idle cycles (the reply port possibly stalled), the E-stop input
-// held for a while, a reset, an URGENT feed HOLD / RESUME / OVERRIDE (the small build
-// has FEED). Checked every cycle (docs/CORE.md):
+// held for a while, the limit and probe pins set (with CONFIG field 10, the seek), a
+// reset, an URGENT feed HOLD / RESUME / OVERRIDE (the small build has FEED and INPUTS).
+// Checked every cycle (docs/CORE.md):
 //   - the status word is the live outputs (running, fault, stretched, E-stop,
 //     drivers, code), fault <=> code != 0, bit 5 (torch) zero, bit 6 held as the
 //     HOLD and RESUME sent say; held and no longer ramping, no move fires; the read port shows
@@ -147,6 +148,7 @@ struct Harness {
   uint64_t since_kick = 0;  // clocks since the last word offered (the watchdog's kick)
   uint32_t feed = 0;        // this clock's URGENT feed bits: 1 HOLD, 2 RESUME, 4 OVERRIDE (value in [31:16])
   bool held = false;        // HOLD sent and no RESUME since (nor reset)
+  uint32_t pins = 0;        // the input pins: [1:0] limit min, [3:2] limit max, [4] probe
 
   bool out_of_time() const { return cycles >= kMaxCycles; }
 
@@ -157,6 +159,9 @@ struct Harness {
     core.in.cmd_data = word;
     core.in.rsp_ready = rsp_ready;
     core.in.estop = estop;
+    core.in.lim_min = pins & 3;
+    core.in.lim_max = pins >> 2 & 3;
+    core.in.probe = (pins >> 4 & 1) != 0;
     // A word handed over stands for a frame that brought it: the watchdog's kick
     // (CONFIG field 5 may set a timeout; idle spans may outlast it).
     core.in.kick = valid;
@@ -306,9 +311,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       case 1:
       case 2: h.segment(in); break;
       case 3: {  // CONFIG: axis, field, value
-        // Fields 0..9: pulse timing, polarity, the watchdog, the inputs, the feed ramp's tick
-        // (docs/CORE.md; the small build has FEED).
-        const uint32_t w = 2u << 28 | (in.u8() % 3u) << 24 | (in.u8() % 10u) << 20 | in.u16();
+        // Fields 0..10: pulse timing, polarity, the watchdog, the inputs, the feed ramp's
+        // tick, the seek (docs/CORE.md; the small build has FEED and INPUTS).
+        const uint32_t w = 2u << 28 | (in.u8() % 3u) << 24 | (in.u8() % 11u) << 20 | in.u16();
         h.send({w});
         break;
       }
@@ -337,7 +342,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         h.rsp_ready = true;
         break;
       }
-      case 8: {  // E-stop held
+      case 8: {  // E-stop held; with bit 7, the limit and probe pins set instead
+        if (op & 0x80) {
+          h.pins = in.u8() & 0x1F;
+          h.idle(1 + in.u8() % 32u);
+          break;
+        }
         h.estop = true;
         h.idle(1 + in.u8() % 16u);
         h.estop = false;

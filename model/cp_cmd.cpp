@@ -111,7 +111,7 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
           // Refused while running, and while a STEP pulse is still high (after ABORT,
           // E-stop or the run's last move): a polarity or timing write never cuts it.
           if (i.running || i.pulse_busy) refuse(CoreError::config_busy);
-          else if (axis >= p_.n || field > (p_.feed ? 9u : 8u) || (field <= 1 && value == 0) ||
+          else if (axis >= p_.n || field > 10 || (field == 9 && !p_.feed) || (field == 10 && !p_.inputs) || (field <= 1 && value == 0) ||
                    (field <= 3 && value > mask_tw_))  // must fit the TW-bit timing field
             refuse(CoreError::config_value);
           else o.cfg_write = true;

@@ -15,7 +15,8 @@ namespace cpstep::model {
 struct CpCmdParams {
   unsigned n = 4, umax = 1048575, kmax = 8, caw = 6, tw = 16;
   bool conic = false;  // CONIC segments (opcode 0x5) taken; refused as BAD_OPCODE otherwise
-  bool feed = false;   // CONFIG field 9 (the feed ramp's tick) taken; refused above 8 otherwise
+  bool feed = false;    // CONFIG field 9 (the feed ramp's tick) taken; refused otherwise
+  bool inputs = false;  // CONFIG field 10 (the seek) taken; refused otherwise (and above 10)
 };
 
 struct CpCmdIn {

@@ -10,7 +10,7 @@ namespace cpstep::model {
 
 CpCore::CpCore(Params p)
     : p_(p),
-      cmd_({p.n, p.umax, p.kmax, p.caw, p.tw, p.conic, p.feed}),
+      cmd_({p.n, p.umax, p.kmax, p.caw, p.tw, p.conic, p.feed, p.inputs}),
       build_({p.n, p.w, p.umax, p.saw, p.conic}),
       run_({p.n, p.w, p.conic, p.ciw}),
       status_({p.n, p.w, p.umax, p.kmax, p.caw, p.saw, p.tw, p.pw, p.step_high_reset, p.step_low_reset,
@@ -130,7 +130,8 @@ CpCore::Wires CpCore::settle() const {
   r.rst = in.rst;
   r.estop = in.estop;
   r.start = w.cmd.start || in.ctl_start;
-  r.stop = in.ctl_stop || status_.wd_trip(in.kick);  // STOP, or the watchdog ran out
+  // STOP, the watchdog ran out, or the seek trips on the probe.
+  r.stop = in.ctl_stop || status_.wd_trip(in.kick) || w.inp.seek_stop;
   r.lim_min = w.inp.lim_min;
   r.lim_max = w.inp.lim_max;
   r.scale = w.fo.scale;
@@ -162,7 +163,10 @@ CpCore::Wires CpCore::settle() const {
   s.clear = w.cmd.clear;
   s.ack = in.ctl_ack;
   s.kick = in.kick;
-  s.lim_hit = w.r.lim_hit;
+  s.lim_hit = w.r.lim_hit && !w.inp.seek_lim;  // in the seek's mode 3 a trip, not LIMIT
+  w.i_in.running = run_.running();
+  w.i_in.lim_hit = w.r.lim_hit;
+  s.seek = w.inp.seek;
   s.lim_min = w.inp.lim_min;
   s.lim_max = w.inp.lim_max;
   s.probe = w.inp.probe;

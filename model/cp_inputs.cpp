@@ -20,12 +20,21 @@ uint32_t CpInputs::pins(const In& i) const {
   return pack_inputs(n_, i.lim_min, i.lim_max, i.probe);
 }
 
+// Modes 1 and 2: the probe active, the probe inactive.
+bool CpInputs::probe_trips(const Regs& q) const {
+  const bool on = ((q.level >> (2 * n_) & 1) != 0) == q.probe_hi;
+  return (q.seek == 1 && on) || (q.seek == 2 && !on);
+}
+
 CpInputs::Out CpInputs::outputs() const {
   const Regs& q = r_;
   Out o;
   o.lim_min = q.min_en & ~(q.level ^ q.min_hi) & mask_;
   o.lim_max = q.max_en & ~((q.level >> n_) ^ q.max_hi) & mask_;
   o.probe = ((q.level >> (2 * n_) & 1) != 0) == q.probe_hi;
+  o.seek_stop = probe_trips(q);
+  o.seek_lim = q.seek == 3;
+  o.seek = uint32_t(q.tripped) << 2 | q.seek;
   return o;
 }
 
@@ -49,6 +58,14 @@ void CpInputs::tick() {
   }
   if (cfg_filter) q.filter = i.cfg_word & 0xFFFF;
   if (i.cfg_write && field == 8) q.probe_hi = (i.cfg_word & 1) != 0;
+  if ((i.running && probe_trips(was)) || (was.seek == 3 && i.lim_hit)) {
+    q.seek = 0;
+    q.tripped = true;
+  }
+  if (i.cfg_write && field == 10) {
+    q.seek = i.cfg_word & 3;
+    q.tripped = false;
+  }
   if (i.cfg_write && field == 7) {
     const uint32_t axis = i.cfg_word >> 24 & 0xF;
     if (axis < n_) {
@@ -64,6 +81,7 @@ void CpInputs::tick() {
 
 uint64_t CpInputs::quiet_for(const In& i, uint64_t limit) const {
   if (i.rst || i.cfg_write) return 0;
+  if ((i.running && probe_trips(r_)) || (r_.seek == 3 && i.lim_hit)) return 0;  // the seek trips
   const uint32_t p = pins(i);
   return (r_.s1 == p && r_.s2 == p && r_.level == p) ? limit : 0;
 }

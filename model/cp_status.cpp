@@ -70,7 +70,7 @@ uint32_t CpStatus::read(const In& i, uint32_t reg) const {
     case 0x24: return p_.clock_hz;
     case 0x25: return p_.build_id;
     case 0x26: return p_.conic ? p_.ciw : 0;
-    case 0x27: return uint32_t(i.probe) << 16 | (i.lim_max & 0xFF) << 8 | (i.lim_min & 0xFF);
+    case 0x27: return (i.seek & 7) << 17 | uint32_t(i.probe) << 16 | (i.lim_max & 0xFF) << 8 | (i.lim_min & 0xFF);
     case 0x28: return (q.lim_max_at & 0xFF) << 8 | (q.lim_min_at & 0xFF);
     case 0x29: return i.feed;
     case 0x2A: return i.override & 0xFFFF;

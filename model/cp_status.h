@@ -41,6 +41,7 @@ struct CpStatusIn {
   // The inputs, active (cp_inputs): READ 0x27 live, 0x28 the limits at LIMIT.
   uint32_t lim_min = 0, lim_max = 0;
   bool probe = false;
+  uint32_t seek = 0;  // the seek's {tripped, mode} (cp_inputs), READ 0x27 [19:17]
   // Feed hold and override (cp_feed; 0 without): READ 0x29, 0x2A.
   uint32_t feed = 0, override = 0;
   bool stretch = false, fire = false, seg_done = false, seg_active = false;

@@ -26,8 +26,10 @@ module cp_cmd #(
     parameter integer TW = 16,
     // 1: CONIC segments (opcode 0x5, docs/CORE.md) are taken; 0: refused as BAD_OPCODE.
     parameter integer CONIC = 0,
-    // 1: CONFIG field 9 (the feed ramp's tick, cp_feed) is taken; 0: fields above 8 are refused.
-    parameter integer FEED = 0
+    // 1: CONFIG field 9 (the feed ramp's tick, cp_feed) is taken; 0: refused.
+    parameter integer FEED = 0,
+    // 1: CONFIG field 10 (the seek, cp_inputs) is taken; 0: refused. Fields above 10: refused.
+    parameter integer INPUTS = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -156,7 +158,10 @@ reg [7:0]    rsp_addr_q, rsp_addr_d;
 
 // ---------------------------------------------------------------- word fields
 // The last CONFIG field taken.
-localparam [3:0] CFG_LAST = (FEED != 0) ? 4'd9 : 4'd8;
+// Fields 0..8 always; 9 (the feed ramp) in FEED builds, 10 (the seek) in INPUTS builds.
+wire [3:0] cfg_field = cmd_data_i[23:20];
+wire       cfg_field_bad = cfg_field > 4'd10 || (cfg_field == 4'd9 && FEED == 0) ||
+                           (cfg_field == 4'd10 && INPUTS == 0);
 wire [3:0]  op        = cmd_data_i[31:28];
 wire        take      = cmd_valid_i && cmd_ready_o;
 wire [15:0] c1_count  = cmd_data_i[15:0];
@@ -287,7 +292,7 @@ always @* begin
             // E-stop or the run's last move): a polarity or timing write never cuts it.
             if (running_i || pulse_busy_i) begin
                 refuse = 1'b1;  refuse_code = E_CONFIG_BUSY;
-            end else if ({28'd0, cmd_data_i[27:24]} >= N || cmd_data_i[23:20] > CFG_LAST ||
+            end else if ({28'd0, cmd_data_i[27:24]} >= N || cfg_field_bad ||
                          (cmd_data_i[23:20] <= 4'd1 && cmd_data_i[15:0] == 16'd0) ||
                          (cmd_data_i[23:20] <= 4'd3 && (cmd_data_i[15:0] & ~TMASK) != 16'd0)) begin
                 refuse = 1'b1;  refuse_code = E_CONFIG_VALUE;

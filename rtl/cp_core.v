@@ -49,8 +49,8 @@ module cp_core #(
     // (docs/CONIC.md section 8); 0: refused as BAD_OPCODE, and no walker.
     parameter integer CONIC = 0,
     parameter integer CIW = 40,
-    // Limit switches and the probe (cp_inputs; docs/CORE.md "Inputs"); 0: the
-    // inputs are not looked at (READ 0x27 reads 0, no LIMIT).
+    // Limit switches, the probe and the seek (cp_inputs; docs/CORE.md "Inputs"); 0:
+    // the inputs are not looked at (READ 0x27 reads 0, no LIMIT, CONFIG field 10 refused).
     parameter integer INPUTS = 0,
     // Feed hold, resume and override on scaled time (cp_feed; docs/CORE.md "Feed hold
     // and override"); 0: the timer runs at scale 1, the URGENT feed bits are ignored,
@@ -168,6 +168,9 @@ wire          wd_trip;     // the watchdog ran out: the runner stops (cp_status)
 wire          lim_hit;     // the runner stopped at an active limit
 wire [N-1:0]  lim_min, lim_max;   // active limits (cp_inputs)
 wire          probe;
+wire          seek_stop;   // the seek trips on the probe: the runner stops (cp_inputs)
+wire          seek_lim;    // a limit hit is the seek's trip, not LIMIT (cp_inputs)
+wire [2:0]    seek;        // {tripped, mode}, READ 0x27
 wire [17:0]   scale;       // the timer's scale (cp_feed), Q2.16
 wire [31:0]   feed_word;   // READ 0x29
 wire [15:0]   override;    // READ 0x2A
@@ -208,7 +211,8 @@ wire [PW-1:0] pulse_pos [0:N-1];
 wire unused = &{1'b0, seg_used, seg_level, ch_used, run_used, run_full};
 
 // ---------------------------------------------------------------- parts
-cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW), .CONIC(CONIC), .FEED(FEED)) u_cmd (
+cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW), .CONIC(CONIC), .FEED(FEED),
+         .INPUTS(INPUTS)) u_cmd (
     .clk(clk), .rst(rst), .flush_i(ctl_flush_i),
     .cmd_valid_i(cmd_valid_i), .cmd_ready_o(cmd_ready_o), .cmd_data_i(cmd_data_i),
     .rsp_valid_o(rsp_valid_o), .rsp_ready_i(rsp_ready_i), .rsp_data_o(rsp_data_o),
@@ -254,7 +258,7 @@ cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
 
 cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW), .FEED(FEED)) u_run (
     .clk(clk), .rst(rst), .flush_i(flush_all), .estop_i(estop_i),
-    .start_i(start_req || ctl_start_i), .stop_i(ctl_stop_i || wd_trip), .abort_i(abort_req), .fault_i(fault),
+    .start_i(start_req || ctl_start_i), .stop_i(ctl_stop_i || wd_trip || seek_stop), .abort_i(abort_req), .fault_i(fault),
     .ch_valid_i(ch_head_valid), .ch_head_i(ch_head), .ch_pop_o(ch_pop),
     .run_valid_i(run_head_valid), .run_head_i(run_head), .run_level_i(run_level),
     .run_pop_o(run_pop),
@@ -278,8 +282,8 @@ cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW
     .abort_i(abort_req), .clear_i(clear_req), .ack_i(ctl_ack_i), .kick_i(kick_i), .drivers_on_i(drivers_on_req),
     .drivers_off_i(drivers_off_req), .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i),
     .cmd_fault_i(cmd_fault), .cmd_code_i(cmd_code), .build_fault_i(build_fault),
-    .run_fault_i(run_fault), .run_conic_i(run_conic), .lim_hit_i(lim_hit),
-    .lim_min_i(lim_min), .lim_max_i(lim_max), .probe_i(probe),
+    .run_fault_i(run_fault), .run_conic_i(run_conic), .lim_hit_i(lim_hit && !seek_lim),
+    .lim_min_i(lim_min), .lim_max_i(lim_max), .probe_i(probe), .seek_i(seek),
     .feed_i(feed_word), .override_i(override),
     .stretch_i(stretch), .fire_i(fire), .seg_done_i(seg_done), .seg_active_i(seg_active),
     .running_i(running), .torch_i(torch), .cur_valid_i(cur_valid), .segq_i(segq), .build_busy_i(build_busy),
@@ -298,12 +302,16 @@ generate
     if (INPUTS != 0) begin : g_inputs
         cp_inputs #(.N(N)) u_inputs (
             .clk(clk), .rst(rst), .lim_min_i(lim_min_i), .lim_max_i(lim_max_i), .probe_i(probe_i),
-            .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i),
-            .lim_min_o(lim_min), .lim_max_o(lim_max), .probe_o(probe));
+            .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i), .running_i(running), .lim_hit_i(lim_hit),
+            .lim_min_o(lim_min), .lim_max_o(lim_max), .probe_o(probe),
+            .seek_stop_o(seek_stop), .seek_lim_o(seek_lim), .seek_o(seek));
     end else begin : g_no_inputs
         assign lim_min = {N{1'b0}};
         assign lim_max = {N{1'b0}};
         assign probe   = 1'b0;
+        assign seek_stop = 1'b0;
+        assign seek_lim  = 1'b0;
+        assign seek      = 3'd0;
         wire unused_pins = &{1'b0, lim_min_i, lim_max_i, probe_i};
     end
 endgenerate

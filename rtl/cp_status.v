@@ -69,6 +69,7 @@ module cp_status #(
     input  wire [N-1:0]  lim_min_i,
     input  wire [N-1:0]  lim_max_i,
     input  wire          probe_i,
+    input  wire [2:0]    seek_i,           // the seek: {tripped, mode} (cp_inputs)
     // Feed hold and override (cp_feed; 0 without): READ 0x29 and 0x2A.
     input  wire [31:0]   feed_i,
     input  wire [15:0]   override_i,
@@ -293,12 +294,13 @@ localparam [31:0] CLK_WORD = CLK_HZ;
 localparam [31:0] CONIC_WORD = (CONIC == 0) ? 32'd0 : CIW;
 
 // The inputs (INPUTS = 1 builds; 0 otherwise): [7:0] min active, [15:8] max active,
-// [16] probe active; and the limits active when LIMIT latched.
+// [16] probe active, [18:17] the seek's mode, [19] the seek tripped; and the limits
+// active when LIMIT latched.
 wire [8:0]  min9 = {{(9 - N){1'b0}}, lim_min_i};
 wire [8:0]  max9 = {{(9 - N){1'b0}}, lim_max_i};
 wire [8:0]  min9_at = {{(9 - N){1'b0}}, lim_min_at_q};
 wire [8:0]  max9_at = {{(9 - N){1'b0}}, lim_max_at_q};
-wire [31:0] inputs_word = {15'd0, probe_i, max9[7:0], min9[7:0]};
+wire [31:0] inputs_word = {12'd0, seek_i, probe_i, max9[7:0], min9[7:0]};
 wire [31:0] limits_at_word = {16'd0, max9_at[7:0], min9_at[7:0]};
 wire unused_inputs = &{1'b0, min9[8], max9[8], min9_at[8], max9_at[8]};
 

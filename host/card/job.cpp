@@ -5,6 +5,7 @@
 
 #include <bit>
 #include <numeric>
+#include <stdexcept>
 
 namespace cpstep::card {
 
@@ -205,6 +206,25 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
   return r;
 }
 
+void encode_inputs(const plan::Machine& m, std::vector<uint32_t>& words) {
+  // The inputs (a card that has them): the filter, each axis's limit switches (those
+  // not wired disabled), the probe's level (docs/CORE.md "Inputs").
+  if (!m.card.inputs) return;
+  encode_config(0, ConfigField::input_filter, m.inputs.filter_cycles, words);
+  for (int a = 0; a < plan::kAxes; ++a) {
+    const plan::AxisConfig& ax = m.axes[a];
+    if (!ax.present) continue;
+    const auto bits = [](plan::SwitchLevel l, uint32_t high, uint32_t enabled) {
+      return (l == plan::SwitchLevel::none ? 0 : enabled) | (l == plan::SwitchLevel::active_low ? 0 : high);
+    };
+    encode_config(a, ConfigField::limits,
+                  bits(ax.limit_min, limit_bits::min_active_high, limit_bits::min_enabled) |
+                      bits(ax.limit_max, limit_bits::max_active_high, limit_bits::max_enabled),
+                  words);
+  }
+  encode_config(0, ConfigField::probe, uint32_t(m.inputs.probe_active_high), words);
+}
+
 std::vector<uint32_t> encode_job(const plan::Machine& m, const WireJob& job) {
   std::vector<uint32_t> words;
   // Drivers on first: the motors hold while the card is configured and filled.
@@ -219,22 +239,10 @@ std::vector<uint32_t> encode_job(const plan::Machine& m, const WireJob& job) {
     encode_config(a, ConfigField::polarity,
                   uint32_t(ax.step_active_high) | uint32_t(ax.dir_positive_high) << 1, words);
   }
-  // The inputs (a card that has them): the filter, each axis's limit switches (those
-  // not wired disabled), the probe's level (docs/CORE.md "Inputs").
-  if (m.card.inputs) {
-    encode_config(0, ConfigField::input_filter, m.inputs.filter_cycles, words);
-    for (int a = 0; a < plan::kAxes; ++a) {
-      const plan::AxisConfig& ax = m.axes[a];
-      if (!ax.present) continue;
-      const auto bits = [](plan::SwitchLevel l, uint32_t high, uint32_t enabled) {
-        return (l == plan::SwitchLevel::none ? 0 : enabled) | (l == plan::SwitchLevel::active_low ? 0 : high);
-      };
-      encode_config(a, ConfigField::limits,
-                    bits(ax.limit_min, limit_bits::min_active_high, limit_bits::min_enabled) |
-                        bits(ax.limit_max, limit_bits::max_active_high, limit_bits::max_enabled),
-                    words);
-    }
-    encode_config(0, ConfigField::probe, uint32_t(m.inputs.probe_active_high), words);
+  encode_inputs(m, words);
+  if (job.seek != seek_mode::off) {
+    if (!m.card.inputs) throw std::invalid_argument("encode_job: a seek needs a card with inputs");
+    encode_config(0, ConfigField::seek, job.seek, words);
   }
   // The feed ramp (a card that has it; docs/CORE.md "Feed hold and override").
   if (m.card.feed) {

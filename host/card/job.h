@@ -40,6 +40,9 @@ struct WireJob {
   std::vector<WireSegment> segments;
   std::vector<size_t> source;   // per wire segment: index of its planned card segment
   size_t start_after = 0;       // START is sent after this many segments
+  // The seek armed before START (CONFIG field 10, seek_mode; cards with inputs):
+  // the run ends when the input trips (docs/CORE.md "Seek: homing and probing").
+  uint32_t seek = 0;
 };
 
 // Converts the planned card segments. A segment whose U exceeds UMAX, or whose
@@ -55,5 +58,8 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
 // Configuration of every present axis, the segments (the last one ends the run)
 // and START where the first segments fit the card's queues.
 std::vector<uint32_t> encode_job(const plan::Machine& machine, const WireJob& job);
+// The CONFIG words of the machine's inputs on a card that has them (the filter, each
+// axis's limit switches, the probe's level); nothing otherwise. encode_job sends them.
+void encode_inputs(const plan::Machine& machine, std::vector<uint32_t>& words);
 
 }  // namespace cpstep::card

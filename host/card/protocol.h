@@ -79,7 +79,21 @@ enum class ConfigField : uint32_t {
   // Feed hold and override (cards with FEED): the ramp's tick period in clocks
   // (docs/CORE.md "Feed hold and override").
   feed_tick = 9,
+  // The seek (cards with inputs, docs/CORE.md "Seek: homing and probing"): the run
+  // ends when an input trips; value seek_mode (0 off).
+  seek = 10,
 };
+// CONFIG field 10's modes: trip on the probe active (G38.2/G38.3), on the probe
+// inactive (G38.4/G38.5), on a limit hit toward the motion (homing: no LIMIT fault).
+namespace seek_mode {
+constexpr uint32_t off = 0, probe_contact = 1, probe_loss = 2, limit = 3;
+}
+// READ 0x27's seek bits.
+namespace inputs_bits {
+constexpr uint32_t probe = 1u << 16;
+constexpr uint32_t seek_mode_shift = 17;  // [18:17]
+constexpr uint32_t tripped = 1u << 19;
+}
 namespace limit_bits {
 constexpr uint32_t min_active_high = 1, max_active_high = 2, min_enabled = 4, max_enabled = 8;
 }
@@ -99,7 +113,8 @@ enum class Register : uint32_t {
   clock_hz = 0x24,      // the card clock in Hz
   build_id = 0x25,      // the build id (rtl/builds.json)
   conic_width = 0x26,   // the conic walker's width CIW; 0: no CONIC segments
-  inputs = 0x27,        // active now: [7:0] limit min per axis, [15:8] max, [16] probe
+  inputs = 0x27,        // active now: [7:0] limit min per axis, [15:8] max, [16] probe;
+                        // the seek: [18:17] its mode (0 off), [19] tripped
   limits_at = 0x28,     // the limits active when LIMIT (20) latched: [7:0] min, [15:8] max
   feed = 0x29,          // [31] held, [30] settled on its target, [15:0] the timer's scale s (Q2.14)
   feed_override = 0x2A, // [15:0] the override (Q2.14)

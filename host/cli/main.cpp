@@ -23,6 +23,7 @@
 #include "cli/accuracy_command.h"
 #include "cli/cam_command.h"
 #include "cli/check_command.h"
+#include "cli/home_command.h"
 #include "cli/interp_command.h"
 #include "cli/conic_command.h"
 #include "cli/run_command.h"
@@ -162,6 +163,8 @@ int main(int argc, char** argv) {
   auto* camc = cli::add_cam_command(app, camo);
   cli::InterpCliOptions io;
   auto* intc = cli::add_interp_command(app, io);
+  cli::HomeOptions hmo;
+  auto* homc = cli::add_home_command(app, hmo);
 
   cli::ConicOptions ko;
   auto* conc = app.add_subcommand("conic", "Step one arc or conic by combined steps (seed 001) on the conic "
@@ -202,6 +205,7 @@ int main(int argc, char** argv) {
         return cli::run_job(r);
       });
     if (*intc) return cli::run_interp(io);
+    if (*homc) return cli::run_home(hmo);
     if (*conc) return cli::run_conic(ko);
   } catch (const std::exception& e) {
     fmt::print(stderr, "cpstep: internal error: {}\n", e.what());

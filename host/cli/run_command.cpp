@@ -20,6 +20,7 @@
 #include "cpstep/builds.h"
 #include "run/card_job.h"
 #include "run/feed_ramp.h"
+#include "run/home.h"
 #include "run/link_run.h"
 #include "run/measure.h"
 #include "run/plots.h"
@@ -267,7 +268,9 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
   if (r.pins_observed && r.torch_verdict.planned > 0) {
     const run::TorchVerdict& t = r.torch_verdict;
     fmt::print("torch      {} switches planned, {} on the pin{}; on {:.3f} s{}\n", t.planned, t.edges,
-               t.ok() ? ", each at its move boundary" : " (not as planned: see faults)", t.on_cycles / j.clock_hz(),
+               !t.ok()          ? " (not as planned: see faults)"
+               : r.feed_scaled ? ", in the planned order (the feed scaled the card's time: cycles not compared)"
+                               : ", each at its move boundary", t.on_cycles / j.clock_hz(),
                t.min_pierce_cycles ? fmt::format("; shortest pierce (torch on to the first step) {:.3f} s",
                                                  *t.min_pierce_cycles / j.clock_hz())
                                    : "");
@@ -570,7 +573,63 @@ CLI::App* add_plan_command(CLI::App& app, PlanOptions& o) {
   return c;
 }
 
+namespace {
+
+// A job with G38 moves (docs/HOST.md "Probing"): run block by block to each probe on
+// the simulated card, the program going on from where each probe stopped.
+int run_probing_job(const RunOptions& o) {
+  if (o.transport != "sim" || !o.vcd.empty() || !o.report.empty() || !o.plots.empty() || !o.state.empty() ||
+      !o.resume.empty() || o.stop_after_contours > 0 || o.override_pct != 100 || !o.feed.empty() || !o.fst.empty()) {
+    fmt::print(stderr, "cpstep run: {}: a job that probes (G38) runs on --transport sim without --vcd, --report, "
+                       "--plots, --fst, --state, --resume, --stop-after-contours, --override or --feed "
+                       "(docs/HOST.md \"Probing\")\n",
+               o.job);
+    return kExitRefused;
+  }
+  const std::string board = o.board.empty() ? std::string("hx8k") : o.board;
+  const run::SimProbeRun r = run::probe_job_on_sim(o.job, o.machine, board, o.engine);
+  if (!r.error.empty()) {
+    fmt::print(stderr, "cpstep run: {}\n", r.error);
+    return kExitRefused;
+  }
+  for (const plan::Diagnostic& w : r.warnings) fmt::print(stderr, "{}\n", w.str());
+  if (r.probes.empty() && !r.errors.empty()) {  // refused whole: nothing was sent
+    for (const plan::Diagnostic& e : r.errors) fmt::print(stderr, "{}\n", e.str());
+    return kExitRefused;
+  }
+  const plan::Machine& m = r.machine;
+  const auto mm = [&](const plan::PerAxis<double>& p) {
+    std::string t;
+    for (int a = 0; a < plan::kAxes; ++a)
+      if (m.axes[a].present) t += fmt::format("{}{}={:.4f}", t.empty() ? "" : " ", plan::kAxisLetters[a], p[a]);
+    return t;
+  };
+  fmt::print("cpstep run: {} on the simulated {} card (engine {}): a probing job, run to each probe and on from "
+             "where it stopped\n",
+             o.job, board, o.engine);
+  for (const run::ProbeEvent& e : r.probes)
+    fmt::print("probe      {}:{} {}: {} at {} mm\n", o.job, e.loc.line, e.code, e.tripped ? "tripped" : "no trip",
+               mm(e.at));
+  plan::PerAxis<double> end{};
+  for (int a = 0; a < plan::kAxes; ++a)
+    if (m.axes[a].present) end[a] = double(r.counts[a]) / m.axes[a].steps_per_mm;
+  fmt::print("moves      {} move events, {:.3f} s simulated\n", r.moves, double(r.cycles) / m.card.clock_hz);
+  fmt::print("position   {} mm (the card's counters; the pins {})\n", mm(end),
+             r.pins == r.counts ? "equal to them" : "DIFFER");
+  std::string faults;
+  for (const plan::Diagnostic& e : r.errors) faults += (faults.empty() ? "" : "; ") + e.str();
+  if (r.pins != r.counts) faults += std::string(faults.empty() ? "" : "; ") + "PIN_COUNT: the pins differ from the counters";
+  fmt::print("faults     {}\n", faults.empty() ? "none" : faults);
+  for (const plan::Diagnostic& e : r.errors) fmt::print(stderr, "{}\n", e.str());
+  return faults.empty() ? 0 : 1;
+}
+
+}  // namespace
+
 int run_job(const RunOptions& o) {
+  // A job that probes runs its own way (docs/HOST.md "Probing").
+  if (const plan::Result<plan::Machine> m = plan::load_machine(o.machine); m.ok() && run::job_probes(o.job, *m.value))
+    return run_probing_job(o);
   if (o.transport == "file") {
     if (o.out.empty()) {
       fmt::print(stderr, "cpstep run: --transport file needs --out FILE\n");

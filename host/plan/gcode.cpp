@@ -38,6 +38,7 @@ constexpr double kPeckRetract = 0.010 * 25.4;         // G73 retract, G83 rapid-
 // T and H: tool numbers as the machine file's [gcode.tool_lengths] keys (1..99999), or 0.
 constexpr double kMaxTool = 99999;
 
+bool is_probe(int m) { return m >= g(38, 2) && m <= g(38, 5); }
 bool is_spline(int m) { return m == g(5) || m == g(5, 1) || m == g(5, 2) || m == g(5, 3); }
 
 bool is_cycle(int m) {
@@ -77,6 +78,9 @@ struct State {
     std::optional<bool> output0_sync;
     int tool = 0, selected_tool = 0;
     PerAxis<double> g28{}, g30{};
+    // The last G38 probe: where it stopped (machine mm) and whether it tripped.
+    PerAxis<double> probe_at{};
+    bool probe_tripped = false;
     // Canned cycle values, sticky while a cycle mode is active (program units).
     std::optional<double> cycle_r, cycle_z, cycle_p, cycle_q;
 };
@@ -114,6 +118,13 @@ public:
         }
         if (n == 5400) return static_cast<double>(st_.tool);
         if (n == 5403) return st_.tlo / st_.unit;
+        // The last probe: #5061..#5064 where it stopped, in the coordinate system in
+        // effect now, program units; #5070 1 when it tripped (LinuxCNC).
+        if (n >= 5061 && n <= 5064) {
+            const auto a = static_cast<std::size_t>(n - 5061);
+            return program(a, st_.probe_at[a]);
+        }
+        if (n == 5070) return st_.probe_tripped ? 1.0 : 0.0;
         if (n >= 5420 && n <= 5423) {
             const auto a = static_cast<std::size_t>(n - 5420);
             return program(a, st_.pos[a]);
@@ -256,7 +267,10 @@ public:
                     err(*w, fmt::format("{}: back boring and manual boring cycles are not supported", w->text));
                     break;
                 case g(38, 2): case g(38, 3): case g(38, 4): case g(38, 5):
-                    err(*w, fmt::format("{}: probing is not supported (the card has no probe input)", w->text));
+                    if (opt_.probe) set_group(motion_w, w, "motion");
+                    else err(*w, fmt::format("{}: probing needs a card with a probe input, on `cpstep run` "
+                                             "(docs/HOST.md \"Probing\")",
+                                             w->text));
                     break;
                 case g(5): case g(5, 1): case g(5, 2): case g(5, 3):
                     set_group(motion_w, w, "motion"); break;
@@ -718,6 +732,48 @@ public:
         job_.blocks.push_back(b);
     }
 
+    // G38.2..G38.5 (opt_.probe set): the handler runs the blocks so far and the move;
+    // the program goes on from where it stopped.
+    void probe(int mode, const Word& at, const PerAxis<double>& target) {
+        if (!need_feed(at)) return;
+        const std::string code = fmt::format("G38.{}", mode % 10);
+        if (target == st_.pos) {
+            error(line_, at.col, fmt::format("{}: the probe move has no length (the target is where the tool is)", code));
+            return;
+        }
+        for (std::size_t a = 0; a < kAxes; ++a)
+            if (!st_.known[a]) {
+                error(line_, at.col, fmt::format("{}: the position is not known after a refused block", code));
+                return;
+            }
+        if (!errors_.empty()) return;  // a refused program runs nothing, probes included
+        ProbeRequest r;
+        r.loc = {line_, at.col};
+        r.code = code;
+        r.contact = mode == g(38, 2) || mode == g(38, 3);
+        r.must_trip = mode == g(38, 2) || mode == g(38, 4);
+        r.from = st_.pos;
+        r.to = target;
+        r.feed = feed_mm_s(target);
+        r.before = std::span<const MotionBlock>(job_.blocks).subspan(job_.probed_blocks);
+        const ProbeResult res = opt_.probe(r);
+        job_.probed_blocks = job_.blocks.size();
+        ++job_.probes;
+        if (!res.error.empty()) {
+            error(line_, at.col, fmt::format("{}: {}", code, res.error));
+            ended_ = probe_failed_ = true;  // nothing after it runs
+            return;
+        }
+        st_.pos = res.at;
+        st_.probe_at = res.at;
+        st_.probe_tripped = res.tripped;
+        if (r.must_trip && !res.tripped) {
+            error(line_, at.col, fmt::format("{}: the probe {} by the end of the move", code,
+                                             r.contact ? "made no contact" : "did not lose contact"));
+            ended_ = probe_failed_ = true;
+        }
+    }
+
     bool need_feed(const Word& at) {
         if (st_.feed) return true;
         if (st_.feed_known) error(line_, at.col, "feed rate is not set (F) for a G1/G2/G3 move or canned cycle");
@@ -763,6 +819,10 @@ public:
             if (!st_.units_set && !warned_units_) {
                 warned_units_ = true;
                 warn(line_, at.col, "the program sets no units (G20/G21): millimetres assumed");
+            }
+            if (is_probe(mode)) {
+                probe(mode, at, target);
+                return;
             }
             if (mode == g(1) && !need_feed(at)) return;
             if (target == st_.pos) return;  // a move to where the tool is: no block
@@ -1321,7 +1381,9 @@ public:
     }
 
     bool ended() const { return ended_; }
-    void note_after_end(int line) { warn(line, 1, "text after the program end (M2/M30) is ignored"); }
+    void note_after_end(int line) {
+        if (!probe_failed_) warn(line, 1, "text after the program end (M2/M30) is ignored");
+    }
     void reset_line_flags() { z_consumed_ = false; }
 
 private:
@@ -1331,6 +1393,7 @@ private:
     Job job_;
     gcode::Parameters params_;
     bool ended_ = false;
+    bool probe_failed_ = false;  // a G38 move failed: the program stops there
     bool warned_units_ = false;
     bool warned_home_ = false;
     bool z_consumed_ = false;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -71,7 +72,32 @@ ArcFrame arc_frame(const MotionBlock& b);
 struct Job {
     std::string file;
     std::vector<MotionBlock> blocks;
+    // Blocks before this index were handed to a probe handler, which ran them before
+    // its probe move (GcodeOptions::probe); the rest run after the program's last probe.
+    std::size_t probed_blocks = 0;
+    std::size_t probes = 0;  // G38.x moves handed to the probe handler
 };
+
+// A G38.2..G38.5 probe move (docs/HOST.md "Probing"): from where the program stands
+// to the target, at the feed, until the probe makes (G38.2/G38.3) or breaks
+// (G38.4/G38.5) contact; G38.2 and G38.4 are errors when it does not.
+struct ProbeRequest {
+    SourceLoc loc;                       // the G38 word
+    std::string code;                    // "G38.2", ...
+    bool contact = true;                 // G38.2/G38.3: trip on contact; G38.4/G38.5: on its loss
+    bool must_trip = true;               // G38.2/G38.4
+    PerAxis<double> from{}, to{};        // machine mm
+    double feed = 0;                     // mm/s
+    // The program's blocks not yet run (job.blocks from probed_blocks on): the
+    // handler runs them first, then the probe move.
+    std::span<const MotionBlock> before;
+};
+struct ProbeResult {
+    bool tripped = false;
+    PerAxis<double> at{};                // machine mm where the motion stopped (the trip, or the target)
+    std::string error;                   // "": the move ran; else why not (the program stops there)
+};
+using ProbeHandler = std::function<ProbeResult(const ProbeRequest&)>;
 
 struct GcodeOptions {
     // Machine position when the job starts (the card's counters at zero = 0 mm).
@@ -90,6 +116,11 @@ struct GcodeOptions {
     // cannot make a job of gigabytes (docs/PLANNING.md).
     double max_cycle_block = 1e5;
     double max_cycle_job = 1e6;
+    // G38.2..G38.5: runs everything before the probe move and the move itself on the
+    // card and says where it stopped; the program goes on from there with
+    // #5061..#5064 (the trip in the coordinate system in effect, program units) and
+    // #5070 (1 tripped, 0 not) set as LinuxCNC sets them. Unset: G38 is refused.
+    ProbeHandler probe;
 };
 
 // The options a machine file gives (its axes, [gcode] table), starting at `start`.

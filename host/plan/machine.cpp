@@ -138,6 +138,41 @@ std::string upper(std::string_view s) {
     return out;
 }
 
+// [axes.X.home]: switch, position_mm, search_mm_s, latch_mm_s, backoff_mm, sequence,
+// sim_switch_mm; checked against the axis (its switch wired, speeds within its limit).
+void read_home(Reader& r, const toml::table& t, const std::string& path, AxisConfig& ax) {
+    HomeConfig& h = ax.home;
+    h.present = true;
+    h.loc = loc_of(t);
+    r.only_keys(t, path, {"switch", "position_mm", "search_mm_s", "latch_mm_s", "backoff_mm", "sequence",
+                          "sim_switch_mm"});
+    const auto sw = r.string(t, path, "switch");
+    if (!sw && !t.contains("switch")) r.error(h.loc, fmt::format("{}.switch: missing (\"min\" or \"max\")", path));
+    if (sw && *sw != "min" && *sw != "max")
+        r.error(loc_of(*t.get("switch")), fmt::format("{}.switch: \"{}\" is neither \"min\" nor \"max\"", path, *sw));
+    h.at_max = sw && *sw == "max";
+    if (sw && (h.at_max ? ax.limit_max : ax.limit_min) == SwitchLevel::none)
+        r.error(loc_of(*t.get("switch")),
+                fmt::format("{}.switch: homing on the {} switch needs it wired (limit_{} = \"active_high\" or "
+                            "\"active_low\")", path, *sw, *sw));
+    h.position_mm = r.number(t, path, "position_mm", false, any_value, "finite")
+                        .value_or(h.at_max ? ax.travel_max_mm : ax.travel_min_mm);
+    h.search_mm_s = r.number(t, path, "search_mm_s", true, positive, "> 0").value_or(0);
+    h.latch_mm_s = r.number(t, path, "latch_mm_s", true, positive, "> 0").value_or(0);
+    h.backoff_mm = r.number(t, path, "backoff_mm", true, positive, "> 0").value_or(0);
+    if (ax.max_velocity > 0 && h.search_mm_s > ax.max_velocity)
+        r.error(loc_of(*t.get("search_mm_s")), fmt::format("{}.search_mm_s: {} is above the axis's max_velocity_mm_s ({})",
+                                                          path, h.search_mm_s, ax.max_velocity));
+    if (h.latch_mm_s > 0 && h.search_mm_s > 0 && h.latch_mm_s > h.search_mm_s)
+        r.error(loc_of(*t.get("latch_mm_s")),
+                fmt::format("{}.latch_mm_s: {} is above search_mm_s ({}): the slow approach must be the slower",
+                            path, h.latch_mm_s, h.search_mm_s));
+    const auto seq = r.number(t, path, "sequence", false, [](double v) { return v >= 0 && v <= 9 && v == std::floor(v); },
+                              "a whole number 0..9");
+    h.sequence = int(seq.value_or(0));
+    h.sim_switch_mm = r.number(t, path, "sim_switch_mm", false, any_value, "finite");
+}
+
 void read_axis(Reader& r, const toml::table& t, std::string_view path, AxisConfig& ax) {
     ax.present = true;
     ax.loc = loc_of(t);
@@ -145,7 +180,7 @@ void read_axis(Reader& r, const toml::table& t, std::string_view path, AxisConfi
                 {"steps_per_mm", "travel_min_mm", "travel_max_mm", "max_velocity_mm_s",
                  "max_accel_mm_s2", "max_jerk_mm_s3", "driver", "step_high_ns", "step_low_ns",
                  "dir_setup_ns", "dir_hold_ns", "step_active_high", "dir_positive_high", "limit_min",
-                 "limit_max"});
+                 "limit_max", "home"});
     const auto gt0 = "> 0";
     ax.steps_per_mm = r.number(t, path, "steps_per_mm", true, positive, gt0).value_or(0);
     auto tmin = r.number(t, path, "travel_min_mm", true, any_value, "finite");
@@ -222,6 +257,8 @@ void read_axis(Reader& r, const toml::table& t, std::string_view path, AxisConfi
             r.error(loc_of(*t.get(key)),
                     fmt::format("{}.{}: \"{}\" is none of \"none\", \"active_high\", \"active_low\"", path, key, *s));
     }
+    const std::string hpath = std::string(path) + ".home";
+    if (const toml::table* h = r.table(t, hpath, "home", false)) read_home(r, *h, hpath, ax);
 }
 
 // [gcode]: z_words, g28_position, g30_position, [gcode.tool_lengths].
@@ -332,7 +369,7 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
             100.0;
     }
     if (const toml::table* in = r.table(root, "inputs", "inputs", false)) {
-        r.only_keys(*in, "inputs", {"filter_us", "probe"});
+        r.only_keys(*in, "inputs", {"filter_us", "probe", "sim_probe_mm"});
         m.inputs.loc = loc_of(*in);
         m.inputs.filter_us = r.number(*in, "inputs", "filter_us", false, non_negative, ">= 0").value_or(0);
         if (const auto s = r.string(*in, "inputs", "probe")) {
@@ -340,6 +377,19 @@ Result<Machine> parse_machine(std::string_view text, std::string_view file) {
             else
                 r.error(loc_of(*in->get("probe")),
                         fmt::format("inputs.probe: \"{}\" is neither \"active_high\" nor \"active_low\"", *s));
+        }
+        // The simulated probe: one axis's place, mm from the start (a touch plate).
+        if (const toml::table* sp = r.table(*in, "inputs.sim_probe_mm", "sim_probe_mm", false)) {
+            r.only_keys(*sp, "inputs.sim_probe_mm", {"x", "y", "z", "a"});
+            for (std::size_t i = 0; i < kAxes; ++i) {
+                const auto v = r.number(*sp, "inputs.sim_probe_mm", std::string_view(&kAxisLetters[i], 1), false,
+                                        any_value, "finite");
+                if (!v) continue;
+                if (m.inputs.sim_probe_axis >= 0)
+                    r.error(loc_of(*sp), "inputs.sim_probe_mm: give one axis (the simulated probe is a plane across it)");
+                m.inputs.sim_probe_axis = int(i);
+                m.inputs.sim_probe_mm = *v;
+            }
         }
     }
 

@@ -53,6 +53,25 @@ PulseTimingCycles to_cycles(const PulseTimingNs& ns, double clock_hz);
 // its pin), or active at a high or a low level.
 enum class SwitchLevel { none, active_high, active_low };
 
+// [axes.X.home]: the axis's homing cycle (docs/HOST.md "Homing"): fast approach to
+// its limit switch, back off, slow approach, the trip there is `position_mm`, back
+// off. The card stops an approach at the switch's trip at once (the seek, docs/CORE.md
+// "Seek: homing and probing"), so both speeds must be ones the axis can stop from
+// without a ramp.
+struct HomeConfig {
+    bool present = false;
+    bool at_max = false;             // switch = "max": homes toward travel_max_mm
+    double position_mm = 0;          // machine coordinate of the switch's trip (default: that end of the travel)
+    double search_mm_s = 0;          // the fast approach
+    double latch_mm_s = 0;           // the slow approach (<= search)
+    double backoff_mm = 0;           // off the switch, between the approaches and at the end
+    int sequence = 0;                // axes home in this order (ties: x, y, z, a)
+    // `cpstep home` on the simulated card: where the simulated switch trips, mm from
+    // where the simulated machine starts (its counters at 0). Not used on a real card.
+    std::optional<double> sim_switch_mm;
+    SourceLoc loc;                   // where [axes.X.home] starts
+};
+
 struct AxisConfig {
     bool present = false;
     double steps_per_mm = 0;        // card output steps (microsteps) per mm
@@ -68,6 +87,7 @@ struct AxisConfig {
     bool dir_positive_high = true;
     SwitchLevel limit_min = SwitchLevel::none, limit_max = SwitchLevel::none;
     SourceLoc limit_loc;            // the first limit_* key given (line 0: none)
+    HomeConfig home;                // [axes.X.home] (present: the axis homes)
     SourceLoc loc;                  // where [axes.X] starts
 
     // Fastest step rate the card can emit without violating the pulse
@@ -118,6 +138,11 @@ struct InputsConfig {
     double filter_us = 0;                // an input must hold ~3 samples this far apart
     std::uint32_t filter_cycles = 0;     // derived by bind_card (CONFIG field 6)
     bool probe_active_high = true;
+    // G38 on the simulated card: the probe touches a plane across this axis at
+    // sim_probe_mm from where the simulated machine starts; in contact on the far side
+    // of it (-1: no simulated probe).
+    int sim_probe_axis = -1;
+    double sim_probe_mm = 0;
     SourceLoc loc;                       // where [inputs] starts (line 0: not given)
 };
 

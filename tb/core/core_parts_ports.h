@@ -361,18 +361,24 @@ struct InputsPort {
     r.probe_i = i.probe;
     r.cfg_write_i = i.cfg_write;
     r.cfg_word_i = i.cfg_word;
+    r.running_i = i.running;
+    r.lim_hit_i = i.lim_hit;
   }
   static Out sample(const Rtl& r) {
     Out o;
     o.lim_min = r.lim_min_o;
     o.lim_max = r.lim_max_o;
     o.probe = r.probe_o;
+    o.seek_stop = r.seek_stop_o;
+    o.seek_lim = r.seek_lim_o;
+    o.seek = r.seek_o;
     return o;
   }
   static const std::vector<sim::Field<Out>>& fields() {
     static const std::vector<sim::Field<Out>> f = {
         CPSTEP_FIELD("lim_min_o", o.lim_min), CPSTEP_FIELD("lim_max_o", o.lim_max),
-        CPSTEP_FIELD("probe_o", o.probe),
+        CPSTEP_FIELD("probe_o", o.probe),     CPSTEP_FIELD("seek_stop_o", o.seek_stop),
+        CPSTEP_FIELD("seek_lim_o", o.seek_lim), CPSTEP_FIELD("seek_o", o.seek),
     };
     return f;
   }

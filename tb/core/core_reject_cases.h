@@ -88,8 +88,11 @@ inline std::vector<BadInput> bad_inputs(const model::CpCoreParams& p) {
       {"config_step_high_0", 14, [] { return config_word(1, 0, 0); }},
       {"config_step_low_0", 14, [] { return config_word(2, 1, 0); }},
       {"config_axis_out_of_range", 14, [] { return config_word(4, 0, 3); }},
-      {"config_unknown_field", 14, [] { return config_word(0, 10, 3); }},
+      {"config_unknown_field", 14, [] { return config_word(0, 11, 3); }},
+      {"config_unknown_field_15", 14, [] { return config_word(0, 15, 3); }},
   };
+  // Field 10 (the seek) is a CONFIG only in a core built with INPUTS = 1.
+  if (!p.inputs) cases.push_back({"config_seek_field_without_inputs", 14, [] { return config_word(0, 10, 1); }});
   // Field 9 (the feed ramp's tick) is a CONFIG only in a core built with FEED = 1.
   if (!p.feed) cases.push_back({"config_feed_field_without_feed", 14, [] { return config_word(0, 9, 3); }});
   // CONIC (opcode 5) is a command only in a core built with CONIC = 1.

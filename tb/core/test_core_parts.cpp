@@ -107,7 +107,8 @@ std::vector<uint32_t> conic_words(Rng& rng, bool legal) {
 
 uint32_t other_word(Rng& rng) {
   switch (pick(rng, 0, 4)) {
-    case 0: return 0x2u << 28 | pick(rng, 0, 4) << 24 | pick(rng, 0, 5) << 20 | pick(rng, 0, 300);  // CONFIG
+    // CONFIG: every field, the refused ones (9 without FEED, 10 without INPUTS, 11..15) too.
+    case 0: return 0x2u << 28 | pick(rng, 0, 4) << 24 | pick(rng, 0, 15) << 20 | pick(rng, 0, 300);
     case 1: return 0x3u << 28 | pick(rng, 0, 31);                                                 // CONTROL
     case 2: return 0x4u << 28 | pick(rng, 0, 0x30);                                               // READ
     case 3: return pick(rng, 5, 15) << 28 | pick(rng, 0, 0xFFFFFFF);                              // bad op
@@ -518,14 +519,15 @@ TEST(CorePartFeed, TheRampKeepsItsLimitsAndArrivesExactly) {
 }
 
 // ---------------------------------------------------------------- cp_inputs
-// Random pins (levels held for random spans, glitches of a clock or a few) and
-// random CONFIG of the filter (fields 6), the limits (7) and the probe (8).
+// Random pins (levels held for random spans, glitches of a clock or a few), random
+// CONFIG of the filter (fields 6), the limits (7), the probe (8) and the seek (10),
+// the run switching on and off and limit hits at random; the seek trips counted.
 TEST(CorePartInputs, RandomPinsAndConfigurationMatchTheModel) {
   Rng rng(61);
   Lockstep<InputsPort> ls;
   ls.reset();
   model::CpInputsIn in;
-  uint64_t changes = 0;
+  uint64_t changes = 0, trips = 0, stops = 0;
   model::CpInputsOut last;
   for (int c = 0; c < 300000; ++c) {
     in.rst = pick(rng, 0, 49999) == 0;
@@ -534,15 +536,78 @@ TEST(CorePartInputs, RandomPinsAndConfigurationMatchTheModel) {
       in.lim_max ^= chance(rng, 50) ? 1u << pick(rng, 0, 2) : 0;
       in.probe = chance(rng, 50) ? !in.probe : in.probe;
     }
-    in.cfg_write = pick(rng, 0, 999) < 2;
-    const uint32_t field = pick(rng, 6, 8);
+    if (pick(rng, 0, 99) < 2) in.running = !in.running;
+    in.lim_hit = in.running && pick(rng, 0, 199) == 0;
+    in.cfg_write = !in.running && pick(rng, 0, 999) < 3;
+    const uint32_t field = pick(rng, 6, 10);
     const uint32_t value = field == 6 ? pick(rng, 0, 6) : pick(rng, 0, 15);
     in.cfg_word = 0x2u << 28 | pick(rng, 0, 3) << 24 | field << 20 | value;
     const model::CpInputsOut o = ls.step(in);
     changes += !(o == last);
+    trips += (o.seek & 4) && !(last.seek & 4);
+    stops += o.seek_stop && in.running;
     last = o;
   }
   EXPECT_GT(changes, 500u);
+  EXPECT_GT(trips, 20u) << "the seek tripped";
+  EXPECT_GT(stops, 20u);
+}
+
+// The seek against the documented rule: mode 1 trips on the probe while the run is
+// on (and holds the run off while it is not), mode 2 on the probe's loss, mode 3 on
+// a limit hit only; a trip disarms and sets `tripped`; field 10 clears it.
+TEST(CorePartInputs, TheSeekTripsOnceAndDisarms) {
+  Lockstep<InputsPort> ls;
+  ls.reset();
+  model::CpInputsIn in;
+  const auto config = [&](uint32_t field, uint32_t value) {
+    in.cfg_write = true;
+    in.cfg_word = 0x2u << 28 | field << 20 | value;
+    ls.step(in);
+    in.cfg_write = false;
+  };
+  const auto settle = [&] {
+    model::CpInputsOut o;
+    for (int c = 0; c < 6; ++c) o = ls.step(in);  // P = 0: three samples and the level
+    return o;
+  };
+  config(10, 1);  // probe contact
+  model::CpInputsOut o = settle();
+  EXPECT_EQ(o.seek, 1u);
+  EXPECT_FALSE(o.seek_stop);
+  in.probe = true;  // active high (reset)
+  o = settle();
+  EXPECT_TRUE(o.seek_stop) << "armed and in contact: the run is held off";
+  EXPECT_EQ(o.seek, 1u) << "no trip while the run is off";
+  in.running = true;
+  o = ls.step(in);
+  EXPECT_EQ(o.seek, 1u);
+  o = ls.step(in);
+  EXPECT_EQ(o.seek, 4u) << "tripped, disarmed";
+  EXPECT_FALSE(o.seek_stop);
+  in.running = false;
+  config(10, 2);  // contact lost
+  o = settle();
+  EXPECT_EQ(o.seek, 2u) << "field 10 clears tripped";
+  in.running = true;
+  for (int c = 0; c < 10; ++c) EXPECT_EQ(ls.step(in).seek, 2u) << "in contact: no trip";
+  in.probe = false;
+  o = settle();
+  EXPECT_EQ(o.seek, 4u);
+  in.running = false;
+  config(10, 3);  // a limit hit
+  in.running = true;
+  in.probe = true;
+  o = settle();
+  EXPECT_TRUE(o.seek_lim);
+  EXPECT_FALSE(o.seek_stop) << "mode 3 does not look at the probe";
+  EXPECT_EQ(o.seek, 3u);
+  in.lim_hit = true;
+  ls.step(in);
+  in.lim_hit = false;
+  o = ls.step(in);
+  EXPECT_EQ(o.seek, 4u);
+  EXPECT_FALSE(o.seek_lim);
 }
 
 // The filter against the documented rule, on the RTL's pins alone: with P = 4 a

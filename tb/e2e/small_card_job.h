@@ -138,6 +138,31 @@ inline size_t send_what_fits(card::CardClient& c, const Job& j, size_t w) {
   return w;
 }
 
+// Feeds the job's segments from `w` on as they fit while the card runs for `cycles`
+// clocks (in steps of `chunk`); returns the index of the first not sent.
+inline size_t feed_for(card::CardClient& c, Card& card, const Job& j, size_t w, uint64_t cycles,
+                       uint64_t chunk = 2000) {
+  const uint64_t until = card.twin.cycle() + cycles;
+  while (card.twin.cycle() < until) {
+    w = send_what_fits(c, j, w);
+    card.spi.idle(chunk);
+  }
+  return w;
+}
+
+// Drivers, pulse timing, the input filter (a sample every `filter` clocks) and both
+// axes' limits: active high, enabled.
+inline std::vector<uint32_t> limits_setup(const Job& j, uint32_t filter) {
+  std::vector<uint32_t> w = j.setup;
+  card::encode_config(0, card::ConfigField::input_filter, filter, w);
+  for (unsigned a = 0; a < 2; ++a)
+    card::encode_config(a, card::ConfigField::limits,
+                        card::limit_bits::min_active_high | card::limit_bits::max_active_high |
+                            card::limit_bits::min_enabled | card::limit_bits::max_enabled,
+                        w);
+  return w;
+}
+
 // A new job `next` (its segments, START out of band) runs from where the card stood
 // at `before`: no fault, its moves counted on, its end on the counters and pins.
 inline void expect_next_job_runs_exactly(card::CardClient& c, const Card& card, const Job& next,

@@ -33,17 +33,6 @@ constexpr uint32_t kFilter = 4;  // CONFIG field 6: a sample every 4 clocks
 // edge of a move fired in the cycle before shows one clock later.
 constexpr uint64_t kLatest = 2 + 3 * kFilter + 1 + 1;
 
-// Drivers, pulse timing, the filter and both axes' limits: active high, enabled.
-std::vector<uint32_t> limits_setup(const Job& j) {
-  std::vector<uint32_t> w = j.setup;
-  card::encode_config(0, card::ConfigField::input_filter, kFilter, w);
-  for (unsigned a = 0; a < 2; ++a)
-    card::encode_config(a, card::ConfigField::limits,
-                        card::limit_bits::min_active_high | card::limit_bits::max_active_high |
-                            card::limit_bits::min_enabled | card::limit_bits::max_enabled,
-                        w);
-  return w;
-}
 
 void expect_limit_fault(const card::Reply& r) {
   expect_stopped_by(r, 20, "LIMIT");
@@ -57,7 +46,7 @@ TEST(Limits, ASwitchClosedMidJobStopsAtOnceAndOnlyMovingAwayRuns) {
     const Job j = make_job(20, 1500 + 200 * uint32_t(trial));  // 12,000 clocks a segment or more
     Card card;
     card::CardClient c(card.link, card.options());
-    const std::vector<uint32_t> setup = limits_setup(j);
+    const std::vector<uint32_t> setup = limits_setup(j, kFilter);
     ASSERT_EQ(c.send(setup), setup.size());
     ASSERT_TRUE(c.urgent(card::urgent::start));
     const uint64_t close_at = std::uniform_int_distribution<uint64_t>(15000, 60000)(rng);
@@ -113,7 +102,7 @@ TEST(Limits, GlitchesAndSwitchesOffThePathDoNotStopIt) {
   const Job j = make_job(6, 400);
   Card card;
   card::CardClient c(card.link, card.options());
-  const std::vector<uint32_t> setup = limits_setup(j);
+  const std::vector<uint32_t> setup = limits_setup(j, kFilter);
   ASSERT_EQ(c.send(setup), setup.size());
   ASSERT_EQ(c.send(j.segments), j.segments.size());
   ASSERT_TRUE(c.urgent(card::urgent::start));

@@ -156,7 +156,7 @@ TEST(Gcode, AllErrorsWithLineAndColumn) {
         {"G41 D1\n", "job.ngc:1:1: G41: cutter radius compensation is not supported; let the CAM offset "
                      "the path\njob.ngc:1:5: word 'D1' is not supported (cutter compensation G41/G42 is "
                      "not supported)"},
-        {"G38.2 Z-5 F10\n", "job.ngc:1:1: G38.2: probing is not supported (the card has no probe input)"},
+        {"G38.2 Z-5 F10\n", "job.ngc:1:1: G38.2: probing needs a card with a probe input, on `cpstep run` (docs/HOST.md \"Probing\")"},
         {"G84 Z-5 R1 F10\n", "job.ngc:1:1: G84: spindle-synchronized motion (threading, tapping) is not supported"},
         {"M98 P100\n", "job.ngc:1:1: M98: subprograms are not supported; expand them before planning\n"
                        "job.ngc:1:5: P is only used by G4 (dwell seconds), G10, G64, G2/G3 turns, G82/G86/G89 and M62-M65"},

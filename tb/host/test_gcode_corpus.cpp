@@ -87,7 +87,7 @@ TEST(CorpusRefused, EveryErrorHasFileLineColumn) {
           "expand them before planning",
           "7:1: O-word 'o100endwhile': subroutines, loops and conditionals (o-codes) are not supported; "
           "expand them before planning"}},
-        {"refused/probe.ngc", {"4:1: G38.2: probing is not supported (the card has no probe input)"}},
+        {"refused/probe.ngc", {"5:1: G38.2: probing needs a card with a probe input, on `cpstep run` (docs/HOST.md \"Probing\")"}},
         {"refused/garbage.ngc", {"3:10: unexpected character '@'", "5:20: unexpected character '~'"}},
     };
     const std::regex shape(R"(^.+:[0-9]+:[0-9]+: .+$)");
