@@ -628,8 +628,7 @@ int run_probing_job(const RunOptions& o) {
 
 int run_job(const RunOptions& o) {
   // A job that probes runs its own way (docs/HOST.md "Probing").
-  if (const plan::Result<plan::Machine> m = plan::load_machine(o.machine); m.ok() && run::job_probes(o.job, *m.value))
-    return run_probing_job(o);
+  if (run::job_probes(o.job)) return run_probing_job(o);
   if (o.transport == "file") {
     if (o.out.empty()) {
       fmt::print(stderr, "cpstep run: --transport file needs --out FILE\n");

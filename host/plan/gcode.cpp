@@ -1522,6 +1522,19 @@ Result<Job> parse_gcode(std::string_view text, std::string_view file, const Gcod
     return p.finish();
 }
 
+bool has_probe_words(std::string_view text) {
+    for (std::size_t pos = 0; pos <= text.size();) {
+        std::size_t nl = text.find('\n', pos);
+        if (nl == std::string_view::npos) nl = text.size();
+        for (const Word& w : gcode::read_line(text.substr(pos, nl - pos), {}).words) {
+            const long tenths = std::lround(w.value * 10);
+            if (w.letter == 'G' && w.known && is_probe(static_cast<int>(tenths))) return true;
+        }
+        pos = nl + 1;
+    }
+    return false;
+}
+
 Result<Job> load_gcode(const std::filesystem::path& path, const GcodeOptions& options) {
     std::ifstream in(path, std::ios::binary);
     if (!in) {

@@ -133,6 +133,10 @@ std::vector<Diagnostic> summarize_repeats(std::vector<Diagnostic> diags);
 // Codes that are accepted and deliberately do nothing (see docs/PLANNING.md).
 std::span<const std::string_view> ignored_codes();
 
+// True when some line of `text` has a G38.2..G38.5 word (read word by word, as the
+// parser reads them; comments do not count). Builds no blocks: cheap beside parsing.
+bool has_probe_words(std::string_view text);
+
 // Parse a whole job. Every error is collected; any error refuses the job.
 Result<Job> parse_gcode(std::string_view text, std::string_view file,
                         const GcodeOptions& options = {});

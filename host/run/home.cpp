@@ -110,9 +110,8 @@ namespace {
 
 class Homer {
  public:
-  Homer(card::CardClient& c, const plan::Machine& m, const card::CardCaps& caps,
-        const std::function<void(const std::string&)>& log)
-      : c_(c), m_(m), hm_(homing_machine(m)), caps_(caps), log_(log) {}
+  Homer(card::CardClient& c, const plan::Machine& m, const card::CardCaps& caps)
+      : c_(c), m_(m), hm_(homing_machine(m)), caps_(caps) {}
 
   HomeResult run() {
     HomeResult r;
@@ -170,9 +169,6 @@ class Homer {
     o.tripped = r.tripped;
     o.count = r.positions.at(size_t(a));
     o.error = r.error;
-    if (log_)
-      log_(fmt::format("{} {:+.4f} mm at {:g} mm/s: {} -> {}{}", char(std::toupper(plan::kAxisLetters[a])), delta_mm,
-                       speed, at[a], o.count, o.tripped ? " (tripped)" : ""));
     return o;
   }
 
@@ -221,17 +217,15 @@ class Homer {
   const plan::Machine& m_;
   plan::Machine hm_;
   const card::CardCaps& caps_;
-  const std::function<void(const std::string&)>& log_;
 };
 
 }  // namespace
 
-HomeResult home_axes(card::CardClient& c, const plan::Machine& m, const card::CardCaps& caps,
-                     const std::function<void(const std::string&)>& log) {
+HomeResult home_axes(card::CardClient& c, const plan::Machine& m, const card::CardCaps& caps) {
   HomeResult r;
   r.error = homing_refusal(m, caps);
   if (!r.error.empty()) return r;
-  return Homer(c, m, caps, log).run();
+  return Homer(c, m, caps).run();
 }
 
 }  // namespace cpstep::run

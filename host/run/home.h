@@ -71,9 +71,8 @@ std::string homing_refusal(const plan::Machine& m, const card::CardCaps& caps);
 // Runs the homing cycle on the card behind `c` (freshly polled; its counters as they
 // stand), `m` bound to the card (run::load_card_machine). Stops at the first error
 // (a switch not found within 1.5 travels, still closed after backing off, a card
-// fault), leaving the card stopped and flushed. `log` (optional) is told each move.
-HomeResult home_axes(card::CardClient& c, const plan::Machine& m, const card::CardCaps& caps,
-                     const std::function<void(const std::string&)>& log = nullptr);
+// fault), leaving the card stopped and flushed; each move is in the result.
+HomeResult home_axes(card::CardClient& c, const plan::Machine& m, const card::CardCaps& caps);
 
 // `cpstep home` on the simulated card (docs/SIM.md): a freshly reset card of `board`
 // (its engine as for `cpstep run`), switches placed where each axis's
@@ -124,7 +123,7 @@ struct SimProbeRun {
 };
 SimProbeRun probe_job_on_sim(const std::string& gcode_file, const std::string& machine_file, std::string_view board,
                              std::string_view engine);
-// True when the job has G38 moves (read with every probe taken as touching at its target).
-bool job_probes(const std::string& gcode_file, const plan::Machine& m);
+// True when the job's text has G38 words (plan::has_probe_words): it runs as a probing job.
+bool job_probes(const std::string& gcode_file);
 
 }  // namespace cpstep::run

@@ -10,13 +10,12 @@
 #include <cmath>
 #include <memory>
 #include <stdexcept>
-#include <type_traits>
 #include <fstream>
 #include <sstream>
+#include <type_traits>
 
 #include "card/job.h"
 #include "plan/gcode.h"
-
 #include "run/card_job.h"
 #include "run/home.h"
 #include "run/sim_run.h"
@@ -375,19 +374,12 @@ SimProbeRun probe_job_on_sim(const std::string& gcode_file, const std::string& m
   throw std::invalid_argument(fmt::format("no simulated board '{}' (boards: {})", board, card::board_names()));
 }
 
-bool job_probes(const std::string& gcode_file, const plan::Machine& m) {
+bool job_probes(const std::string& gcode_file) {
   std::ifstream in(gcode_file, std::ios::binary);
   if (!in) return false;
   std::stringstream text;
   text << in.rdbuf();
-  plan::GcodeOptions dry = plan::gcode_options(m);
-  dry.probe = [](const plan::ProbeRequest& r) { return plan::ProbeResult{true, r.to, ""}; };
-  const plan::Result<plan::Job> job = plan::parse_gcode(text.str(), gcode_file, dry);
-  if (job.value) return job.value->probes > 0;
-  // Refused: a probing job when an error names a G38 (the probing run reports them).
-  for (const plan::Diagnostic& e : job.errors)
-    if (e.message.find("G38.") != std::string::npos) return true;
-  return false;
+  return plan::has_probe_words(text.str());
 }
 
 }  // namespace cpstep::run

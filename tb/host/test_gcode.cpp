@@ -775,3 +775,12 @@ TEST(Gcode, BinaryDataIsRefusedWithOneError) {
     ASSERT_FALSE(one.ok());
     EXPECT_EQ(one.errors.at(0).loc.line, 2) << join(one.errors);
 }
+
+// A job is a probing job (`cpstep run`, docs/HOST.md "Probing") when a line has a
+// G38.2..G38.5 word: not in a comment, not as another word's value, not G38.1.
+TEST(Gcode, ProbeWordsAreFoundWordByWord) {
+    EXPECT_TRUE(has_probe_words("G21 G90\nG0 Z5\ng38.3 z-2 F60\nM2\n"));
+    EXPECT_TRUE(has_probe_words("G38.5 X1 F10"));
+    EXPECT_FALSE(has_probe_words("G21 (G38.2 Z-5 in a comment)\n; G38.2 too\nG1 X38.2 F100\nG38.1 X1\n"));
+    EXPECT_FALSE(has_probe_words(""));
+}
