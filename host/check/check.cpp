@@ -129,7 +129,8 @@ struct Event {
 
 class Checker {
  public:
-  Checker(const run::CardJob& job, const PinTrace& trace, const CheckOptions& o) : job_(job), trace_(trace) {
+  Checker(const run::CardJob& job, const PinTrace& trace, const CheckOptions& o)
+      : job_(job), trace_(trace), chunk_cycles_(run::chunk_cycles(job)) {
     plan_segments();
     v_.trace = trace.file;
     v_.job = job.job_file;
@@ -221,7 +222,7 @@ class Checker {
   }
 
   double default_skew() const {
-    const auto& t = job_.chunk_cycles;
+    const std::vector<int64_t>& t = chunk_cycles_;
     double shortest = t.empty() ? 0 : double(t.front());
     for (size_t k = 1; k < t.size(); ++k) shortest = std::min(shortest, double(t[k] - t[k - 1]));
     return shortest / 4;
@@ -410,13 +411,13 @@ class Checker {
     const uint64_t n = std::min<uint64_t>(events_.size(), job_.moves());
     if (n == 0) return;
     std::vector<double> offsets(n);
-    for (uint64_t k = 0; k < n; ++k) offsets[k] = events_[k].t - double(job_.chunk_cycles[k]);
+    for (uint64_t k = 0; k < n; ++k) offsets[k] = events_[k].t - double(chunk_cycles_[k]);
     std::nth_element(offsets.begin(), offsets.begin() + long(n / 2), offsets.end());
     const double offset = offsets[n / 2];
     v_.time_offset_cycles = offset;
     const double tol = v_.time_tol_cycles + v_.resolution_cycles;
     for (uint64_t k = 0; k < n; ++k) {
-      const double dev = events_[k].t - offset - double(job_.chunk_cycles[k]);
+      const double dev = events_[k].t - offset - double(chunk_cycles_[k]);
       if (-dev > v_.max_early_cycles) v_.max_early_cycles = -dev, v_.max_early_move = k + 1;
       if (dev > v_.max_late_cycles) v_.max_late_cycles = dev, v_.max_late_move = k + 1;
       if (std::abs(dev) <= tol + kEps) continue;
@@ -530,6 +531,7 @@ class Checker {
 
   const run::CardJob& job_;
   const PinTrace& trace_;
+  const std::vector<int64_t> chunk_cycles_;  // every move's planned chunk time (the trace is whole anyway)
   Verdict v_;
   std::vector<SegmentPlan> segs_;
   std::map<size_t, LinePlan> lines_;

@@ -200,8 +200,9 @@ static std::string klipper_text(const plan::QueueStepCost& c) {
 }
 
 // The summary on stdout and the faults and warnings on stderr; returns the exit code.
-int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r, const run::RunMeasure& m,
+int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r, run::RunMeter& meter,
               double wall_s, std::ofstream& report_file) {
+  const run::RunMeasure m = meter.finish(r);
   int rc = r.ok() ? 0 : kExitFault;
   if (report_file.is_open()) {
     report_file << run::make_report(j, r, m).dump(2) << '\n';
@@ -212,7 +213,7 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
     }
   }
   std::string plot_error;
-  if (!o.plots.empty()) plot_error = run::write_plots(o.plots, j, r, m);
+  if (!o.plots.empty()) plot_error = run::write_plots(o.plots, j, meter, m);
 
   print_plan_summary(j);
   if (r.pins_observed) {
@@ -424,11 +425,15 @@ int run_sim_transport(const RunOptions& o) {
   so.engine = *engine;
   so.fst = o.fst;
   so.progress = [&progress](uint64_t done, uint64_t total) { progress.update(done, total); };
+  // The run measured as it goes: nothing kept per move (docs/SIM.md "Memory").
+  run::RunMeter meter(j);
+  so.meter = &meter;
+  so.record_pins = false;
   const auto began = std::chrono::steady_clock::now();
   const run::CardRun r = contours.run_sim(j, so);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   progress.clear();
-  return contours.finish(r, print_run(o, j, r, run::measure_run(j, r), wall_s, report_file));
+  return contours.finish(r, print_run(o, j, r, meter, wall_s, report_file));
 }
 
 int run_spidev_transport(const RunOptions& o) {
@@ -495,7 +500,8 @@ int run_spidev_transport(const RunOptions& o) {
   }
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   progress.clear();
-  return contours.finish(r, print_run(o, j, r, run::measure_run(j, r), wall_s, report_file));
+  run::RunMeter meter(j);  // a real card's pins are not observed: the counts only
+  return contours.finish(r, print_run(o, j, r, meter, wall_s, report_file));
 }
 
 }  // namespace

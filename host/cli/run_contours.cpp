@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include "cli/run_contours.h"
+#include "run/measure.h"
 
 #include <fmt/format.h>
 
@@ -76,6 +77,7 @@ plan::Result<run::CardJob> ContourRun::plan(const card::CardCaps& caps, const pl
 
 run::CardRun ContourRun::run_sim(const run::CardJob& job, const run::SimRunOptions& options) const {
   if (job.start == plan::PerAxis<int64_t>{}) return run::run_on_sim(job, options);
+  if (options.meter) options.meter->set_origin(job.start);
   run::CardRun r = run::run_on_sim(run::counted_from_zero(job), options);
   run::add_origin(r, job.start);
   return r;

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "card/protocol.h"
+#include "plan/steptime.h"
 
 namespace cpstep::run {
 
@@ -116,20 +117,14 @@ plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& m
   cj.planned = std::move(*planned.value);
   cj.wire = std::move(*wire.value);
   cj.words = card::encode_job(cj.machine, cj.wire);
-  cj.ideal_cycles = plan::ideal_times(cj.planned, cj.clock_hz());
 
   plan::PerAxis<int64_t> pos = start;
   if (!cj.planned.step_segments.empty()) pos = cj.planned.step_segments.front().start;
   cj.start = pos;
   uint64_t moves = 0;
-  int64_t last_event = 0;
   for (const plan::PlannedCardSegment& c : cj.planned.card) {
-    // Every move's time from its chunks; a pause's moves time the next move's
-    // first interval, but the pins show neither them nor a checkpoint.
-    const std::vector<int64_t> t = plan::expand(c.chunks, last_event);
-    if (!t.empty()) last_event = t.back();
+    // The pins show neither a pause's moves nor a checkpoint for it.
     if (c.segment.pause) continue;
-    cj.chunk_cycles.insert(cj.chunk_cycles.end(), t.begin(), t.end());
     moves += c.segment.moves;
     for (int a = 0; a < plan::kAxes; ++a) pos[a] += c.segment.delta[a];
     cj.checkpoints.push_back({moves, pos, c.segment.loc});
@@ -150,6 +145,93 @@ plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& m
   }
   cj.warnings = r.warnings;
   return r;
+}
+
+MoveClock::MoveClock(const CardJob& job) : job_(job) {
+  ideal_.reserve(kBlock);
+  chunk_.reserve(kBlock);
+}
+
+bool MoveClock::next() {
+  if (at_ + 1 < ideal_.size()) {
+    ++at_;
+    ++moves_;
+    return true;
+  }
+  if (!fill()) return false;
+  at_ = 0;
+  ++moves_;
+  return true;
+}
+
+bool MoveClock::fill() {
+  const std::vector<plan::PlannedCardSegment>& card = job_.planned.card;
+  ideal_.clear();
+  chunk_.clear();
+  while (card_ < card.size()) {
+    const plan::PlannedCardSegment& c = card[card_];
+    if (into_ == 0 && (card_ == 0 || card[card_ - 1].segment.step_segment != c.segment.step_segment)) {
+      // A step segment's parts are consecutive; each move is timed against its total
+      // (as plan::ideal_times does).
+      total_ = 0;
+      for (size_t e = card_; e < card.size() && card[e].segment.step_segment == c.segment.step_segment; ++e)
+        total_ += card[e].segment.moves;
+    }
+    const uint64_t left = c.segment.moves - into_;
+    const uint64_t n = std::min(left, kBlock);
+    if (n == 0) {
+      ++card_;
+      into_ = 0;
+      chunk_index_ = 0;
+      chunk_move_ = 0;
+      continue;
+    }
+    // The chunk times of the block's moves (the card's sum, move by move).
+    std::vector<int64_t> times;
+    for (uint64_t i = 0; i < n; ++i) {
+      while (chunk_index_ < c.chunks.size() && chunk_move_ >= c.chunks[chunk_index_].count) {
+        ++chunk_index_;
+        chunk_move_ = 0;
+      }
+      if (chunk_index_ >= c.chunks.size()) break;  // chunks short of the moves: a bad plan, times stop
+      const plan::Chunk& ch = c.chunks[chunk_index_];
+      const int64_t j = chunk_move_++;
+      last_event_ += int64_t(ch.interval) + j * ch.add + ch.add2 * j * (j - 1) / 2;
+      times.push_back(last_event_);
+    }
+    if (!c.segment.pause) {
+      if (c.conic) {
+        const auto b = c.conic->ideal.begin() + std::ptrdiff_t(into_);
+        ideal_.assign(b, b + std::ptrdiff_t(std::min<uint64_t>(n, c.conic->ideal.size() - into_)));
+      } else {
+        ideal_ = plan::ideal_move_times(job_.planned.feeds[c.segment.step_segment], total_,
+                                        c.segment.first_move + into_, n, job_.clock_hz());
+      }
+      chunk_ = std::move(times);
+    }
+    into_ += n;
+    if (!c.segment.pause) {
+      const size_t m = std::min(ideal_.size(), chunk_.size());
+      ideal_.resize(m);
+      chunk_.resize(m);
+      if (m > 0) return true;
+    }
+  }
+  return false;
+}
+
+std::vector<double> ideal_cycles(const CardJob& job) {
+  std::vector<double> out;
+  out.reserve(job.moves());
+  for (MoveClock c(job); c.next();) out.push_back(c.ideal());
+  return out;
+}
+
+std::vector<int64_t> chunk_cycles(const CardJob& job) {
+  std::vector<int64_t> out;
+  out.reserve(job.moves());
+  for (MoveClock c(job); c.next();) out.push_back(c.chunk());
+  return out;
 }
 
 double buffered_seconds(const CardJob& job, uint64_t segments_done, uint64_t moves_done, uint64_t words_handed) {

@@ -30,8 +30,6 @@ struct CardJob {
   plan::PlannedJob planned;
   card::WireJob wire;
   std::vector<uint32_t> words;           // the command stream: CONFIG, segments, START
-  std::vector<double> ideal_cycles;      // per move: the planner's ideal time from START
-  std::vector<int64_t> chunk_cycles;     // per move: the time its chunks realize
   std::vector<Checkpoint> checkpoints;   // one per planned card segment
   plan::PerAxis<int64_t> start{};        // absolute steps the job was planned from (the card's position)
   // Per wire segment (the SEGMENT commands of `words`, in order): the word
@@ -50,6 +48,45 @@ struct CardJob {
   card::CardCaps caps;                   // the card it is planned for
   [[nodiscard]] double clock_hz() const { return machine.card.clock_hz; }
 };
+
+// Every move of a job that steps, one at a time in execution order, with its
+// planned times in card cycles from START: the planner's ideal time and the time
+// its chunks realize (never later; within the chunk tolerance). A pause's moves
+// show no pin: they are passed over, but they time the next move's first
+// interval. Memory is bounded by a block of moves (kBlock), whatever the job's
+// length: what a run measured as it goes (RunMeter) steps through.
+class MoveClock {
+ public:
+  explicit MoveClock(const CardJob& job);
+  // Moves to the next move; false past the last.
+  bool next();
+  [[nodiscard]] double ideal() const { return ideal_[at_]; }
+  [[nodiscard]] int64_t chunk() const { return chunk_[at_]; }
+  // Moves made so far (the current move's number, 1-based).
+  [[nodiscard]] uint64_t moves() const { return moves_; }
+
+  static constexpr uint64_t kBlock = 4096;
+
+ private:
+  bool fill();  // the next block of the current card segment (or of the ones after it)
+
+  const CardJob& job_;
+  size_t card_ = 0;          // the card segment the block is from
+  uint64_t into_ = 0;        // its moves already in blocks
+  uint64_t total_ = 0;       // the moves of its step segment (all of its parts)
+  size_t chunk_index_ = 0;   // the chunk of the card segment the next move is in
+  uint32_t chunk_move_ = 0;  // that move's index in its chunk
+  int64_t last_event_ = 0;   // the chunk time of the move before
+  std::vector<double> ideal_;
+  std::vector<int64_t> chunk_;
+  size_t at_ = 0;
+  uint64_t moves_ = 0;
+};
+
+// Every move's ideal and chunk time at once (MoveClock run to the end): for
+// tests and for `cpstep check`, which holds a whole trace anyway.
+std::vector<double> ideal_cycles(const CardJob& job);
+std::vector<int64_t> chunk_cycles(const CardJob& job);
 
 // The seconds of motion the card still holds, at least, while it runs the job
 // (card::CardClient::BufferedTime): from its next move (`moves_done` of the

@@ -75,14 +75,17 @@ JobFeedRamp fit_feed_ramp(CardJob& job) {
   for (Checkpoint& cp : dry_job.checkpoints)
     for (int x = 0; x < plan::kAxes; ++x) cp.position[x] -= job.start[x];
   dry_job.start = {};
+  RunMeter meter(job);
+  o.meter = &meter;
+  o.record_pins = false;
   const CardRun dry = run_on_sim(dry_job, o);
   if (!dry.ok()) {
     out.note = "the dry run on the fast engine failed: the machine's ramp stays";
     job.feed_ramp_note = out.note;
     return out;
   }
-  const RunMeasure m = measure_run(job, dry);
-  const KinematicSeries ks = kinematic_series(job, dry, m);
+  meter.finish(dry);
+  const KinematicSeries ks = meter.series();
   if (ks.path_v.empty()) return out;
   const size_t fastest = fastest_point(job, ks);
   out.fastest_s = ks.t[fastest];

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <tuple>
 #include <memory>
 
 #include "plan/gcode.h"
@@ -16,17 +17,6 @@ Windows peak_windows(const plan::AxisConfig& axis) {
   return {1 / (0.02 * axis.max_velocity * spm), std::sqrt(4 / (0.05 * axis.max_accel * spm)),
           std::cbrt(6 / (0.1 * axis.max_jerk * spm))};
 }
-
-namespace {
-
-// STEP edge times of an axis in seconds from START.
-std::vector<double> edge_times(const AxisPulses& p, uint64_t start_cycle, double clock_hz) {
-  std::vector<double> t(p.cycles.size());
-  for (size_t i = 0; i < t.size(); ++i) t[i] = double(int64_t(p.cycles[i] - start_cycle)) / clock_hz;
-  return t;
-}
-
-}  // namespace
 
 std::vector<plan::StepperSteps> klipper_path_steps(const CardJob& job) {
   if (!(job.machine.planner.fit_arcs_mm > 0)) return plan::path_steps(job.planned, job.clock_hz());
@@ -47,129 +37,245 @@ std::vector<plan::StepperSteps> klipper_path_steps(const CardJob& job) {
   return plan::path_steps(p, job.clock_hz());
 }
 
-RunMeasure measure_run(const CardJob& job, const CardRun& run) {
-  RunMeasure m;
-  m.moves = run.move_cycles.size();
-  const int64_t start = int64_t(run.start_cycle);
-  const size_t n = std::min({run.move_cycles.size(), job.ideal_cycles.size(), job.chunk_cycles.size()});
-  for (size_t i = 0; i < n; ++i) {
-    const int64_t event = int64_t(run.move_cycles[i]);
-    const double err = std::abs(double(event - start) - job.ideal_cycles[i]);
-    if (err > m.max_timing_error_cycles) {
-      m.max_timing_error_cycles = err;
-      m.max_timing_error_move = i + 1;
-    }
-    const int64_t chunk_err = std::abs(event - start - job.chunk_cycles[i]);
-    m.max_chunk_error_cycles = std::max(m.max_chunk_error_cycles, chunk_err);
-    if (chunk_err != 0) ++m.moves_off_chunk_time;
+std::pair<plan::QueueStepCost, plan::QueueStepCost> klipper_path_costs(const CardJob& job) {
+  plan::QueueStepCounter at25(25e-6 * job.clock_hz()), at1(1e-6 * job.clock_hz());
+  const auto add = [&](int stepper, uint64_t cycle, int8_t dir) {
+    at25.add(stepper, cycle, dir);
+    at1.add(stepper, cycle, dir);
+  };
+  if (!(job.machine.planner.fit_arcs_mm > 0)) {
+    plan::for_each_path_step(job.planned, job.clock_hz(), add);
+  } else {
+    const std::vector<plan::StepperSteps> steps = klipper_path_steps(job);
+    for (size_t s = 0; s < steps.size(); ++s)
+      for (size_t k = 0; k < steps[s].cycles.size(); ++k) add(int(s), steps[s].cycles[k], steps[s].dirs[k]);
   }
-  if (!run.move_cycles.empty()) {
-    m.job_time_cycles = run.move_cycles.back() - run.start_cycle;
-    m.job_time_s = double(m.job_time_cycles) / job.clock_hz();
-  }
-  for (int a = 0; a < plan::kAxes; ++a) {
-    const plan::AxisConfig& ax = job.machine.axes[a];
-    AxisMeasure& am = m.axes[a];
-    am.present = ax.present;
-    if (!ax.present) continue;
-    const AxisPulses& p = run.pulses[a];
-    am.pulses = p.cycles.size();
-    const Windows h = peak_windows(ax);
-    am.window = h;
-    const std::vector<double> times = edge_times(p, run.start_cycle, job.clock_hz());
-    const std::vector<int> dirs(p.dirs.begin(), p.dirs.end());
-    const double spm = ax.steps_per_mm;
-    am.peak.v = plan::realized_peaks(times, dirs, spm, h.v, kEvaluationsPerWindow).v;
-    am.peak.a = plan::realized_peaks(times, dirs, spm, h.a, kEvaluationsPerWindow).a;
-    am.peak.j = plan::realized_peaks(times, dirs, spm, h.j, kEvaluationsPerWindow).j;
-    am.tolerance = {1 / (h.v * spm), 4 / (h.a * h.a * spm), 6 / (h.j * h.j * h.j * spm)};
-    am.within_limits = am.peak.v <= ax.max_velocity + am.tolerance.v &&
-                       am.peak.a <= ax.max_accel + am.tolerance.a &&
-                       am.peak.j <= ax.max_jerk + am.tolerance.j;
-  }
-  if (run.pins_observed) m.curve = curve_deviation(job, run);
-  if (run.pins_observed) {
-    std::vector<plan::StepperSteps> steppers;
-    for (int a = 0; a < plan::kAxes; ++a) {
-      const AxisPulses& p = run.pulses[a];
-      if (p.cycles.empty()) continue;
-      plan::StepperSteps s;
-      s.cycles.reserve(p.cycles.size());
-      for (uint64_t c : p.cycles) s.cycles.push_back(c - run.start_cycle);
-      s.dirs = p.dirs;
-      steppers.push_back(std::move(s));
-    }
-    m.klipper_pins_25us = plan::queue_step_cost(steppers, 25e-6 * job.clock_hz());
-    const std::vector<plan::StepperSteps> path = klipper_path_steps(job);
-    m.klipper_25us = plan::queue_step_cost(path, 25e-6 * job.clock_hz());
-    m.klipper_1us = plan::queue_step_cost(path, 1e-6 * job.clock_hz());
-  }
-  return m;
+  return {at25.finish(), at1.finish()};
 }
 
-CurveDeviation curve_deviation(const CardJob& job, const CardRun& run) {
-  CurveDeviation d;
-  // The curves of the job, by the G-code block they came from.
-  auto parsed = plan::load_gcode(job.job_file, plan::gcode_options(job.machine));
-  if (!parsed.ok()) return d;
-  std::map<std::pair<int, int>, const plan::MotionBlock*> curves;
-  for (const auto& b : parsed->blocks)
-    if (b.kind == plan::MotionKind::nurbs && b.curve) curves[{b.loc.line, b.loc.col}] = &b;
-  if (curves.empty()) return d;
-  const std::vector<plan::PerAxis<double>> path = card_path(job, run);
-  std::unique_ptr<plan::CurveDistance> dist;
+// The job's NURBS blocks by their G-code position, and the distance to the one
+// the card is on.
+struct RunMeter::Curves {
+  plan::Job parsed;
+  std::map<std::pair<int, int>, const plan::MotionBlock*> by_loc;
   const plan::MotionBlock* current = nullptr;
-  double sum2 = 0;
-  uint64_t prev = 0;  // moves before this checkpoint's card segment
-  for (const Checkpoint& cp : job.checkpoints) {
-    auto it = curves.find({cp.loc.line, cp.loc.col});
-    if (it != curves.end()) {
-      if (it->second != current) {
-        current = it->second;
-        dist = std::make_unique<plan::CurveDistance>(*current->curve);
-        ++d.curves;
-      }
-      const double z = current->curve->points().front()[2];
-      for (uint64_t i = prev; i <= cp.moves && i < path.size(); ++i) {
-        const double e = (*dist)(Eigen::Vector3d(path[i][0], path[i][1], z));
-        ++d.positions;
-        sum2 += e * e;
-        if (e > d.max_mm) {
-          d.max_mm = e;
-          d.worst_loc = cp.loc;
-          d.worst_x_mm = path[i][0];
-          d.worst_y_mm = path[i][1];
-        }
-      }
-    } else {
-      current = nullptr;
-    }
-    prev = cp.moves;
+  std::unique_ptr<plan::CurveDistance> distance;
+  const plan::MotionBlock* at(const plan::SourceLoc& loc) const {
+    const auto it = by_loc.find({loc.line, loc.col});
+    return it == by_loc.end() ? nullptr : it->second;
   }
-  if (d.positions) d.rms_mm = std::sqrt(sum2 / double(d.positions));
-  return d;
+};
+
+struct RunMeter::AxisState {
+  bool present = false;
+  double spm = 1;
+  Windows window;
+  std::unique_ptr<plan::PeakMeter> v, a, j;
+  uint64_t pulses = 0;
+  // The series: steps after the edges so far (from 0 at START), the time of the
+  // last edge, the next grid sample not yet taken and the samples taken.
+  double after = 0;
+  double last_t = 0;
+  bool any = false;
+  size_t next = 0;
+  std::vector<double> samples;  // mm
+};
+
+RunMeter::RunMeter(const CardJob& job) : job_(job), clock_(job), pins_(25e-6 * job.clock_hz()) {
+  axes_.resize(plan::kAxes);
+  size_t k_max = 1;
+  dt_ = std::max(job.planned.stats.duration_s / 4000, 2.5e-4);
+  for (int a = 0; a < plan::kAxes; ++a) {
+    const plan::AxisConfig& ax = job.machine.axes[a];
+    AxisState& st = axes_[size_t(a)];
+    st.present = ax.present;
+    if (!ax.present) continue;
+    st.spm = ax.steps_per_mm;
+    st.window = peak_windows(ax);
+    st.v = std::make_unique<plan::PeakMeter>(st.spm, st.window.v, kEvaluationsPerWindow);
+    st.a = std::make_unique<plan::PeakMeter>(st.spm, st.window.a, kEvaluationsPerWindow);
+    st.j = std::make_unique<plan::PeakMeter>(st.spm, st.window.j, kEvaluationsPerWindow);
+    for (double w : {st.window.v, st.window.a, st.window.j})
+      k_max = std::max(k_max, size_t(std::max(1L, std::lround(w / dt_))));
+  }
+  pad_ = 4 * k_max + 2;
+}
+
+RunMeter::~RunMeter() = default;
+
+void RunMeter::start(uint64_t start_cycle, const plan::PerAxis<int64_t>& position) {
+  start_cycle_ = start_cycle;
+  started_ = true;
+  for (int a = 0; a < plan::kAxes; ++a) steps_[a] = position[a] + origin_[a];
+  position_point();
+  // The curves, when the job has any, and the first checkpoint's.
+  auto parsed = plan::load_gcode(job_.job_file, plan::gcode_options(job_.machine));
+  if (parsed.ok()) {
+    curves_ = std::make_unique<Curves>();
+    curves_->parsed = std::move(*parsed.value);
+    for (const auto& b : curves_->parsed.blocks)
+      if (b.kind == plan::MotionKind::nurbs && b.curve) curves_->by_loc[{b.loc.line, b.loc.col}] = &b;
+    if (curves_->by_loc.empty()) curves_.reset();
+  }
+  checkpoint_ = 0;
+  checkpoint_from_ = 0;
+  if (curves_ && !job_.checkpoints.empty()) {
+    curves_->current = curves_->at(job_.checkpoints[0].loc);
+    if (curves_->current) {
+      curves_->distance = std::make_unique<plan::CurveDistance>(*curves_->current->curve);
+      ++m_.curve.curves;
+    }
+  }
+  curve_point();
+}
+
+void RunMeter::position_point() {
+  plan::PerAxis<double> p{};
+  for (int a = 0; a < plan::kAxes; ++a)
+    if (axes_[size_t(a)].present) p[a] = double(steps_[a]) / axes_[size_t(a)].spm;
+  if (path_.size() == kMaxPathPoints) {
+    // Every other point stays (the start among them); from now on every 2^k-th move.
+    for (size_t i = 0; 2 * i < path_.size(); ++i) path_[i] = path_[2 * i];
+    path_.resize((path_.size() + 1) / 2);
+    path_stride_ *= 2;
+  }
+  path_.push_back(p);
+}
+
+void RunMeter::curve_point() {
+  if (!curves_) return;
+  const std::vector<Checkpoint>& cps = job_.checkpoints;
+  const uint64_t i = m_.moves;  // the position after i moves
+  for (;;) {
+    if (checkpoint_ >= cps.size()) return;
+    const Checkpoint& cp = cps[checkpoint_];
+    if (curves_->current && i >= checkpoint_from_ && i <= cp.moves) {
+      const double z = curves_->current->curve->points().front()[2];
+      const double x = double(steps_[0]) / axes_[0].spm, y = double(steps_[1]) / axes_[1].spm;
+      const double e = (*curves_->distance)(Eigen::Vector3d(x, y, z));
+      ++m_.curve.positions;
+      curve_sum2_ += e * e;
+      if (e > m_.curve.max_mm) {
+        m_.curve.max_mm = e;
+        m_.curve.worst_loc = cp.loc;
+        m_.curve.worst_x_mm = x;
+        m_.curve.worst_y_mm = y;
+      }
+    }
+    if (i != cp.moves) return;
+    // The card segment ends here: the next one starts at this position.
+    checkpoint_from_ = cp.moves;
+    if (++checkpoint_ >= cps.size()) return;
+    const plan::MotionBlock* b = curves_->at(cps[checkpoint_].loc);
+    if (b && b != curves_->current) {
+      curves_->distance = std::make_unique<plan::CurveDistance>(*b->curve);
+      ++m_.curve.curves;
+    }
+    curves_->current = b;
+  }
+}
+
+void RunMeter::decimate() {
+  // Keep the samples at even multiples of the doubled spacing: old index i = i0 + 2 n.
+  const size_t i0 = pad_ % 2;
+  for (AxisState& st : axes_) {
+    if (!st.present) continue;
+    std::vector<double> kept;
+    for (size_t i = i0; i < st.samples.size(); i += 2) kept.push_back(st.samples[i]);
+    st.samples = std::move(kept);
+    st.next = st.next > i0 ? (st.next - i0 + 1) / 2 : 0;
+  }
+  pad_ = (pad_ - i0) / 2;
+  dt_ *= 2;
+}
+
+void RunMeter::move(uint64_t edge_cycle, uint32_t leading, const plan::PerAxis<int8_t>& dirs) {
+  const double hz = job_.clock_hz();
+  const int64_t event = int64_t(edge_cycle) - 1 - int64_t(start_cycle_);
+  ++m_.moves;
+  last_edge_ = edge_cycle;
+  if (clock_.next()) {
+    const double err = std::abs(double(event) - clock_.ideal());
+    if (err > m_.max_timing_error_cycles) {
+      m_.max_timing_error_cycles = err;
+      m_.max_timing_error_move = m_.moves;
+    }
+    const int64_t chunk_err = std::abs(event - clock_.chunk());
+    m_.max_chunk_error_cycles = std::max(m_.max_chunk_error_cycles, chunk_err);
+    if (chunk_err != 0) ++m_.moves_off_chunk_time;
+  }
+  const double t = double(int64_t(edge_cycle - start_cycle_)) / hz;
+  while (t > double(kMaxSeriesSamples - 1) * dt_) decimate();
+  for (int a = 0; a < plan::kAxes; ++a) {
+    if (!(leading >> a & 1)) continue;
+    steps_[a] += dirs[a];
+    AxisState& st = axes_[size_t(a)];
+    if (!st.present) continue;
+    ++st.pulses;
+    st.v->add(t, dirs[a]);
+    st.a->add(t, dirs[a]);
+    st.j->add(t, dirs[a]);
+    pins_.add(a, edge_cycle - start_cycle_, dirs[a]);
+    // The series' samples before this edge: between the last edge and this one.
+    for (;; ++st.next) {
+      const double g = (double(st.next) - double(pad_)) * dt_;
+      if (!(g < t)) break;
+      double steps = st.after;
+      if (st.any && t > st.last_t) steps += (g - st.last_t) / (t - st.last_t) * dirs[a];
+      if (st.samples.size() <= st.next) st.samples.resize(st.next + 1);
+      st.samples[st.next] = steps / st.spm;
+    }
+    st.after += dirs[a];
+    st.last_t = t;
+    st.any = true;
+  }
+  if (m_.moves % path_stride_ == 0) position_point();
+  curve_point();
+}
+
+RunMeasure RunMeter::finish(const CardRun& run) {
+  finished_ = true;
+  if (m_.moves > 0) {
+    m_.job_time_cycles = last_edge_ - 1 - start_cycle_;
+    m_.job_time_s = double(m_.job_time_cycles) / job_.clock_hz();
+  }
+  for (int a = 0; a < plan::kAxes; ++a) {
+    const plan::AxisConfig& ax = job_.machine.axes[a];
+    AxisMeasure& am = m_.axes[a];
+    AxisState& st = axes_[size_t(a)];
+    am.present = ax.present;
+    if (!ax.present) continue;
+    am.pulses = st.pulses;
+    am.window = st.window;
+    am.peak = {st.v->finish().v, st.a->finish().a, st.j->finish().j};
+    const Windows& h = st.window;
+    const double spm = ax.steps_per_mm;
+    am.tolerance = {1 / (h.v * spm), 4 / (h.a * h.a * spm), 6 / (h.j * h.j * h.j * spm)};
+    am.within_limits = am.peak.v <= ax.max_velocity + am.tolerance.v && am.peak.a <= ax.max_accel + am.tolerance.a &&
+                       am.peak.j <= ax.max_jerk + am.tolerance.j;
+    if (st.pulses > 0) window_ = {std::max(window_.v, h.v), std::max(window_.a, h.a), std::max(window_.j, h.j)};
+  }
+  // The series to the end of the grid: shown samples to the job's time, a pad after.
+  const size_t shown = size_t(std::ceil(m_.job_time_s / dt_)) + 1;
+  const size_t total = shown + 2 * pad_;
+  for (AxisState& st : axes_) {
+    if (!st.present) continue;
+    st.samples.resize(total, 0.0);
+    for (; st.next < total; ++st.next) st.samples[st.next] = st.after / st.spm;
+  }
+  samples_ = total;
+  if (path_.size() < 2 || m_.moves % path_stride_ != 0) position_point();
+  if (m_.curve.positions) m_.curve.rms_mm = std::sqrt(curve_sum2_ / double(m_.curve.positions));
+  if (run.pins_observed) {
+    m_.klipper_pins_25us = pins_.finish();
+    std::tie(m_.klipper_25us, m_.klipper_1us) = klipper_path_costs(job_);
+  } else {
+    m_.curve = {};
+  }
+  return m_;
 }
 
 namespace {
-
-// Position in mm of one axis at each grid time: the piecewise-linear curve
-// through (edge time, steps after the edge), 0 before the first edge.
-std::vector<double> sample_position(const std::vector<double>& times, const std::vector<int8_t>& dirs,
-                                    double spm, const std::vector<double>& grid) {
-  std::vector<double> out(grid.size());
-  size_t next = 0;     // first edge later than the grid time
-  double after = 0;    // steps after edge next - 1
-  for (size_t g = 0; g < grid.size(); ++g) {
-    while (next < times.size() && times[next] <= grid[g]) after += dirs[next++];
-    double steps = after;
-    if (next > 0 && next < times.size() && times[next] > times[next - 1]) {
-      const double f = (grid[g] - times[next - 1]) / (times[next] - times[next - 1]);
-      steps += f * dirs[next];
-    }
-    out[g] = steps / spm;
-  }
-  return out;
-}
 
 // Central differences of y on a grid with k samples per h: first, second and
 // third derivative at sample i (0 where the stencil leaves the grid).
@@ -192,41 +298,23 @@ struct Derivatives {
 
 }  // namespace
 
-KinematicSeries kinematic_series(const CardJob& job, const CardRun& run, const RunMeasure& m) {
+KinematicSeries RunMeter::series() const {
   KinematicSeries s;
-  // One window per quantity for the whole plot: the longest any moving axis needs.
-  Windows h;
-  for (const AxisMeasure& am : m.axes) {
-    if (!am.present || am.pulses == 0) continue;
-    h = {std::max(h.v, am.window.v), std::max(h.a, am.window.a), std::max(h.j, am.window.j)};
-  }
-  if (h.j <= 0 || m.moves == 0) return s;
-  const double duration = m.job_time_s;
-  const double dt = std::max(duration / 4000, 2.5e-4);
+  if (!finished_ || window_.j <= 0 || m_.moves == 0) return s;
+  const double dt = dt_;
   auto samples = [dt](double w) { return std::max<size_t>(1, size_t(std::lround(w / dt))); };
-  const size_t kv = samples(h.v), ka = samples(h.a), kj = samples(h.j);
+  const size_t kv = samples(window_.v), ka = samples(window_.a), kj = samples(window_.j);
   s.window = {double(kv) * dt, double(ka) * dt, double(kj) * dt};
-  // The grid runs beyond both ends so that every stencil of the shown part fits.
-  const size_t pad = 4 * std::max({kv, ka, kj});
-  const size_t shown = size_t(std::ceil(duration / dt)) + 1;
-  std::vector<double> grid(shown + 2 * pad);
-  for (size_t g = 0; g < grid.size(); ++g) grid[g] = (double(g) - double(pad)) * dt;
-
   std::vector<int> moving;
-  plan::PerAxis<std::vector<double>> pos;
-  for (int a = 0; a < plan::kAxes; ++a) {
-    if (!m.axes[a].present || m.axes[a].pulses == 0) continue;
-    moving.push_back(a);
-    pos[a] = sample_position(edge_times(run.pulses[a], run.start_cycle, job.clock_hz()),
-                             run.pulses[a].dirs, job.machine.axes[a].steps_per_mm, grid);
-  }
+  for (int a = 0; a < plan::kAxes; ++a)
+    if (axes_[size_t(a)].present && axes_[size_t(a)].pulses > 0) moving.push_back(a);
   // Path speed with the window of each quantity; its derivatives are the
   // measured path acceleration and jerk.
   auto path_speed = [&](size_t k, double w) {
-    std::vector<double> speed(grid.size(), 0.0);
+    std::vector<double> speed(samples_, 0.0);
     for (int a : moving) {
-      const Derivatives d{pos[a], k, w};
-      for (size_t g = 0; g < grid.size(); ++g) speed[g] += d.d1(g) * d.d1(g);
+      const Derivatives d{axes_[size_t(a)].samples, k, w};
+      for (size_t g = 0; g < samples_; ++g) speed[g] += d.d1(g) * d.d1(g);
     }
     for (double& v : speed) v = std::sqrt(v);
     return speed;
@@ -234,16 +322,16 @@ KinematicSeries kinematic_series(const CardJob& job, const CardRun& run, const R
   const std::vector<double> speed_v = path_speed(kv, s.window.v), speed_a = path_speed(ka, s.window.a),
                             speed_j = path_speed(kj, s.window.j);
   const Derivatives dsa{speed_a, ka, s.window.a}, dsj{speed_j, kj, s.window.j};
-
-  const auto& feeds = job.planned.feeds;
+  const auto& feeds = job_.planned.feeds;
   size_t f = 0;
-  for (size_t g = pad; g < pad + shown; ++g) {
-    const double t = grid[g];
+  for (size_t g = pad_; g + pad_ < samples_; ++g) {
+    const double t = (double(g) - double(pad_)) * dt;
     s.t.push_back(t);
     for (int a : moving) {
-      s.v[a].push_back(Derivatives{pos[a], kv, s.window.v}.d1(g));
-      s.a[a].push_back(Derivatives{pos[a], ka, s.window.a}.d2(g));
-      s.j[a].push_back(Derivatives{pos[a], kj, s.window.j}.d3(g));
+      const std::vector<double>& y = axes_[size_t(a)].samples;
+      s.v[a].push_back(Derivatives{y, kv, s.window.v}.d1(g));
+      s.a[a].push_back(Derivatives{y, ka, s.window.a}.d2(g));
+      s.j[a].push_back(Derivatives{y, kj, s.window.j}.d3(g));
     }
     s.path_v.push_back(speed_v[g]);
     s.path_a.push_back(dsa.d1(g));
@@ -260,26 +348,27 @@ KinematicSeries kinematic_series(const CardJob& job, const CardRun& run, const R
   return s;
 }
 
-std::vector<plan::PerAxis<double>> card_path(const CardJob& job, const CardRun& run) {
-  std::vector<plan::PerAxis<double>> out;
-  out.reserve(run.move_cycles.size() + 1);
-  plan::PerAxis<int64_t> steps = run.start_position;  // where the card stood (a resumed run: not 0)
+void replay(const CardRun& run, RunMeter& meter) {
+  meter.start(run.start_cycle, run.start_position);
   plan::PerAxis<size_t> next{};
-  auto mm = [&] {
-    plan::PerAxis<double> p{};
-    for (int a = 0; a < plan::kAxes; ++a)
-      if (job.machine.axes[a].present) p[a] = double(steps[a]) / job.machine.axes[a].steps_per_mm;
-    return p;
-  };
-  out.push_back(mm());
   for (uint64_t move : run.move_cycles) {
+    uint32_t leading = 0;
+    plan::PerAxis<int8_t> dirs{};
     for (int a = 0; a < plan::kAxes; ++a) {
       const AxisPulses& p = run.pulses[a];
-      while (next[a] < p.cycles.size() && p.cycles[next[a]] == move + 1) steps[a] += p.dirs[next[a]++];
+      if (next[a] < p.cycles.size() && p.cycles[next[a]] == move + 1) {
+        leading |= 1u << a;
+        dirs[a] = p.dirs[next[a]++];
+      }
     }
-    out.push_back(mm());
+    meter.move(move + 1, leading, dirs);
   }
-  return out;
+}
+
+RunMeasure measure_run(const CardJob& job, const CardRun& run) {
+  RunMeter meter(job);
+  replay(run, meter);
+  return meter.finish(run);
 }
 
 }  // namespace cpstep::run

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "plan/common.h"
@@ -57,9 +59,6 @@ struct RunMeasure {
   plan::QueueStepCost klipper_25us, klipper_1us, klipper_pins_25us;
 };
 
-// CurveDeviation of a run (zero positions when the job has no curves).
-CurveDeviation curve_deviation(const CardJob& job, const CardRun& run);
-
 // The windows for an axis: each as short as it can be while one step of
 // quantization moves the estimate by at most a fixed share of the axis's
 // limit: 2 % of vmax, 5 % of amax, 10 % of jmax, i.e.
@@ -68,7 +67,13 @@ Windows peak_windows(const plan::AxisConfig& axis);
 // realized_peaks evaluates its differences this many times per window.
 inline constexpr int kEvaluationsPerWindow = 8;
 
+// The run measured from its recorded events (CardRun::move_cycles and pulses,
+// SimRunOptions::record_pins): RunMeter fed with them. A run whose pins were
+// not observed (a real card) gives the counts only.
 RunMeasure measure_run(const CardJob& job, const CardRun& run);
+class RunMeter;
+// A run's recorded events fed to a meter (START, then every move event).
+void replay(const CardRun& run, RunMeter& meter);
 
 // The job's steps where Klipper would place them (plan::path_steps): from the
 // plan, or, when the machine file fits arcs to G1 chains (planner.fit_arcs_mm),
@@ -83,10 +88,75 @@ struct KinematicSeries {
   std::vector<double> path_v, path_a, path_j;   // measured along the path (speed and its derivatives)
   std::vector<double> plan_v, plan_a, plan_j;   // the planner's profile along the path
 };
-KinematicSeries kinematic_series(const CardJob& job, const CardRun& run, const RunMeasure& m);
 
-// The card's position in mm after every move event (x, y for the path plot),
-// from run.start_position.
-std::vector<plan::PerAxis<double>> card_path(const CardJob& job, const CardRun& run);
+// The job's steps on Klipper's wire where Klipper places them, at max_error 25 us
+// and 1 us (RunMeasure::klipper_25us, klipper_1us), counted step by step from
+// the plan (plan::QueueStepCounter): bounded memory, whatever the job's length.
+std::pair<plan::QueueStepCost, plan::QueueStepCost> klipper_path_costs(const CardJob& job);
+
+// What a run's pins amount to, measured as the run goes (docs/SIM.md
+// "Memory"): fed with START and every move event's STEP edges (run_on_sim with
+// SimRunOptions::meter, or measure_run from recorded events), it keeps no
+// per-move record. Memory is bounded whatever the job's length: the timing
+// through MoveClock, the peaks through plan::PeakMeter, Klipper's cost through
+// plan::QueueStepCounter, the plots' series on a grid of at most
+// kMaxSeriesSamples times (its spacing doubles when the run outlasts it) and
+// the path plot at most kMaxPathPoints card positions (every 2^k-th move).
+class RunMeter {
+ public:
+  explicit RunMeter(const CardJob& job);
+  RunMeter(const RunMeter&) = delete;
+  RunMeter& operator=(const RunMeter&) = delete;
+  ~RunMeter();
+
+  // START was taken in `start_cycle`; the card's counters read `position`
+  // (steps), plus the origin (set_origin: a job run counted from zero).
+  void start(uint64_t start_cycle, const plan::PerAxis<int64_t>& position);
+  void set_origin(const plan::PerAxis<int64_t>& origin) { origin_ = origin; }
+  // A move event whose STEP edges show on the pins in `edge_cycle` (the move's
+  // cycle + 1): bit a of `leading` for each axis that stepped, `dirs[a]` its
+  // direction (+1 / -1).
+  void move(uint64_t edge_cycle, uint32_t leading, const plan::PerAxis<int8_t>& dirs);
+  // The measures (once, after the last move). run: whether its pins were
+  // observed (the per-pin measures) and its start position.
+  RunMeasure finish(const CardRun& run);
+
+  // After finish(): the plots' series, and the card's position in mm before the
+  // first move and after every path_stride()-th move and the last.
+  [[nodiscard]] KinematicSeries series() const;
+  [[nodiscard]] const std::vector<plan::PerAxis<double>>& path() const { return path_; }
+  [[nodiscard]] uint64_t path_stride() const { return path_stride_; }
+
+  static constexpr size_t kMaxSeriesSamples = 8192;
+  static constexpr size_t kMaxPathPoints = size_t{1} << 18;
+
+ private:
+  struct Curves;      // the job's NURBS blocks, for CurveDeviation
+  struct AxisState;   // per axis: peaks, Klipper's counter, the series' samples
+  void decimate();           // the series' grid spacing doubled
+  void position_point();     // the path plot's point at the current position
+  void curve_point();        // the current position against the curve it is on
+
+  const CardJob& job_;
+  MoveClock clock_;
+  plan::QueueStepCounter pins_;  // the pins' steps on Klipper's wire, 25 us
+  RunMeasure m_;
+  std::unique_ptr<Curves> curves_;
+  std::vector<AxisState> axes_;
+  uint64_t start_cycle_ = 0;
+  bool started_ = false, finished_ = false;
+  plan::PerAxis<int64_t> steps_{}, origin_{};
+  uint64_t last_edge_ = 0;
+  // The series: samples at t = (i - pad_) dt_, i = 0, 1, ...
+  double dt_ = 0;
+  size_t pad_ = 0, samples_ = 0;
+  Windows window_;  // the longest window of any moving axis (finish())
+  std::vector<plan::PerAxis<double>> path_;
+  uint64_t path_stride_ = 1;
+  // CurveDeviation: the checkpoint the current move belongs to.
+  size_t checkpoint_ = 0;
+  uint64_t checkpoint_from_ = 0;  // moves before its card segment
+  double curve_sum2_ = 0;
+};
 
 }  // namespace cpstep::run

@@ -74,9 +74,9 @@ const char* const kAxisColours[plan::kAxes] = {"#1f77b4", "#d62728", "#2ca02c", 
 
 }  // namespace
 
-std::string write_plots(const fs::path& dir, const CardJob& job, const CardRun& run,
+std::string write_plots(const fs::path& dir, const CardJob& job, const RunMeter& meter,
                         const RunMeasure& m) {
-  if (run.move_cycles.empty()) return "the card made no move event: nothing to plot";
+  if (m.moves == 0) return "the card made no move event: nothing to plot";
   const std::string gnuplot = find_gnuplot();
   if (gnuplot.empty())
     return "gnuplot is not on PATH (install it, e.g. `apt-get install gnuplot-nox` or scripts/deps)";
@@ -87,8 +87,10 @@ std::string write_plots(const fs::path& dir, const CardJob& job, const CardRun& 
   // Data: the card's path, the planned segment ends, the kinematics.
   {
     std::ofstream out(dir / "path_card.dat");
-    out << "# x_mm y_mm z_mm a_mm after every move event, from the STEP/DIR pins\n";
-    for (const auto& p : card_path(job, run)) out << fmt::format("{:.6f} {:.6f} {:.6f} {:.6f}\n", p[0], p[1], p[2], p[3]);
+    out << fmt::format("# x_mm y_mm z_mm a_mm before the first move event and after every {}, and the last, "
+                       "from the STEP/DIR pins\n",
+                       meter.path_stride() == 1 ? std::string("one") : fmt::format("{}th", meter.path_stride()));
+    for (const auto& p : meter.path()) out << fmt::format("{:.6f} {:.6f} {:.6f} {:.6f}\n", p[0], p[1], p[2], p[3]);
     std::ofstream plan(dir / "path_plan.dat");
     plan << "# x_mm y_mm z_mm a_mm at the planned step segments' ends\n";
     bool first = true;
@@ -103,7 +105,7 @@ std::string write_plots(const fs::path& dir, const CardJob& job, const CardRun& 
     }
     if (!out || !plan) return fmt::format("cannot write the path data in {}", dir.string());
   }
-  const KinematicSeries ks = kinematic_series(job, run, m);
+  const KinematicSeries ks = meter.series();
   {
     std::ofstream out(dir / "kinematics.dat");
     out << "# t_s";

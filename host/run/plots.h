@@ -19,7 +19,8 @@ std::string find_gnuplot();
 // Writes the plots into `dir` (created if needed). Returns "" on success, else
 // what went wrong (no gnuplot on PATH, a file that cannot be written, gnuplot
 // failing: its messages are in DIR/gnuplot.log).
-std::string write_plots(const std::filesystem::path& dir, const CardJob& job, const CardRun& run,
+// `meter` has measured the run (RunMeter::finish).
+std::string write_plots(const std::filesystem::path& dir, const CardJob& job, const RunMeter& meter,
                         const RunMeasure& measure);
 
 }  // namespace cpstep::run

@@ -11,6 +11,7 @@
 #include <type_traits>
 
 #include "run/feed_driver.h"
+#include "run/measure.h"
 #include "sim/card_configs.h"
 #include "sim/fast_card.h"
 #include "sim/sim_link.h"
@@ -95,23 +96,26 @@ void add_card_faults(const CardJob& job, CardRun& run) {
   // The pins show the moves that step; the card also counts the pause moves.
   const uint64_t pauses = job.card_moves() - job.moves();
   const std::string paused = pauses ? fmt::format(" (and {} pause moves)", pauses) : std::string();
-  if (run.pins_observed ? run.move_cycles.size() != job.moves() || run.moves_done != job.card_moves()
+  if (run.pins_observed ? run.move_events != job.moves() || run.moves_done != job.card_moves()
                         : run.moves_done != job.card_moves())
     run.faults.push_back(host_fault(
         HostFault::move_count,
         run.pins_observed ? fmt::format("{} move events on the pins, {} counted by the card, {} planned{}",
-                                        run.move_cycles.size(), run.moves_done, job.moves(), paused)
+                                        run.move_events, run.moves_done, job.moves(), paused)
                           : fmt::format("{} move events counted by the card, {} planned{}", run.moves_done,
                                         job.moves(), paused)));
 }
 
 // The torch pin against the plan: exact cycles from START (tolerance 0).
-void check_torch_pin(const CardJob& job, CardRun& run, const std::vector<uint64_t>& cycles) {
+// `move_edges`: the pin cycles of the first move event after each torch edge
+// and of the last (all check_torch needs of the moves).
+void check_torch_pin(const CardJob& job, CardRun& run, const std::vector<uint64_t>& cycles,
+                     const std::vector<uint64_t>& move_edges) {
   const auto from_start = [&](uint64_t c) { return double(c) - double(run.start_cycle); };
   for (size_t k = 0; k < cycles.size(); ++k) run.torch.push_back({from_start(cycles[k]), k % 2 == 0});
   std::vector<double> moves;
-  moves.reserve(run.move_cycles.size());
-  for (uint64_t c : run.move_cycles) moves.push_back(from_start(c + 1));  // the pin's edge
+  moves.reserve(move_edges.size());
+  for (uint64_t c : move_edges) moves.push_back(from_start(c));
   // Under a feed override or hold the card's time is not the plan's: the edges are
   // checked in order and number (and each pierce measured), not against planned cycles.
   run.torch_verdict =
@@ -142,7 +146,7 @@ class Recorder {
           signals_.push_back(vcd_->add_signal(fmt::format("{}_{}", pin, plan::kAxisLetters[a])));
       signals_.push_back(vcd_->add_signal("torch"));
     }
-    run_.move_cycles.reserve(job.moves());
+    if (options_.record_pins) run_.move_cycles.reserve(job.moves());
   }
 
   // `count` cycles from `cycle` on with the same pins and outputs (1 from the
@@ -162,7 +166,7 @@ class Recorder {
     // About every 65536 cycles: in each span that holds a multiple of it.
     const uint64_t low = cycle & 0xFFFF;
     if (options_.progress && (low == 0 || low + count > 0x10000))
-      options_.progress(run_.move_cycles.size(), job_.moves());
+      options_.progress(run_.move_events, job_.moves());
     if (in.rst) {
       primed_ = false;
       return;
@@ -172,11 +176,13 @@ class Recorder {
     if (!started_ && out.running) {
       started_ = true;
       run_.start_cycle = cycle - 1;
+      if (options_.meter) options_.meter->start(run_.start_cycle, run_.start_position);
     }
     if (started_ && !end_cycle_ && !out.running) end_cycle_ = cycle + 1;
     if (out.torch != torch_) {
       torch_ = out.torch;
       torch_cycles_.push_back(cycle);
+      want_move_after_ = cycle;  // the pierce: the first move event after it
     }
     const uint32_t active = ~(out.step ^ step_active_high_) & kAxisMask;
     const uint32_t leading = primed_ ? active & ~active_ : 0;
@@ -185,21 +191,40 @@ class Recorder {
     if (!leading) return;
     // Every move steps its major axis, and move events are at least a cycle
     // apart: each cycle with a leading edge is one move event.
-    run_.move_cycles.push_back(cycle - 1);
+    ++run_.move_events;
+    if (options_.record_pins) run_.move_cycles.push_back(cycle - 1);
+    plan::PerAxis<int8_t> dirs{};
     for (int a = 0; a < plan::kAxes; ++a) {
       if (!(leading >> a & 1)) continue;
       const bool dir_high = out.dir >> a & 1;
       const int8_t dir = dir_high == bool(dir_positive_high_ >> a & 1) ? 1 : -1;
-      run_.pulses[a].cycles.push_back(cycle);
-      run_.pulses[a].dirs.push_back(dir);
+      dirs[a] = dir;
+      if (options_.record_pins) {
+        run_.pulses[a].cycles.push_back(cycle);
+        run_.pulses[a].dirs.push_back(dir);
+      }
       pins_[a] += dir;
     }
+    if (options_.meter) options_.meter->move(cycle, leading, dirs);
+    // The moves the torch check needs: the first after each torch edge, and the last.
+    if (want_move_after_ && cycle > *want_move_after_) {
+      torch_moves_.push_back(cycle);
+      want_move_after_.reset();
+    }
+    last_move_edge_ = cycle;
     check_segment_end(out);
   }
 
   const plan::PerAxis<int64_t>& pin_position() const { return pins_; }
   // The torch pin's changes (absolute cycles; the first is on).
   const std::vector<uint64_t>& torch_cycles() const { return torch_cycles_; }
+  // The pin cycles of the first move event after each torch change and of the
+  // last move event, increasing.
+  std::vector<uint64_t> torch_moves() const {
+    std::vector<uint64_t> m = torch_moves_;
+    if (last_move_edge_ && (m.empty() || m.back() != last_move_edge_)) m.push_back(last_move_edge_);
+    return m;
+  }
   bool started() const { return started_; }
   // One past the first cycle running_o was low after START; 0 while it runs or never ran.
   uint64_t end_cycle() const { return end_cycle_; }
@@ -210,7 +235,7 @@ class Recorder {
   void check_segment_end(const sim::CardOut& out) {
     if (next_ >= job_.checkpoints.size()) return;
     const Checkpoint& cp = job_.checkpoints[next_];
-    if (run_.move_cycles.size() != cp.moves) return;
+    if (run_.move_events != cp.moves) return;
     ++run_.checked_segments;
     plan::PerAxis<int64_t> card{};
     bool same = true;
@@ -237,6 +262,9 @@ class Recorder {
   uint32_t active_ = 0;
   bool primed_ = false, started_ = false, torch_ = false;
   std::vector<uint64_t> torch_cycles_;
+  std::vector<uint64_t> torch_moves_;
+  std::optional<uint64_t> want_move_after_;
+  uint64_t last_move_edge_ = 0;
   uint64_t end_cycle_ = 0;
   size_t next_ = 0;
   plan::PerAxis<int64_t> pins_{};
@@ -361,10 +389,10 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   if constexpr (requires { dut.skipped(); }) run.skipped_cycles = dut.skipped();
   run.link = {"sim", sim_link.name(), client.stats(), job.clock_hz() / o.sck_div, o.sck_div,
               sim_link.busy_cycles(), double(run.sim_cycles) / job.clock_hz()};
-  if (o.progress) o.progress(run.move_cycles.size(), job.moves());
+  if (o.progress) o.progress(run.move_events, job.moves());
 
   add_card_faults(job, run);
-  check_torch_pin(job, run, rec.torch_cycles());
+  check_torch_pin(job, run, rec.torch_cycles(), rec.torch_moves());
   if (run.position_mismatches > kListedMismatches)
     run.faults.push_back(host_fault(HostFault::position,
                                     fmt::format("{} more card segments ended off the plan",

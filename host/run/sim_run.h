@@ -70,7 +70,10 @@ struct LinkReport {
 
 struct CardRun {
   uint64_t start_cycle = 0;              // the cycle START was taken in
-  std::vector<uint64_t> move_cycles;     // per move event: the cycle it fired (pin edge - 1)
+  uint64_t move_events = 0;              // move events seen on the pins
+  // Recorded only with SimRunOptions::record_pins (tests): per move event the
+  // cycle it fired (pin edge - 1), and each axis's leading STEP edges.
+  std::vector<uint64_t> move_cycles;
   plan::PerAxis<AxisPulses> pulses;
   uint64_t checked_segments = 0;         // checkpoints reached and compared
   uint64_t position_mismatches = 0;
@@ -96,8 +99,15 @@ struct CardRun {
   [[nodiscard]] bool ok() const { return faults.empty(); }
 };
 
+class RunMeter;
+
 struct SimRunOptions {
   Engine engine = Engine::model;    // what simulates the card
+  // Every move event and STEP edge kept in the CardRun (memory grows with the
+  // job: about 30 bytes a move), and/or fed as it happens to a meter that
+  // measures the run in bounded memory (run/measure.h; `cpstep run` does that).
+  bool record_pins = true;
+  RunMeter* meter = nullptr;
   std::string board;                // rtl/builds.json's board to simulate; "": the job's (job.caps)
   std::string fst;                  // rtl: an FST waveform of every RTL signal ("" for none)
   std::string vcd;                  // "" for none: step_<axis>, dir_<axis> per pin

@@ -270,30 +270,31 @@ Outcome* CardLink::clean_small_ = nullptr;
 // the time of its last move.
 TEST_F(CardLink, SegmentEndsAreTheLastMoveTimesAndBufferedTimeSpansThem) {
   const run::CardJob& j = *job_;
+  const std::vector<int64_t> chunk_cycles = run::chunk_cycles(j);
   ASSERT_EQ(j.segment_end_cycle.size(), j.wire.segments.size());
   ASSERT_EQ(j.segment_end_word.size(), j.wire.segments.size());
   uint64_t moves = 0;
   for (size_t i = 0; i < j.wire.segments.size(); ++i) {
     const card::WireSegment& w = j.wire.segments[i];
     moves += uint64_t(w.u) << w.k;
-    ASSERT_LE(moves, j.chunk_cycles.size());
-    EXPECT_EQ(int64_t(j.segment_end_cycle[i]), j.chunk_cycles[moves - 1]) << "segment " << i;
+    ASSERT_LE(moves, chunk_cycles.size());
+    EXPECT_EQ(int64_t(j.segment_end_cycle[i]), chunk_cycles[moves - 1]) << "segment " << i;
     // The word just past the segment starts the next command (or ends the stream).
     EXPECT_LE(j.segment_end_word[i], j.words.size());
   }
-  EXPECT_EQ(moves, j.chunk_cycles.size());
+  EXPECT_EQ(moves, chunk_cycles.size());
   // buffered_seconds() from the card's next move (its moves done, as an index
   // into the planner's move times: this job has no pause moves) to the end of
   // the last segment handed over, for every segment the card may run and
   // moves into it, and every segment handed over.
   const double hz = j.clock_hz();
-  ASSERT_EQ(j.segment_end_moves.back(), j.chunk_cycles.size());
+  ASSERT_EQ(j.segment_end_moves.back(), chunk_cycles.size());
   for (uint64_t done = 0; done < 8; ++done) {
     const uint64_t first = done ? j.segment_end_moves[done - 1] : 0;
     for (const uint64_t made : {first, first + 1, (first + j.segment_end_moves[done]) / 2, j.segment_end_moves[done] - 1})
       for (uint64_t sent = 0; sent <= 8; ++sent) {
         const uint64_t handed = sent ? j.segment_end_word[sent - 1] : 0;
-        const double expect = sent > done ? double(int64_t(j.segment_end_cycle[sent - 1]) - j.chunk_cycles[made]) / hz : 0;
+        const double expect = sent > done ? double(int64_t(j.segment_end_cycle[sent - 1]) - chunk_cycles[made]) / hz : 0;
         EXPECT_DOUBLE_EQ(run::buffered_seconds(j, done, made, handed), std::max(expect, 0.0))
             << "segments done " << done << ", moves made " << made << ", segments handed " << sent;
         // A word short of the segment: it is not the card's yet.
@@ -328,8 +329,10 @@ TEST_F(CardLink, ManySmallFramesAndOneLargeEndInTheSamePins) {
   EXPECT_EQ(large.pins.size(), small.pins.size());
   EXPECT_TRUE(large.pins == small.pins);
   // And the moves fired at the chunk times the plan computed.
+  const std::vector<int64_t> chunk_cycles = run::chunk_cycles(*job_);
+  ASSERT_EQ(small.run.move_cycles.size(), chunk_cycles.size());
   for (size_t i = 0; i < small.run.move_cycles.size(); ++i)
-    ASSERT_EQ(int64_t(small.run.move_cycles[i] - small.run.start_cycle), job_->chunk_cycles[i]) << "move " << i;
+    ASSERT_EQ(int64_t(small.run.move_cycles[i] - small.run.start_cycle), chunk_cycles[i]) << "move " << i;
 }
 
 TEST_F(CardLink, AFrameDamagedOnMosiIsRefusedAndSentAgainOnce) {

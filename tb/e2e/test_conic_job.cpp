@@ -123,8 +123,10 @@ TEST(ConicJob, ArcsRunAsConicsOnTheHx8kCardOnBothEnginesAndConformToThePlan) {
   EXPECT_EQ(rtl.stretch_count, 0u) << "a move waited for the walker";
   EXPECT_EQ(rtl.moves_done, job.card_moves());
   ASSERT_EQ(rtl.move_cycles.size(), job.moves());
+  const std::vector<int64_t> chunk_cycles = run::chunk_cycles(job);
+  ASSERT_EQ(chunk_cycles.size(), job.moves());
   for (size_t i = 0; i < job.moves(); ++i)
-    ASSERT_EQ(rtl.move_cycles[i] - rtl.start_cycle, uint64_t(job.chunk_cycles[i])) << "move " << i;
+    ASSERT_EQ(rtl.move_cycles[i] - rtl.start_cycle, uint64_t(chunk_cycles[i])) << "move " << i;
   {
     std::ifstream a(vcds[0]), b(vcds[1]);
     const std::string ta((std::istreambuf_iterator<char>(a)), {}), tb((std::istreambuf_iterator<char>(b)), {});

@@ -45,8 +45,10 @@ TEST_P(FeedJobs, HoldAtTheFastestPointKeepsEveryLimitAndThePath) {
   o.board = "hx8k";
   const run::CardRun plain = run::run_on_sim(job, o);
   ASSERT_TRUE(plain.ok()) << plain.faults.front().message;
-  const run::RunMeasure pm = run::measure_run(job, plain);
-  const run::KinematicSeries ks = run::kinematic_series(job, plain, pm);
+  run::RunMeter meter(job);
+  run::replay(plain, meter);
+  meter.finish(plain);
+  const run::KinematicSeries ks = meter.series();
   ASSERT_FALSE(ks.path_v.empty());
   const size_t fastest = run::fastest_point(job, ks);
   EXPECT_DOUBLE_EQ(ks.t[fastest], fit.fastest_s);

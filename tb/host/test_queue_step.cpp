@@ -5,6 +5,9 @@
 // framing), not taken from the code.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <random>
+
 #include <fmt/format.h>
 
 #include "plan/pipeline.h"
@@ -129,4 +132,204 @@ TEST(QueueStep, PathStepsSitWhereThePathCrossesHalfSteps) {
     // The last step comes before the job ends, the first after it starts.
     EXPECT_GT(x.cycles.front(), 0u);
     EXPECT_LT(double(x.cycles.back()), pj.value->stats.duration_s * 48e6);
+}
+
+namespace {
+
+// Steps of one stepper built piece by piece, each piece starting where the last ended.
+struct TrainBuilder {
+    StepperSteps s;
+    double t = 0;
+    std::int8_t dir = 1;
+
+    void step() {
+        s.cycles.push_back(static_cast<std::uint64_t>(std::llround(t)));
+        s.dirs.push_back(dir);
+    }
+    // n steps `interval` cycles apart, the interval growing by `slope` a step.
+    void run(std::size_t n, double interval, double slope = 0) {
+        for (std::size_t k = 0; k < n; ++k) {
+            t += std::max(1.0, interval + slope * double(k));
+            step();
+        }
+    }
+};
+
+// A random step train of about `pieces` pieces: constant and slowly varying
+// rates, bursts of irregular steps, pauses, direction changes (some a single
+// step back and forth). `long_run` steps at a constant rate and as many at a
+// slowly varying one come somewhere among them.
+StepperSteps random_train(std::mt19937_64& rng, int pieces, std::size_t long_run) {
+    auto pick = [&](std::int64_t lo, std::int64_t hi) { return std::uniform_int_distribution<std::int64_t>(lo, hi)(rng); };
+    TrainBuilder b;
+    b.t = double(pick(0, 100000));
+    b.dir = pick(0, 1) != 0 ? 1 : -1;
+    const int long_at = int(pick(0, pieces - 1));
+    for (int p = 0; p < pieces; ++p) {
+        if (pick(0, 3) == 0) b.dir = std::int8_t(-b.dir);
+        if (p == long_at && long_run > 0) {
+            b.run(long_run, double(pick(30, 400)));
+            b.run(long_run, double(pick(200, 400)), -double(pick(0, 100)) / double(long_run));
+            continue;
+        }
+        switch (pick(0, 4)) {
+            case 0: b.run(std::size_t(pick(1, 400)), double(pick(20, 5000))); break;
+            case 1: b.run(std::size_t(pick(1, 400)), double(pick(100, 3000)), double(pick(-20, 20)) / 100); break;
+            case 2:   // a burst of irregular steps
+                for (std::int64_t k = pick(1, 60); k > 0; --k) b.run(1, double(pick(1, 300)));
+                break;
+            case 3: b.t += double(pick(1000, 10000000)); break;
+            default:   // back and forth, a step each way
+                for (std::int64_t k = pick(1, 6); k > 0; --k) {
+                    b.dir = std::int8_t(-b.dir);
+                    b.run(1, double(pick(5, 500)));
+                }
+        }
+    }
+    return b.s;
+}
+
+// queue_step_cost() of the axes that step, in axis order.
+QueueStepCost whole_cost(const PerAxis<StepperSteps>& axes, double e, const ChunkLimits& lim) {
+    std::vector<StepperSteps> v;
+    for (const StepperSteps& s : axes)
+        if (!s.cycles.empty()) v.push_back(s);
+    return queue_step_cost(v, e, lim);
+}
+
+// The counter fed the axes' steps interleaved at random, each axis's in order.
+QueueStepCost counted_cost(const PerAxis<StepperSteps>& axes, double e, const ChunkLimits& lim, std::size_t window,
+                           std::mt19937_64& rng) {
+    QueueStepCounter counter(e, lim, window);
+    PerAxis<std::size_t> next{};
+    std::vector<int> left;
+    for (int a = 0; a < kAxes; ++a)
+        if (!axes[a].cycles.empty()) left.push_back(a);
+    while (!left.empty()) {
+        const std::size_t pick = std::uniform_int_distribution<std::size_t>(0, left.size() - 1)(rng);
+        const int a = left[pick];
+        // A few steps of the axis at a time, up to a whole burst of them.
+        const std::size_t n = std::uniform_int_distribution<std::size_t>(1, 64)(rng);
+        for (std::size_t k = 0; k < n && next[a] < axes[a].cycles.size(); ++k, ++next[a])
+            counter.add(a, axes[a].cycles[next[a]], axes[a].dirs[next[a]]);
+        if (next[a] == axes[a].cycles.size()) left.erase(left.begin() + std::ptrdiff_t(pick));
+    }
+    return counter.finish();
+}
+
+std::string cost_text(const QueueStepCost& c) {
+    return fmt::format("steps {} queue_step {} set_next_step_dir {} reset_step_clock {} message_bytes {} blocks {} "
+                       "bytes {} error '{}'",
+                       c.steps, c.queue_step, c.set_next_step_dir, c.reset_step_clock, c.message_bytes, c.blocks,
+                       c.bytes, c.error);
+}
+
+void expect_same_cost(const QueueStepCost& got, const QueueStepCost& want, const std::string& what) {
+    EXPECT_TRUE(got == want) << what << "\n got:  " << cost_text(got) << "\n want: " << cost_text(want);
+}
+
+// 1 to 4 of the axes (any of them) with random trains.
+PerAxis<StepperSteps> random_axes(std::mt19937_64& rng, int pieces, std::size_t long_run) {
+    PerAxis<StepperSteps> axes;
+    const auto used = std::uniform_int_distribution<int>(1, (1 << kAxes) - 1)(rng);
+    for (int a = 0; a < kAxes; ++a)
+        if ((used >> a & 1) != 0) axes[a] = random_train(rng, pieces, long_run);
+    return axes;
+}
+
+}  // namespace
+
+TEST(QueueStepCounter, NoStepsCostNothing) {
+    QueueStepCounter counter(0.5);
+    expect_same_cost(counter.finish(), queue_step_cost({}, 0.5), "no steps");
+}
+
+TEST(QueueStepCounter, EqualsTheWholeCountOnRandomSteps) {
+    // Klipper's limits, the default window: the interleaving, the direction
+    // messages and the blocks chained across steppers.
+    std::mt19937_64 rng(1);
+    for (int trial = 0; trial < 40; ++trial) {
+        const PerAxis<StepperSteps> axes = random_axes(rng, 30, 0);
+        for (double e : {0.5, 7.0, 60.0}) {
+            const QueueStepCost want = whole_cost(axes, e, klipper_chunk_limits());
+            ASSERT_TRUE(want.error.empty()) << want.error;
+            expect_same_cost(counted_cost(axes, e, klipper_chunk_limits(), 0, rng), want,
+                             fmt::format("trial {} error {}", trial, e));
+        }
+    }
+}
+
+TEST(QueueStepCounter, EqualsTheWholeCountOnRunsLongerThanTheWindow) {
+    // Klipper's limits and the default window (2 * 65535 steps): runs of 300000
+    // steps at a constant rate and as many at a slowly varying one are counted
+    // a window at a time.
+    std::mt19937_64 rng(2);
+    for (int trial = 0; trial < 2; ++trial) {
+        PerAxis<StepperSteps> axes;
+        axes[0] = random_train(rng, 8, 300000);
+        axes[2] = random_train(rng, 8, trial == 0 ? 300000 : 0);
+        for (double e : {0.5, 25.0}) {
+            const QueueStepCost want = whole_cost(axes, e, klipper_chunk_limits());
+            ASSERT_TRUE(want.error.empty()) << want.error;
+            EXPECT_GT(want.queue_step, 2u * 4u);   // more than the runs' count limit alone asks for
+            expect_same_cost(counted_cost(axes, e, klipper_chunk_limits(), 0, rng), want,
+                             fmt::format("trial {} error {}", trial, e));
+        }
+    }
+}
+
+TEST(QueueStepCounter, EqualsTheWholeCountWithSmallWindows) {
+    // A count limit of 5 to 12 moves and windows from that limit up: most
+    // messages are counted from a window that ends before their run does, and
+    // a message decided from too few moves would change the count.
+    std::mt19937_64 rng(3);
+    for (int trial = 0; trial < 60; ++trial) {
+        ChunkLimits lim = klipper_chunk_limits();
+        lim.max_count = std::uint32_t(5 + trial % 8);
+        const PerAxis<StepperSteps> axes = random_axes(rng, 12, 300);
+        for (double e : {0.5, 3.0, 25.0}) {
+            const QueueStepCost want = whole_cost(axes, e, lim);
+            ASSERT_TRUE(want.error.empty()) << want.error;
+            for (std::size_t window : {std::size_t{lim.max_count}, std::size_t{lim.max_count} + 1,
+                                       std::size_t{2 * lim.max_count}, std::size_t{3 * lim.max_count + 5}})
+                expect_same_cost(counted_cost(axes, e, lim, window, rng), want,
+                                 fmt::format("trial {} max_count {} error {} window {}", trial, lim.max_count, e, window));
+        }
+    }
+}
+
+TEST(QueueStepCounter, ReportsTheWholeCountsError) {
+    // Steps no message can time: a step at its predecessor's cycle (a delay of
+    // 0), one after a pause longer than the 32-bit interval, or every step at a
+    // negative error (no whole cycle in its tolerance). Axes 1 and 3 hold the
+    // bad step, deep in a run longer than the window: the whole count stops at
+    // axis 1's, whichever the counter meets first, and the counts up to it agree.
+    std::mt19937_64 rng(4);
+    for (int trial = 0; trial < 12; ++trial) {
+        const int kind = trial % 3;
+        const bool small = trial % 2 == 1;
+        ChunkLimits lim = klipper_chunk_limits();
+        std::size_t window = 0;   // 2 * 65535
+        if (small) {
+            lim.max_count = 7;
+            window = 9;
+        }
+        PerAxis<StepperSteps> axes;
+        for (int a = 0; a < kAxes; ++a) {
+            TrainBuilder b;
+            b.run(100, 300);
+            b.dir = -1;
+            b.run((small ? 2000 : 140000) + std::size_t(a) * 100, 200);
+            if (kind != 2 && (a == 1 || a == 3)) {
+                if (kind == 0) b.step();   // at the last step's cycle
+                else b.run(1, 5e9);
+                b.run(50, 200);
+            }
+            axes[a] = b.s;
+        }
+        const double e = kind == 2 ? -0.5 : 2.0;
+        const QueueStepCost want = whole_cost(axes, e, lim);
+        ASSERT_FALSE(want.error.empty()) << trial;
+        expect_same_cost(counted_cost(axes, e, lim, window, rng), want, fmt::format("trial {}: {}", trial, want.error));
+    }
 }

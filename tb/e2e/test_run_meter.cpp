@@ -1,0 +1,243 @@
+// SPDX-License-Identifier: MIT
+// run::RunMeter, the measure of a run taken as it goes (docs/SIM.md "Memory"),
+// against the whole-run computations it replaces, on the example jobs run on
+// the simulated HX8K card (its conic walker and torch): every move's planned
+// times (MoveClock against plan::ideal_times and the chunks expanded here),
+// the realized peaks (plan::realized_peaks on every recorded STEP edge, bit for
+// bit), Klipper's cost (plan::queue_step_cost on every step), the curve
+// deviation (every position of the recorded pins against the NURBS), and the
+// meter fed live equal to the meter fed the recorded run afterwards. And the
+// meter's memory stays bounded over a run far longer than its plan.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+#include <tuple>
+
+#include "card/caps.h"
+#include "plan/chunks.h"
+#include "plan/gcode.h"
+#include "plan/kinematics.h"
+#include "plan/nurbs.h"
+#include "plan/queue_step.h"
+#include "run/card_job.h"
+#include "run/measure.h"
+#include "run/sim_run.h"
+
+namespace cpstep::tb {
+namespace {
+
+const std::string kSource = CPSTEP_SOURCE_DIR;
+
+run::CardJob example(const std::string& name) {
+  const auto caps = card::board_caps("hx8k");
+  auto prepared = run::prepare_job(kSource + "/examples/jobs/" + name, kSource + "/examples/machines/seed002.toml", *caps);
+  EXPECT_TRUE(prepared.ok()) << plan::join(prepared.errors);
+  return std::move(*prepared.value);
+}
+
+void expect_same_cost(const plan::QueueStepCost& a, const plan::QueueStepCost& b, const char* what) {
+  EXPECT_TRUE(a == b) << what << ": " << a.bytes << " bytes, " << a.queue_step << " queue_step, error '" << a.error
+                      << "' against " << b.bytes << ", " << b.queue_step << ", '" << b.error << "'";
+}
+
+void expect_same_measure(const run::RunMeasure& a, const run::RunMeasure& b) {
+  const auto timing = [](const run::RunMeasure& m) {
+    return std::tuple(m.moves, m.job_time_cycles, m.max_timing_error_cycles, m.max_timing_error_move,
+                      m.max_chunk_error_cycles, m.moves_off_chunk_time, m.curve.positions, m.curve.max_mm);
+  };
+  EXPECT_TRUE(timing(a) == timing(b)) << "moves, times, timing errors or curve deviation differ";
+  const auto axis = [](const run::AxisMeasure& m) {
+    return std::tuple(m.pulses, m.peak.v, m.peak.a, m.peak.j, m.within_limits);
+  };
+  for (int x = 0; x < plan::kAxes; ++x) EXPECT_TRUE(axis(a.axes[x]) == axis(b.axes[x])) << "axis " << x;
+  expect_same_cost(a.klipper_pins_25us, b.klipper_pins_25us, "pins");
+  expect_same_cost(a.klipper_25us, b.klipper_25us, "path 25 us");
+}
+
+class RunMeterJobs : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(RunMeterJobs, TheLiveMeasureIsTheWholeRunsMeasure) {
+  const run::CardJob job = example(GetParam());
+  const double hz = job.clock_hz();
+  run::RunMeter meter(job);
+  run::SimRunOptions o;
+  o.board = "hx8k";
+  o.meter = &meter;
+  o.record_pins = true;  // the whole run as well, for the references
+  const run::CardRun r = run::run_on_sim(job, o);
+  ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
+  const run::RunMeasure m = meter.finish(r);
+  ASSERT_EQ(r.move_cycles.size(), job.moves());
+  EXPECT_EQ(r.move_events, job.moves());
+  EXPECT_EQ(m.moves, job.moves());
+
+  // Every move's planned times, whole: the planner's ideal times and the chunks
+  // expanded segment by segment (a pause's moves time the next move only).
+  const std::vector<double> ideal = plan::ideal_times(job.planned, hz);
+  std::vector<int64_t> chunk;
+  int64_t last = 0;
+  for (const plan::PlannedCardSegment& c : job.planned.card) {
+    const std::vector<int64_t> t = plan::expand(c.chunks, last);
+    if (!t.empty()) last = t.back();
+    if (!c.segment.pause) chunk.insert(chunk.end(), t.begin(), t.end());
+  }
+  ASSERT_EQ(ideal.size(), job.moves());
+  ASSERT_EQ(chunk.size(), job.moves());
+  EXPECT_EQ(run::ideal_cycles(job), ideal);
+  EXPECT_EQ(run::chunk_cycles(job), chunk);
+  double worst = 0;
+  uint64_t worst_move = 0, off = 0;
+  int64_t worst_chunk = 0;
+  for (size_t i = 0; i < job.moves(); ++i) {
+    const int64_t event = int64_t(r.move_cycles[i] - r.start_cycle);
+    const double e = std::abs(double(event) - ideal[i]);
+    if (e > worst) worst = e, worst_move = i + 1;
+    worst_chunk = std::max(worst_chunk, std::abs(event - chunk[i]));
+    off += event != chunk[i];
+  }
+  EXPECT_EQ(m.max_timing_error_cycles, worst);
+  EXPECT_EQ(m.max_timing_error_move, worst_move);
+  EXPECT_EQ(m.max_chunk_error_cycles, worst_chunk);
+  EXPECT_EQ(m.moves_off_chunk_time, off);
+  EXPECT_EQ(m.job_time_cycles, r.move_cycles.back() - r.start_cycle);
+
+  // The peaks from every recorded edge, and Klipper's cost of every step.
+  std::vector<plan::StepperSteps> pins;
+  for (int a = 0; a < plan::kAxes; ++a) {
+    const plan::AxisConfig& ax = job.machine.axes[a];
+    if (!ax.present) continue;
+    const run::AxisPulses& p = r.pulses[a];
+    EXPECT_EQ(m.axes[a].pulses, p.cycles.size());
+    std::vector<double> t;
+    for (uint64_t c : p.cycles) t.push_back(double(int64_t(c - r.start_cycle)) / hz);
+    const std::vector<int> dirs(p.dirs.begin(), p.dirs.end());
+    const run::Windows h = run::peak_windows(ax);
+    const int e = run::kEvaluationsPerWindow;
+    EXPECT_EQ(m.axes[a].peak.v, plan::realized_peaks(t, dirs, ax.steps_per_mm, h.v, e).v) << "axis " << a;
+    EXPECT_EQ(m.axes[a].peak.a, plan::realized_peaks(t, dirs, ax.steps_per_mm, h.a, e).a) << "axis " << a;
+    EXPECT_EQ(m.axes[a].peak.j, plan::realized_peaks(t, dirs, ax.steps_per_mm, h.j, e).j) << "axis " << a;
+    if (p.cycles.empty()) continue;
+    plan::StepperSteps s;
+    for (uint64_t c : p.cycles) s.cycles.push_back(c - r.start_cycle);
+    s.dirs = p.dirs;
+    pins.push_back(std::move(s));
+  }
+  expect_same_cost(m.klipper_pins_25us, plan::queue_step_cost(pins, 25e-6 * hz), "pins");
+  const std::vector<plan::StepperSteps> path = run::klipper_path_steps(job);
+  expect_same_cost(m.klipper_25us, plan::queue_step_cost(path, 25e-6 * hz), "path 25 us");
+  expect_same_cost(m.klipper_1us, plan::queue_step_cost(path, 1e-6 * hz), "path 1 us");
+
+  // The curve deviation from every position the pins show, segment by segment.
+  auto parsed = plan::load_gcode(job.job_file, plan::gcode_options(job.machine));
+  ASSERT_TRUE(parsed.ok());
+  std::map<std::pair<int, int>, const plan::MotionBlock*> curves;
+  for (const auto& b : parsed->blocks)
+    if (b.kind == plan::MotionKind::nurbs && b.curve) curves[{b.loc.line, b.loc.col}] = &b;
+  std::vector<std::array<double, 2>> xy{{0, 0}};  // after each move
+  {
+    int64_t x = 0, y = 0;
+    size_t nx = 0, ny = 0;
+    for (uint64_t c : r.move_cycles) {
+      if (nx < r.pulses[0].cycles.size() && r.pulses[0].cycles[nx] == c + 1) x += r.pulses[0].dirs[nx++];
+      if (ny < r.pulses[1].cycles.size() && r.pulses[1].cycles[ny] == c + 1) y += r.pulses[1].dirs[ny++];
+      xy.push_back({double(x) / job.machine.axes[0].steps_per_mm, double(y) / job.machine.axes[1].steps_per_mm});
+    }
+  }
+  // Each position's distance to the curve, by brute force over all of its chords
+  // (within 1e-6 mm of the curve).
+  std::map<const plan::Nurbs*, std::vector<Eigen::Vector3d>> chords;
+  const auto distance = [&chords](const plan::Nurbs& c, const Eigen::Vector3d& p) {
+    std::vector<Eigen::Vector3d>& pts = chords[&c];
+    if (pts.empty())
+      for (double u : c.chord_parameters(1e-6)) pts.push_back(c.point(u));
+    double best = (p - pts.front()).norm();
+    for (size_t i = 0; i + 1 < pts.size(); ++i) {
+      const Eigen::Vector3d d = pts[i + 1] - pts[i];
+      const double t = d.squaredNorm() > 0 ? std::clamp((p - pts[i]).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+      best = std::min(best, (p - (pts[i] + t * d)).norm());
+    }
+    return best;
+  };
+  uint64_t positions = 0, prev = 0;
+  double max_mm = 0;
+  for (const run::Checkpoint& cp : job.checkpoints) {
+    const auto it = curves.find({cp.loc.line, cp.loc.col});
+    if (it != curves.end()) {
+      const plan::Nurbs& c = *it->second->curve;
+      const double z = c.points().front()[2];
+      // The segment's positions, the one before its first move among them.
+      for (uint64_t i = prev; i <= cp.moves; ++i, ++positions)
+        max_mm = std::max(max_mm, distance(c, {xy[i][0], xy[i][1], z}));
+    }
+    prev = cp.moves;
+  }
+  EXPECT_EQ(m.curve.positions, positions);
+  EXPECT_NEAR(m.curve.max_mm, max_mm, 2e-6);  // both within 1e-6 mm of the curve
+  if (std::string(GetParam()) == "naca0025.ngc") {
+    EXPECT_GT(positions, 1000u);
+  }
+
+  // The meter fed the recorded run afterwards measures the same.
+  expect_same_measure(run::measure_run(job, r), m);
+  // The path plot holds every position (these jobs are below its bound).
+  ASSERT_EQ(meter.path_stride(), 1u);
+  ASSERT_EQ(meter.path().size(), job.moves() + 1);
+  EXPECT_DOUBLE_EQ(meter.path().back()[0], xy.back()[0]);
+  EXPECT_DOUBLE_EQ(meter.path().back()[1], xy.back()[1]);
+  const run::KinematicSeries ks = meter.series();
+  ASSERT_FALSE(ks.t.empty());
+  EXPECT_LE(ks.t.size(), run::RunMeter::kMaxSeriesSamples);
+  EXPECT_GE(ks.t.back(), m.job_time_s - 1e-9);
+}
+
+INSTANTIATE_TEST_SUITE_P(Examples, RunMeterJobs,
+                         ::testing::Values("tab.ngc", "tight_arcs.ngc", "naca0025.ngc", "bracket.ngc", "plasma.ngc"),
+                         [](const auto& info) {
+                           std::string n = info.param;
+                           return n.substr(0, n.find('.'));
+                         });
+
+// A run far longer than its plan (as under a feed hold, or a job of 10^8 moves):
+// the series' grid and the path plot stay within their bounds, and what they
+// keep is exact. X steps +1 every 1,000 cycles for 3,000,000 moves (75 s at
+// 40 MHz, the plan 1.6 s).
+TEST(RunMeter, ALongRunStaysWithinItsBounds) {
+  const run::CardJob job = example("tab.ngc");
+  const double hz = job.clock_hz();
+  const double spm = job.machine.axes[0].steps_per_mm;
+  run::RunMeter meter(job);
+  meter.start(100, {});
+  constexpr uint64_t kMoves = 3'000'000, kEvery = 1000;
+  plan::PerAxis<int8_t> dirs{};
+  dirs[0] = 1;
+  for (uint64_t n = 1; n <= kMoves; ++n) meter.move(100 + n * kEvery + 1, 1u, dirs);
+  run::CardRun r;
+  const run::RunMeasure m = meter.finish(r);
+  EXPECT_EQ(m.moves, kMoves);
+  EXPECT_EQ(m.axes[0].pulses, kMoves);
+  EXPECT_EQ(m.job_time_cycles, kMoves * kEvery);
+  // The speed: 1 step per 1,000 cycles.
+  const double v = hz / double(kEvery) / spm;
+  EXPECT_NEAR(m.axes[0].peak.v, v, m.axes[0].tolerance.v);
+  // The path: the start, every stride-th move, the last; each exact.
+  const auto& path = meter.path();
+  const uint64_t stride = meter.path_stride();
+  EXPECT_GT(stride, 1u);
+  EXPECT_LE(path.size(), run::RunMeter::kMaxPathPoints + 1);
+  for (size_t k = 0; k + 1 < path.size(); ++k) ASSERT_DOUBLE_EQ(path[k][0], double(k * stride) / spm) << k;
+  EXPECT_DOUBLE_EQ(path.back()[0], double(kMoves) / spm);
+  // The series: its grid spacing grew; the measured speed in the middle is v.
+  const run::KinematicSeries ks = meter.series();
+  ASSERT_GT(ks.t.size(), 1000u);
+  EXPECT_LE(ks.t.size(), run::RunMeter::kMaxSeriesSamples);
+  EXPECT_GE(ks.t.back(), m.job_time_s - 1e-9);
+  const size_t mid = ks.t.size() / 2;
+  EXPECT_NEAR(ks.v[0][mid], v, 1e-6 * v);
+  EXPECT_NEAR(ks.path_v[mid], v, 1e-6 * v);
+  EXPECT_NEAR(ks.a[0][mid], 0, 1e-6);
+}
+
+}  // namespace
+}  // namespace cpstep::tb
