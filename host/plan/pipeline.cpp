@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <span>
+#include <stdexcept>
 #include <variant>
 
 #include <fmt/format.h>
@@ -13,6 +14,41 @@
 #include "plan/steptime.h"
 
 namespace cpstep::plan {
+
+namespace {
+
+ChunkLimits job_chunk_limits(const Machine& m, const PlanOptions& options) {
+    ChunkLimits lim = options.chunk_limits;
+    if (options.add2_from_machine) lim.enable_add2 = m.planner.chunk_add2;
+    return lim;
+}
+
+// The ideal times of a pause's `n` moves from `prev` to `until`, in equal steps.
+std::vector<double> pause_times(std::int64_t prev, double until, std::uint64_t n) {
+    std::vector<double> times(n);
+    for (std::uint64_t j = 0; j < n; ++j) times[j] = double(prev) + (until - double(prev)) * double(j + 1) / double(n);
+    return times;
+}
+
+// What plan_conic_arc() takes for the arc of step segments [first, end).
+ConicArcInput arc_input(const PlannedJob& pj, const MotionBlock& block, std::size_t first, std::size_t end,
+                        const PerAxis<std::int64_t>& start, bool last_motion, const Machine& m) {
+    ConicArcInput in;
+    in.block = &block;
+    in.chords = std::span<const StepSegment>(pj.step_segments).subspan(first, end - first);
+    in.feeds = std::span<const PlannedSegment>(pj.feeds).subspan(first, end - first);
+    in.first_step_segment = first;
+    in.start = start;
+    in.last_motion = last_motion;
+    in.ciw = m.card.conic_width;
+    in.umax = m.card.max_moves;
+    in.w = m.card.pattern_capacity;
+    in.clock_hz = m.card.clock_hz;
+    in.tolerance_cycles = m.chunk_tolerance_cycles();
+    return in;
+}
+
+}  // namespace
 
 Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOptions& options) {
     Result<PlannedJob> result;
@@ -42,8 +78,8 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
     PlannedJob pj;
     pj.step_segments = std::move(*segs.value);
     pj.feeds = std::move(*feeds.value);
-    ChunkLimits lim = options.chunk_limits;
-    if (options.add2_from_machine) lim.enable_add2 = m.planner.chunk_add2;
+    const ChunkLimits lim = job_chunk_limits(m, options);
+    pj.chunk_limits = lim;
     const double tol = m.chunk_tolerance_cycles();
     std::int64_t prev = 0;  // the job starts at cycle 0
     // Dwells since the last move: the card times a pause as the next move's first
@@ -55,14 +91,12 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
     // Pause moves from `prev` to cycle `until`, in `n` equal steps of at most
     // 2^32 - 1 cycles (the last at `until`), as one card segment of their own.
     const auto add_pause = [&](double until, std::uint64_t n, std::size_t dwell) -> bool {
-        std::vector<double> times(n);
-        for (std::uint64_t j = 0; j < n; ++j)
-            times[j] = double(prev) + (until - double(prev)) * double(j + 1) / double(n);
-        auto chunks = compress(times, prev, tol, lim);
+        auto chunks = compress(pause_times(prev, until, n), prev, tol, lim);
         if (!chunks.ok()) {
             result.errors.push_back({job.file, pj.step_segments[dwell].loc, fmt::format("pause timing: {}", chunks.error)});
             return false;
         }
+        const std::int64_t before = prev;
         CardSegment pause;
         pause.moves = static_cast<std::uint32_t>(n);
         pause.u.fill(1);
@@ -73,7 +107,10 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
         prev = chunks.last_event;
         pj.stats.pause_moves += n;
         pj.stats.chunks += chunks.chunks.size();
-        pj.card.push_back({pause, std::move(chunks.chunks), nullptr});
+        PlannedCardSegment& c = pj.card.emplace_back(PlannedCardSegment{pause, std::move(chunks.chunks), nullptr});
+        c.prev_event = before;
+        c.step_moves = n;
+        c.pause_until = until;
         return true;
     };
     // Equal intervals, each under 2^32 - 1 cycles, that make up `cycles`.
@@ -114,20 +151,10 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
             // The arc's chords: the step segments of its block.
             std::size_t e = i + 1;
             while (e < pj.step_segments.size() && pj.step_segments[e].block == s.block) ++e;
-            ConicArcInput in;
-            in.block = &job.blocks[s.block];
-            in.chords = std::span<const StepSegment>(pj.step_segments).subspan(i, e - i);
-            in.feeds = std::span<const PlannedSegment>(pj.feeds).subspan(i, e - i);
-            in.first_step_segment = i;
-            in.start = pos;
-            in.last_motion = true;
+            bool last_motion = true;
             for (std::size_t n = e; n < pj.step_segments.size(); ++n)
-                if (pj.step_segments[n].kind != MotionKind::dwell) in.last_motion = false;
-            in.ciw = m.card.conic_width;
-            in.umax = m.card.max_moves;
-            in.w = m.card.pattern_capacity;
-            in.clock_hz = m.card.clock_hz;
-            in.tolerance_cycles = tol;
+                if (pj.step_segments[n].kind != MotionKind::dwell) last_motion = false;
+            const ConicArcInput in = arc_input(pj, job.blocks[s.block], i, e, pos, last_motion, m);
             std::variant<std::vector<ConicPiece>, std::string> pieces = std::string("the card has no conic walker");
             ConicArcStats arc_stats;
             if (conics) pieces = plan_conic_arc(in, m, &arc_stats);
@@ -138,7 +165,10 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
             }
             if (auto* list = std::get_if<std::vector<ConicPiece>>(&pieces)) {
                 if (!pause_before(list->front().walk->ideal.front())) return result;
-                for (ConicPiece& piece : *list) {
+                auto source = std::make_shared<ArcSource>(ArcSource{*in.block, i, e, in.start, in.last_motion});
+                for (std::size_t p = 0; p < list->size(); ++p) {
+                    ConicPiece& piece = (*list)[p];
+                    const std::int64_t before = prev;
                     auto chunks = compress(piece.walk->ideal, prev, tol, lim);
                     if (!chunks.ok()) {
                         result.errors.push_back({job.file, s.loc, fmt::format("timing: {}", chunks.error)});
@@ -149,7 +179,12 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
                     pj.stats.chunks += chunks.chunks.size();
                     ++pj.stats.conic_segments;
                     for (int a = 0; a < kAxes; ++a) pos[a] += piece.segment.delta[a];
-                    pj.card.push_back({piece.segment, std::move(chunks.chunks), std::move(piece.walk)});
+                    PlannedCardSegment& c = pj.card.emplace_back(
+                        PlannedCardSegment{piece.segment, std::move(chunks.chunks), std::move(piece.walk)});
+                    c.prev_event = before;
+                    c.step_moves = piece.segment.moves;
+                    c.arc = source;
+                    c.arc_piece = p;
                 }
                 last_conic_event = prev;
                 ++pj.stats.conic_arcs;
@@ -182,6 +217,7 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
             const auto ideal = ideal_move_times(pj.feeds[i], total, part.first_move, part.moves,
                                                 m.card.clock_hz);
             if (!ideal.empty() && !pause_before(ideal.front())) return result;
+            const std::int64_t before = prev;
             auto chunks = compress(ideal, prev, tol, lim);
             if (!chunks.ok()) {
                 result.errors.push_back({job.file, s.loc, fmt::format("timing: {}", chunks.error)});
@@ -191,7 +227,9 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
             pj.stats.moves += part.moves;
             pj.stats.chunks += chunks.chunks.size();
             for (int a = 0; a < kAxes; ++a) pos[a] += part.delta[a];
-            pj.card.push_back({part, std::move(chunks.chunks), nullptr});
+            PlannedCardSegment& c = pj.card.emplace_back(PlannedCardSegment{part, std::move(chunks.chunks), nullptr});
+            c.prev_event = before;
+            c.step_moves = total;
         }
         dwell_first = kNone;
         dwell_s = 0;
@@ -240,6 +278,37 @@ std::vector<double> ideal_times(const PlannedJob& job, double clock_hz) {
             out.insert(out.end(), t.begin(), t.end());
         }
     }
+    return out;
+}
+
+}  // namespace cpstep::plan
+
+namespace cpstep::plan {
+
+RebuiltCardSegment rebuild_card_segment(const PlannedJob& job, std::size_t s, const Machine& m) {
+    const PlannedCardSegment& c = job.card.at(s);
+    const ChunkLimits& lim = job.chunk_limits;
+    const double tol = m.chunk_tolerance_cycles();
+    RebuiltCardSegment out;
+    std::vector<double> ideal;
+    if (c.segment.pause) {
+        ideal = pause_times(c.prev_event, c.pause_until, c.segment.moves);
+    } else if (c.arc) {
+        const ArcSource& a = *c.arc;
+        auto pieces = plan_conic_arc(arc_input(job, a.block, a.first, a.end, a.start, a.last_motion, m), m);
+        auto* list = std::get_if<std::vector<ConicPiece>>(&pieces);
+        if (!list || c.arc_piece >= list->size())
+            throw std::logic_error(fmt::format("rebuild_card_segment: card segment {}: its arc is not walked again", s));
+        out.conic = std::move((*list)[c.arc_piece].walk);
+        ideal = out.conic->ideal;
+    } else {
+        ideal = ideal_move_times(job.feeds.at(c.segment.step_segment), c.step_moves, c.segment.first_move,
+                                 c.segment.moves, m.card.clock_hz);
+    }
+    auto chunks = compress(ideal, c.prev_event, tol, lim);
+    if (!chunks.ok())
+        throw std::logic_error(fmt::format("rebuild_card_segment: card segment {}: {}", s, chunks.error));
+    out.chunks = std::move(chunks.chunks);
     return out;
 }
 

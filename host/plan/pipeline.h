@@ -17,12 +17,29 @@
 
 namespace cpstep::plan {
 
+// What plan_job() needs to make a CONIC piece's arc again (rebuild_card_segment).
+struct ArcSource {
+    MotionBlock block;                 // the arc's block (of the fitted job when arcs were fitted)
+    std::size_t first = 0, end = 0;    // its step segments [first, end)
+    PerAxis<std::int64_t> start{};     // where the card was at its start
+    bool last_motion = false;          // no motion after it
+};
+
 struct PlannedCardSegment {
     CardSegment segment;
     std::vector<Chunk> chunks;   // their counts sum to segment.moves
     // A CONIC segment (an arc's piece, plan/conic_arc.h): the plane's walk, every
     // move's ideal time; segment.step_segment is the arc's first chord.
     std::shared_ptr<const ConicWalk> conic;
+    // How its chunks (and walk) are made again, exactly, without the rest of the
+    // job's (rebuild_card_segment): the chunk time of the move before it, cycles
+    // from the job start; the moves of its step segment (all of its parts); a
+    // pause's last move's time; a CONIC piece's arc and its place among the pieces.
+    std::int64_t prev_event = 0;
+    std::uint64_t step_moves = 0;
+    double pause_until = 0;
+    std::shared_ptr<const ArcSource> arc;
+    std::size_t arc_piece = 0;
 };
 
 struct PlanStats {
@@ -48,6 +65,7 @@ struct PlannedJob {
     std::vector<PlannedSegment> feeds;       // one per step segment
     std::vector<PlannedCardSegment> card;    // in execution order
     PlanStats stats;
+    ChunkLimits chunk_limits;                // what the chunks were compressed with
 };
 
 struct PlanOptions {
@@ -56,6 +74,18 @@ struct PlanOptions {
 };
 
 Result<PlannedJob> plan_job(const Job& job, const Machine& machine, const PlanOptions& options = {});
+
+// Card segment `s` of a planned job made again from its step segments, feeds and
+// the segment's own record (PlannedCardSegment::prev_event, ...): chunks equal to
+// job.card[s].chunks and, for a CONIC piece, a walk equal to job.card[s].conic.
+// For a sender that keeps a long job's card segments without their chunks and
+// makes them again as it sends (bounded memory). Throws std::logic_error when
+// it cannot (a plan that plan_job() did not make with this machine).
+struct RebuiltCardSegment {
+    std::vector<Chunk> chunks;
+    std::shared_ptr<const ConicWalk> conic;
+};
+RebuiltCardSegment rebuild_card_segment(const PlannedJob& job, std::size_t s, const Machine& machine);
 
 // The ideal time of every move of a planned job, in card clock cycles from the
 // job start, in execution order: what the chunks realize within the chunk

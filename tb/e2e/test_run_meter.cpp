@@ -192,6 +192,28 @@ TEST_P(RunMeterJobs, TheLiveMeasureIsTheWholeRunsMeasure) {
   EXPECT_GE(ks.t.back(), m.job_time_s - 1e-9);
 }
 
+// Every card segment of a planned job made again from its own record
+// (plan::rebuild_card_segment): the same chunks and, for a CONIC piece, the same
+// walk, without the rest of the job's chunks (what a sender that keeps a long
+// job's segments without their chunks does).
+TEST_P(RunMeterJobs, EveryCardSegmentIsMadeAgainExactly) {
+  const run::CardJob job = example(GetParam());
+  size_t conics = 0;
+  for (size_t s = 0; s < job.planned.card.size(); ++s) {
+    const plan::PlannedCardSegment& c = job.planned.card[s];
+    const plan::RebuiltCardSegment r = plan::rebuild_card_segment(job.planned, s, job.machine);
+    ASSERT_EQ(r.chunks, c.chunks) << "card segment " << s << " (line " << c.segment.loc.line << ")";
+    ASSERT_EQ(bool(r.conic), bool(c.conic)) << "card segment " << s;
+    if (!c.conic) continue;
+    ++conics;
+    ASSERT_EQ(r.conic->ideal, c.conic->ideal) << "card segment " << s;
+    ASSERT_EQ(r.conic->words(), c.conic->words()) << "card segment " << s;
+  }
+  if (std::string(GetParam()) == "tight_arcs.ngc" || std::string(GetParam()) == "bracket.ngc") {
+    EXPECT_GT(conics, 0u);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Examples, RunMeterJobs,
                          ::testing::Values("tab.ngc", "tight_arcs.ngc", "naca0025.ngc", "bracket.ngc", "plasma.ngc"),
                          [](const auto& info) {
