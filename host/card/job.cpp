@@ -4,6 +4,8 @@
 #include <fmt/format.h>
 
 #include <bit>
+#include <optional>
+#include <span>
 #include <numeric>
 #include <stdexcept>
 
@@ -85,125 +87,135 @@ bool torch_of(const plan::PlannedJob& job, const plan::CardSegment& seg) {
 
 }  // namespace
 
+std::optional<plan::Diagnostic> to_wire_segment(const plan::PlannedJob& job, size_t s,
+                                                std::span<const plan::Chunk> chunks_in, const plan::ConicWalk* conic,
+                                                const std::string& file, const CardLimits& card,
+                                                std::vector<WireSegment>& out) {
+  const plan::CardSegment& seg = job.card[s].segment;
+  std::vector<plan::Chunk> chunks(chunks_in.begin(), chunks_in.end());
+  for (const plan::Chunk& c : chunks) {
+    if (!in_card_form(c)) {
+      return error(file, seg.loc, fmt::format("chunk (interval {}, count {}, add {}, "
+                                                    "add2 {}) is outside the card's chunk form "
+                                                    "(count 1..65535; add, add2 and every "
+                                                    "increment add + j*add2 within 16 bits "
+                                                    "and of one sign)",
+                                                    c.interval, c.count, c.add, c.add2));
+    }
+  }
+  if (conic) {
+    // A CONIC: its plane's walk can restart at any node (a new segment with the
+    // walker's words there), so a planar one is cut where the chunk queue or
+    // UMAX says; one whose other axes step (a helix) has patterns over its whole
+    // T (k = 0) and is not cut (the planner makes its pieces fit).
+    const plan::ConicWalk& walk = *conic;
+    bool planar = true;
+    for (int a = 0; a < plan::kAxes; ++a) planar = planar && seg.v[a] == 0;
+    plan::ConicWalk rest = walk;
+    size_t next_chunk = 0;
+    for (uint64_t done = 0; done < seg.moves;) {
+      uint64_t n = std::min<uint64_t>(seg.moves - done, card.umax);
+      n = std::min(n, moves_in_chunks(chunks, next_chunk, card.chunk_queue));
+      if (!planar && n < seg.moves) {
+        return error(file, seg.loc, fmt::format("a helix piece of {} moves needs more than the card's "
+                                                      "{} timing chunks or {} moves",
+                                                      seg.moves, card.chunk_queue, card.umax));
+      }
+      const plan::ConicWalk piece = n < rest.moves.size() ? rest.head(n) : rest;
+      if (n < rest.moves.size()) rest = rest.tail(n);
+      WireSegment w;
+      w.u = uint32_t(n);
+      for (int a = 0; a < plan::kAxes; ++a) {
+        w.dir_positive.push_back(seg.delta[a] >= 0);
+        w.v.push_back(seg.v[a]);
+      }
+      w.torch = torch_of(job, seg);
+      w.chunks = take_moves(chunks, next_chunk, n);
+      w.conic = WireSegment::Conic{piece.cw, unsigned(piece.axis_u), unsigned(piece.axis_v), piece.words(),
+                                   piece.cont};
+      out.push_back(std::move(w));
+      done += n;
+    }
+    return std::nullopt;
+  }
+  // The patterns repeat every L = lcm(u_i) moves; pieces of whole periods.
+  const uint64_t T = seg.moves;
+  uint64_t period = 1;
+  for (int a = 0; a < plan::kAxes; ++a) period = std::lcm(period, uint64_t(seg.u[a]));
+  uint64_t piece = T;
+  if (T > card.umax) {
+    if (period > card.umax) {
+      return error(file, seg.loc, fmt::format("segment of {} moves is longer than the "
+                                                    "card's {} and its patterns repeat only "
+                                                    "every {} moves",
+                                                    T, card.umax, period));
+    }
+    piece = card.umax / period * period;
+  }
+  size_t next_chunk = 0;
+  for (uint64_t done = 0; done < T;) {
+    uint64_t n = std::min(piece, T - done);
+    // The card takes a segment only when all its chunks fit its chunk queue
+    // at once: cut where the next chunk_queue chunks end, at whole periods.
+    const uint64_t fit = moves_in_chunks(chunks, next_chunk, card.chunk_queue);
+    if (fit < n) {
+      n = fit / period * period;
+      if (n == 0) {
+        return error(file, seg.loc, fmt::format("segment of {} moves needs more than the "
+                                                      "card's {} timing chunks within one pattern "
+                                                      "period of {} moves, so it cannot be cut into "
+                                                      "segments the card accepts",
+                                                      T, card.chunk_queue, period));
+      }
+    }
+    // Whole periods: axis a makes v_a steps every u_a moves.
+    std::array<uint64_t, plan::kAxes> d{};
+    uint64_t g = n;  // (a pause steps no axis: k from its moves alone)
+    for (int a = 0; a < plan::kAxes; ++a) {
+      d[a] = uint64_t(seg.v[a]) * (n / seg.u[a]);
+      g = std::gcd(g, d[a]);
+    }
+    const unsigned k = std::min<unsigned>(card.kmax, unsigned(std::countr_zero(g)));
+    WireSegment w;
+    w.k = k;
+    w.u = uint32_t(n >> k);
+    for (int a = 0; a < plan::kAxes; ++a) {
+      w.dir_positive.push_back(seg.delta[a] >= 0);
+      w.v.push_back(uint32_t(d[a] >> k));
+    }
+    w.torch = torch_of(job, seg);
+    w.chunks = take_moves(chunks, next_chunk, n);
+    out.push_back(std::move(w));
+    done += n;
+  }
+  return std::nullopt;
+}
+
 plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& file,
                               const CardLimits& card) {
   plan::Result<WireJob> r;
   WireJob& out = r.value.emplace();
   for (size_t s = 0; s < job.card.size(); ++s) {
-    const plan::CardSegment& seg = job.card[s].segment;
-    std::vector<plan::Chunk> chunks = job.card[s].chunks;
-    for (const plan::Chunk& c : chunks) {
-      if (!in_card_form(c)) {
-        r.errors.push_back(error(file, seg.loc, fmt::format("chunk (interval {}, count {}, add {}, "
-                                                      "add2 {}) is outside the card's chunk form "
-                                                      "(count 1..65535; add, add2 and every "
-                                                      "increment add + j*add2 within 16 bits "
-                                                      "and of one sign)",
-                                                      c.interval, c.count, c.add, c.add2)));
-        return r;
-      }
+    const size_t before = out.segments.size();
+    if (auto e = to_wire_segment(job, s, job.card[s].chunks, job.card[s].conic.get(), file, card, out.segments)) {
+      r.errors.push_back(std::move(*e));
+      r.value.reset();
+      return r;
     }
-    if (job.card[s].conic) {
-      // A CONIC: its plane's walk can restart at any node (a new segment with the
-      // walker's words there), so a planar one is cut where the chunk queue or
-      // UMAX says; one whose other axes step (a helix) has patterns over its whole
-      // T (k = 0) and is not cut (the planner makes its pieces fit).
-      const plan::ConicWalk& walk = *job.card[s].conic;
-      bool planar = true;
-      for (int a = 0; a < plan::kAxes; ++a) planar = planar && seg.v[a] == 0;
-      plan::ConicWalk rest = walk;
-      size_t next_chunk = 0;
-      for (uint64_t done = 0; done < seg.moves;) {
-        uint64_t n = std::min<uint64_t>(seg.moves - done, card.umax);
-        n = std::min(n, moves_in_chunks(chunks, next_chunk, card.chunk_queue));
-        if (!planar && n < seg.moves) {
-          r.errors.push_back(error(file, seg.loc, fmt::format("a helix piece of {} moves needs more than the card's "
-                                                        "{} timing chunks or {} moves",
-                                                        seg.moves, card.chunk_queue, card.umax)));
-          return r;
-        }
-        const plan::ConicWalk piece = n < rest.moves.size() ? rest.head(n) : rest;
-        if (n < rest.moves.size()) rest = rest.tail(n);
-        WireSegment w;
-        w.u = uint32_t(n);
-        for (int a = 0; a < plan::kAxes; ++a) {
-          w.dir_positive.push_back(seg.delta[a] >= 0);
-          w.v.push_back(seg.v[a]);
-        }
-        w.torch = torch_of(job, seg);
-        w.chunks = take_moves(chunks, next_chunk, n);
-        w.conic = WireSegment::Conic{piece.cw, unsigned(piece.axis_u), unsigned(piece.axis_v), piece.words(),
-                                     piece.cont};
-        out.segments.push_back(std::move(w));
-        out.source.push_back(s);
-        done += n;
-      }
-      continue;
-    }
-    // The patterns repeat every L = lcm(u_i) moves; pieces of whole periods.
-    const uint64_t T = seg.moves;
-    uint64_t period = 1;
-    for (int a = 0; a < plan::kAxes; ++a) period = std::lcm(period, uint64_t(seg.u[a]));
-    uint64_t piece = T;
-    if (T > card.umax) {
-      if (period > card.umax) {
-        r.errors.push_back(error(file, seg.loc, fmt::format("segment of {} moves is longer than the "
-                                                      "card's {} and its patterns repeat only "
-                                                      "every {} moves",
-                                                      T, card.umax, period)));
-        return r;
-      }
-      piece = card.umax / period * period;
-    }
-    size_t next_chunk = 0;
-    for (uint64_t done = 0; done < T;) {
-      uint64_t n = std::min(piece, T - done);
-      // The card takes a segment only when all its chunks fit its chunk queue
-      // at once: cut where the next chunk_queue chunks end, at whole periods.
-      const uint64_t fit = moves_in_chunks(chunks, next_chunk, card.chunk_queue);
-      if (fit < n) {
-        n = fit / period * period;
-        if (n == 0) {
-          r.errors.push_back(error(file, seg.loc, fmt::format("segment of {} moves needs more than the "
-                                                        "card's {} timing chunks within one pattern "
-                                                        "period of {} moves, so it cannot be cut into "
-                                                        "segments the card accepts",
-                                                        T, card.chunk_queue, period)));
-          return r;
-        }
-      }
-      // Whole periods: axis a makes v_a steps every u_a moves.
-      std::array<uint64_t, plan::kAxes> d{};
-      uint64_t g = n;  // (a pause steps no axis: k from its moves alone)
-      for (int a = 0; a < plan::kAxes; ++a) {
-        d[a] = uint64_t(seg.v[a]) * (n / seg.u[a]);
-        g = std::gcd(g, d[a]);
-      }
-      const unsigned k = std::min<unsigned>(card.kmax, unsigned(std::countr_zero(g)));
-      WireSegment w;
-      w.k = k;
-      w.u = uint32_t(n >> k);
-      for (int a = 0; a < plan::kAxes; ++a) {
-        w.dir_positive.push_back(seg.delta[a] >= 0);
-        w.v.push_back(uint32_t(d[a] >> k));
-      }
-      w.torch = torch_of(job, seg);
-      w.chunks = take_moves(chunks, next_chunk, n);
-      out.segments.push_back(std::move(w));
-      out.source.push_back(s);
-      done += n;
-    }
+    out.source.insert(out.source.end(), out.segments.size() - before, s);
   }
   if (!out.segments.empty()) out.segments.back().end = true;
-  // START once the first segments are queued, before they could fill the card.
-  size_t chunks_queued = 0;
-  while (out.start_after < out.segments.size() && out.start_after < card.segment_queue &&
-         chunks_queued + out.segments[out.start_after].chunks.size() <= card.chunk_queue) {
-    chunks_queued += out.segments[out.start_after].chunks.size();
-    ++out.start_after;
-  }
-  out.start_after = std::max<size_t>(out.start_after, 1);
+  std::vector<size_t> chunks;
+  for (size_t i = 0; i < out.segments.size() && i <= card.segment_queue; ++i) chunks.push_back(out.segments[i].chunks.size());
+  out.start_after = start_after(chunks, card);
   return r;
+}
+
+size_t start_after(std::span<const size_t> chunks, const CardLimits& card) {
+  // START once the first segments are queued, before they could fill the card.
+  size_t n = 0, queued = 0;
+  while (n < chunks.size() && n < card.segment_queue && queued + chunks[n] <= card.chunk_queue) queued += chunks[n++];
+  return std::max<size_t>(n, 1);
 }
 
 void encode_inputs(const plan::Machine& m, std::vector<uint32_t>& words) {
@@ -227,6 +239,16 @@ void encode_inputs(const plan::Machine& m, std::vector<uint32_t>& words) {
 
 std::vector<uint32_t> encode_job(const plan::Machine& m, const WireJob& job) {
   std::vector<uint32_t> words;
+  encode_preamble(m, job.seek, words);
+  for (size_t s = 0; s < job.segments.size(); ++s) {
+    if (s == job.start_after) encode_control(true, false, false, words);
+    encode_segment(job.segments[s], words);
+  }
+  if (job.start_after >= job.segments.size()) encode_control(true, false, false, words);
+  return words;
+}
+
+void encode_preamble(const plan::Machine& m, uint32_t seek, std::vector<uint32_t>& words) {
   // Drivers on first: the motors hold while the card is configured and filled.
   encode_drivers(true, words);
   for (int a = 0; a < plan::kAxes; ++a) {
@@ -240,20 +262,14 @@ std::vector<uint32_t> encode_job(const plan::Machine& m, const WireJob& job) {
                   uint32_t(ax.step_active_high) | uint32_t(ax.dir_positive_high) << 1, words);
   }
   encode_inputs(m, words);
-  if (job.seek != seek_mode::off) {
+  if (seek != seek_mode::off) {
     if (!m.card.inputs) throw std::invalid_argument("encode_job: a seek needs a card with inputs");
-    encode_config(0, ConfigField::seek, job.seek, words);
+    encode_config(0, ConfigField::seek, seek, words);
   }
   // The feed ramp (a card that has it; docs/CORE.md "Feed hold and override").
   if (m.card.feed) {
     encode_config(0, ConfigField::feed_tick, m.feed.ramp.tick, words);
   }
-  for (size_t s = 0; s < job.segments.size(); ++s) {
-    if (s == job.start_after) encode_control(true, false, false, words);
-    encode_segment(job.segments[s], words);
-  }
-  if (job.start_after >= job.segments.size()) encode_control(true, false, false, words);
-  return words;
 }
 
 }  // namespace cpstep::card

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -55,9 +57,24 @@ struct WireJob {
 plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& file,
                               const CardLimits& card = {});
 
+// One planned card segment (job.card[s] with these chunks and walk: its own, or
+// made again by plan::rebuild_card_segment) as wire segments, appended to `out`
+// (none marked `end`); an error when the card cannot take it.
+std::optional<plan::Diagnostic> to_wire_segment(const plan::PlannedJob& job, size_t s,
+                                                std::span<const plan::Chunk> chunks, const plan::ConicWalk* conic,
+                                                const std::string& file, const CardLimits& card,
+                                                std::vector<WireSegment>& out);
+// How many segments go before START: the first ones that fit the card's segment
+// and chunk queues at once (at least one), from the chunk counts of the first
+// segment_queue + 1 wire segments (or all there are).
+size_t start_after(std::span<const size_t> chunks, const CardLimits& card);
+
 // Configuration of every present axis, the segments (the last one ends the run)
 // and START where the first segments fit the card's queues.
 std::vector<uint32_t> encode_job(const plan::Machine& machine, const WireJob& job);
+// What encode_job() sends before the segments: drivers on, every axis's
+// configuration, the inputs, the seek (seek_mode), the feed ramp.
+void encode_preamble(const plan::Machine& machine, uint32_t seek, std::vector<uint32_t>& words);
 // The CONFIG words of the machine's inputs on a card that has them (the filter, each
 // axis's limit switches, the probe's level); nothing otherwise. encode_job sends them.
 void encode_inputs(const plan::Machine& machine, std::vector<uint32_t>& words);

@@ -59,16 +59,18 @@ std::optional<card::CardCaps> board_caps(const char* command, const std::string&
 }
 
 // Plans the job for the card with these capabilities (by contours when
-// `contours` is active); prints every diagnostic. nullopt when it is refused
-// or, by contours, nothing is left to run.
+// `contours` is active; else streamed when asked: run::CardJob::streamed); prints
+// every diagnostic. nullopt when it is refused or, by contours, nothing is left
+// to run.
 std::optional<run::CardJob> prepare(const std::string& job, const std::string& machine,
                                     const card::CardCaps& caps, const plan::PerAxis<int64_t>& start = {},
-                                    ContourRun* contours = nullptr) {
+                                    ContourRun* contours = nullptr, bool streamed = false) {
   if (const std::string why = card::unusable(caps, plan::kAxes); !why.empty()) {
     fmt::print(stderr, "cpstep: {}: cannot plan for this card\n", why);
     return std::nullopt;
   }
-  auto r = contours && contours->active() ? contours->plan(caps, start) : run::prepare_job(job, machine, caps, start);
+  auto r = contours && contours->active() ? contours->plan(caps, start)
+                                          : run::prepare_job(job, machine, caps, start, streamed);
   print_diagnostics(r);
   if (!r.ok()) return std::nullopt;
   return std::move(*r.value);
@@ -80,13 +82,12 @@ void print_plan_summary(const run::CardJob& j) {
   fmt::print("job        {}\n", j.job_file);
   fmt::print("machine    {}\n", j.machine.file);
   fmt::print("card       {}\n", card::describe(j.caps));
-  size_t conics = 0;
-  for (const card::WireSegment& w : j.wire.segments) conics += w.conic.has_value();
+  const uint64_t conics = j.conic_segments();
   if (conics)
-    fmt::print("segments   {} card segments, {} of them CONIC ({} step segments)\n", j.wire.segments.size(), conics,
+    fmt::print("segments   {} card segments, {} of them CONIC ({} step segments)\n", j.wire_segments(), conics,
                s.step_segments);
   else
-    fmt::print("segments   {} card segments ({} step segments)\n", j.wire.segments.size(), s.step_segments);
+    fmt::print("segments   {} card segments ({} step segments)\n", j.wire_segments(), s.step_segments);
   if (j.machine.planner.fit_arcs_mm > 0)  // planner.fit_arcs_mm: G1 chains as arcs
     fmt::print("fitted     {} arcs from {} G1 lines, {} lines from {}; within {:.4f} mm of the G-code "
                "(planner.fit_arcs_mm = {:g})\n",
@@ -264,7 +265,7 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
   if (r.pins_observed)
     fmt::print("wire       {} command bytes; Klipper's queue_step for the job's steps: {} at 25 us, {} at 1 us; "
                "for the card's pin steps: {} at 25 us\n",
-               4 * j.words.size(), klipper_text(m.klipper_25us), klipper_text(m.klipper_1us),
+               4 * j.word_count(), klipper_text(m.klipper_25us), klipper_text(m.klipper_1us),
                klipper_text(m.klipper_pins_25us));
   if (r.pins_observed && r.torch_verdict.planned > 0) {
     const run::TorchVerdict& t = r.torch_verdict;
@@ -407,7 +408,8 @@ int run_sim_transport(const RunOptions& o) {
   }
   ContourRun contours(o);  // --state, --resume, --stop-after-contours
   if (const auto rc = contours.open()) return *rc;
-  auto job = prepare(o.job, o.machine, run::connect_sim(board, *engine), {}, &contours);
+  // Streamed: the words made again as they are sent (memory bounded by the job's segments).
+  auto job = prepare(o.job, o.machine, run::connect_sim(board, *engine), {}, &contours, true);
   if (!job) return contours.nothing_left() ? 0 : kExitRefused;
   if (job->caps.feed) run::fit_feed_ramp(*job);  // the card's feed ramp, fitted to the job's fastest point
   const run::CardJob& j = *job;
@@ -458,7 +460,7 @@ int run_spidev_transport(const RunOptions& o) {
     return kExitRefused;
   }
   if (!contours.card_matches(at)) return kExitRefused;
-  auto job = prepare(o.job, o.machine, *caps, at, &contours);
+  auto job = prepare(o.job, o.machine, *caps, at, &contours, true);
   if (!job) return contours.nothing_left() ? 0 : kExitRefused;
   if (job->caps.feed) run::fit_feed_ramp(*job);  // the card's feed ramp, fitted to the job's fastest point
   const run::CardJob& j = *job;

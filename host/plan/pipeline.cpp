@@ -80,6 +80,21 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
     pj.feeds = std::move(*feeds.value);
     const ChunkLimits lim = job_chunk_limits(m, options);
     pj.chunk_limits = lim;
+    // A card segment made: to the sink, then kept (without its chunks and walk
+    // when the sink is all that needs them).
+    const auto emit = [&](PlannedCardSegment& c) -> bool {
+        if (options.on_segment) {
+            if (auto e = options.on_segment(pj, pj.card.size() - 1)) {
+                result.errors.push_back(std::move(*e));
+                return false;
+            }
+        }
+        if (!options.keep_chunks) {
+            std::vector<Chunk>().swap(c.chunks);
+            c.conic.reset();
+        }
+        return true;
+    };
     const double tol = m.chunk_tolerance_cycles();
     std::int64_t prev = 0;  // the job starts at cycle 0
     // Dwells since the last move: the card times a pause as the next move's first
@@ -111,7 +126,7 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
         c.prev_event = before;
         c.step_moves = n;
         c.pause_until = until;
-        return true;
+        return emit(c);
     };
     // Equal intervals, each under 2^32 - 1 cycles, that make up `cycles`.
     const auto intervals = [](double cycles) {
@@ -185,6 +200,7 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
                     c.step_moves = piece.segment.moves;
                     c.arc = source;
                     c.arc_piece = p;
+                    if (!emit(c)) return result;
                 }
                 last_conic_event = prev;
                 ++pj.stats.conic_arcs;
@@ -230,6 +246,7 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
             PlannedCardSegment& c = pj.card.emplace_back(PlannedCardSegment{part, std::move(chunks.chunks), nullptr});
             c.prev_event = before;
             c.step_moves = total;
+            if (!emit(c)) return result;
         }
         dwell_first = kNone;
         dwell_s = 0;

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <memory>
+#include <optional>
+#include <functional>
 #include <vector>
 
 #include "plan/arc_fit.h"
@@ -71,6 +73,12 @@ struct PlannedJob {
 struct PlanOptions {
     ChunkLimits chunk_limits;                // enable_add2 defaults from the machine
     bool add2_from_machine = true;
+    // Each card segment as it is made (the plan so far, the segment's index in
+    // its card), with its chunks and walk; a diagnostic refuses the job. Without keep_chunks the
+    // plan keeps the segment without them (rebuild_card_segment makes them
+    // again): a long job's plan then holds no chunk (run/card_job.h, streaming).
+    std::function<std::optional<Diagnostic>(const PlannedJob&, std::size_t)> on_segment;
+    bool keep_chunks = true;
 };
 
 Result<PlannedJob> plan_job(const Job& job, const Machine& machine, const PlanOptions& options = {});

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,25 @@ struct CardJob {
   std::vector<uint64_t> segment_end_cycle;
   std::vector<uint64_t> segment_end_moves;
   std::vector<plan::Diagnostic> warnings;  // the planner's (also in the Result)
+  // Streamed (prepare_job(..., streamed)): the plan's card segments keep no
+  // chunks, `words` is empty, and WordSource makes the command words again,
+  // segment by segment, as they are sent: memory that grows with the job's
+  // segments, not its moves (docs/SIM.md "Memory").
+  // Nor does it keep wire segments: their count, the CONIC ones among them and
+  // where their torch level changes stand in for them.
+  bool streamed = false;
+  uint64_t streamed_words = 0, streamed_chunks = 0, streamed_segments = 0, streamed_conics = 0;
+  struct TorchChange {
+    size_t segment = 0;           // the wire segment that brings the new level
+    bool on = false;
+    uint32_t first_interval = 0;  // its first move's delay (its first chunk's interval)
+    plan::SourceLoc loc;          // its G-code block
+  };
+  std::vector<TorchChange> torch_changes;  // streamed only
+  plan::SourceLoc last_segment_loc;        // streamed: the last wire segment's block
+  [[nodiscard]] uint64_t word_count() const { return streamed ? streamed_words : words.size(); }
+  [[nodiscard]] uint64_t wire_segments() const { return streamed ? streamed_segments : wire.segments.size(); }
+  [[nodiscard]] uint64_t conic_segments() const;
   std::string feed_ramp_note;              // how the feed ramp was fitted (run::fit_feed_ramp)
 
   [[nodiscard]] uint64_t moves() const { return planned.stats.moves; }
@@ -81,6 +101,38 @@ class MoveClock {
   std::vector<int64_t> chunk_;
   size_t at_ = 0;
   uint64_t moves_ = 0;
+  plan::RebuiltCardSegment rebuilt_;  // a streamed job's current card segment
+  size_t rebuilt_for_ = SIZE_MAX;
+};
+
+// The command words of a job as they are sent, behind `prefix` (the watchdog's
+// CONFIG, ...): a whole job's words, or a streamed job's made again card segment
+// by card segment (plan::rebuild_card_segment, card::to_wire_segment) into a
+// window: the same words as encode_job() of the whole job, in bounded memory.
+class WordSource {
+ public:
+  explicit WordSource(const CardJob& job, std::vector<uint32_t> prefix = {});
+  // The words not yet consumed, whole commands: at least `at_least` of them
+  // unless the job's last comes first.
+  std::span<const uint32_t> window(size_t at_least);
+  void consume(size_t n);
+  [[nodiscard]] uint64_t total() const { return total_; }
+  [[nodiscard]] uint64_t consumed() const { return consumed_; }
+  [[nodiscard]] bool exhausted() const { return consumed_ == total_; }
+  [[nodiscard]] size_t prefix_words() const { return prefix_; }
+
+ private:
+  bool make_more();  // the next card segment's words; false at the end
+
+  const CardJob& job_;
+  std::vector<uint32_t> buf_;
+  size_t at_ = 0;             // first unconsumed word in buf_
+  size_t prefix_ = 0;
+  uint64_t total_ = 0, consumed_ = 0;
+  bool preamble_ = false;     // the preamble made
+  bool start_ = false;        // START made
+  size_t card_ = 0, wire_ = 0;
+  std::vector<card::WireSegment> made_;
 };
 
 // Every move's ideal and chunk time at once (MoveClock run to the end): for
@@ -107,7 +159,7 @@ plan::CardFacts card_facts(const card::CardCaps& caps);
 // it. Every error refuses the job; warnings travel with the result.
 plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std::filesystem::path& machine,
                                   const card::CardCaps& caps = card::default_caps(),
-                                  const plan::PerAxis<int64_t>& start = {});
+                                  const plan::PerAxis<int64_t>& start = {}, bool streamed = false);
 
 // The steps prepare_job() takes, for callers that change the G-code's blocks
 // between reading and planning (run/resume.h):
@@ -119,7 +171,7 @@ plan::Result<plan::Job> read_card_gcode(const std::filesystem::path& gcode, cons
 // a job's blocks planned and encoded for the card (`start`: where the card is
 // when the job has no motion). The warnings are the planner's.
 plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& machine, const card::CardCaps& caps,
-                                    const plan::PerAxis<int64_t>& start = {});
+                                    const plan::PerAxis<int64_t>& start = {}, bool streamed = false);
 
 // The command stream as little-endian 32-bit words (the `file` transport and
 // `cpstep plan -o`). Returns false when the file cannot be written.

@@ -16,7 +16,7 @@ card::ClientOptions feed_waits(card::ClientOptions client, bool events, bool tog
   return client;
 }
 
-FeedOutcome send_with_feed(card::CardClient& client, std::span<const uint32_t> words, const FeedPlan& plan,
+FeedOutcome send_with_feed(card::CardClient& client, WordSource& words, const FeedPlan& plan,
                            const card::CardClient::KeepWaiting& keep_waiting,
                            const std::function<std::optional<double>()>& since_start_s) {
   FeedOutcome out;
@@ -61,14 +61,22 @@ FeedOutcome send_with_feed(card::CardClient& client, std::span<const uint32_t> w
     }
     return !(feeding && due());
   };
+  // Words a window at a time (whole commands; the client batches within it).
+  constexpr size_t kWindow = size_t{1} << 16;
   for (;;) {
-    if (out.sent < words.size()) out.sent += client.send(words.subspan(out.sent), keep);
+    while (!words.exhausted()) {
+      const std::span<const uint32_t> w = words.window(kWindow);
+      const size_t n = client.send(w, keep);
+      words.consume(n);
+      out.sent += n;
+      if (n < w.size()) break;
+    }
     if (gave_up) break;
     if (feeding && due()) {
       apply();
       continue;
     }
-    if (out.sent < words.size()) break;
+    if (!words.exhausted()) break;
     if (client.wait_until_stopped(keep)) {
       out.stopped = true;
       break;

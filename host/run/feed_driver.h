@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "card/card_client.h"
+#include "run/card_job.h"
 #include "run/feed.h"
 
 namespace cpstep::run {
@@ -34,12 +35,13 @@ struct FeedOutcome {
 // planned (each lands within 5 ms of its time), 50 ms with a toggle (SIGUSR1).
 card::ClientOptions feed_waits(card::ClientOptions client, bool events, bool toggle);
 
-// Sends `words` with `client` and waits until the card stopped, as CardClient::send and
+// Sends the words of `words` (a window of them at a time: a streamed job's are
+// made as they go) with `client` and waits until the card stopped, as CardClient::send and
 // wait_until_stopped do with `keep_waiting`, sending the plan's feed frames on the way.
 // since_start_s: the card's seconds since START, nullopt before it started (events wait
 // for it). The override goes before the words; an event due after the end is not sent.
 // Throws what CardClient throws.
-FeedOutcome send_with_feed(card::CardClient& client, std::span<const uint32_t> words, const FeedPlan& plan,
+FeedOutcome send_with_feed(card::CardClient& client, WordSource& words, const FeedPlan& plan,
                            const card::CardClient::KeepWaiting& keep_waiting,
                            const std::function<std::optional<double>()>& since_start_s);
 

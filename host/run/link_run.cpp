@@ -87,9 +87,10 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   } else if (st0.fault) {
     card::encode_control(false, false, true, words);  // CLEAR the fault left latched
   }
-  const std::vector<uint32_t> job_words = words_with_watchdog(job, o.watchdog_s);
-  const uint64_t before_job = words.size() + job_words.size() - job.words.size();  // the job's first word
-  words.insert(words.end(), job_words.begin(), job_words.end());
+  const std::vector<uint32_t> dog = watchdog_words(job, o.watchdog_s);
+  words.insert(words.end(), dog.begin(), dog.end());
+  const uint64_t before_job = words.size();  // the job's first word
+  WordSource source(job, std::move(words));
   // The card's segment count goes on from the last job's.
   client.set_buffered_time([&job, &first, before_job](const card::Reply& r, uint64_t handed) {
     if (!card::decode_status(r.status).running) return std::numeric_limits<double>::infinity();
@@ -118,14 +119,14 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
     const FeedPlan plan{o.override_pct, o.feed, o.feed_toggle};
     if (plan.any() && !job.caps.feed)
       throw card::CardError(fmt::format("the card, {}, has no feed hold or override", card::card_name(job.caps)));
-    FeedOutcome fed = send_with_feed(client, words, plan, watching, [&]() -> std::optional<double> {
+    FeedOutcome fed = send_with_feed(client, source, plan, watching, [&]() -> std::optional<double> {
       if (!started_at) return std::nullopt;
       return link.now_s() - *started_at;
     });
     sent = fed.sent;
     run.feed = std::move(fed.applied);
     run.feed_scaled = !run.feed.empty();
-    if (sent == words.size() && fed.stopped) watchdog_off(client, o.watchdog_s, keep_waiting);
+    if (sent == source.total() && fed.stopped) watchdog_off(client, o.watchdog_s, keep_waiting);
     if (gave_up == GaveUp::out_of_time) {
       std::vector<uint32_t> abort;
       card::encode_control(false, true, false, abort);
@@ -145,7 +146,7 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
     run.faults.push_back(host_fault(HostFault::stall,
                                     fmt::format("the card, stopped, took no command word for {:.3f} s "
                                                 "(word {} of {} sent)",
-                                                kStallSeconds, sent, words.size())));
+                                                kStallSeconds, sent, source.total())));
   try {
     take_reply(run, client.poll());
     const card::Reply& last = client.last();

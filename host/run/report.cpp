@@ -34,11 +34,11 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
   r["ok"] = run.ok();
   r["step_segments"] = st.step_segments;
   r["planned_card_segments"] = st.card_segments;
-  r["segments"] = job.wire.segments.size();
+  r["segments"] = job.wire_segments();
   r["chunks"] = job.wire_chunks();
   r["moves"] = job.moves();
   r["moves_per_chunk"] = job.wire_chunks() ? double(job.moves()) / double(job.wire_chunks()) : 0.0;
-  r["command_words"] = job.words.size();
+  r["command_words"] = job.word_count();
   r["planned_time_s"] = st.duration_s;
   if (run.pins_observed) {
     r["job_time_s"] = m.job_time_s;
@@ -145,7 +145,7 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
       if (!cost.error.empty()) o["error"] = cost.error;
       return o;
     };
-    r["wire"] = {{"command_bytes", 4 * job.words.size()},
+    r["wire"] = {{"command_bytes", 4 * job.word_count()},
                  {"klipper_25us", qs(m.klipper_25us)},
                  {"klipper_1us", qs(m.klipper_1us)},
                  {"klipper_pins_25us", qs(m.klipper_pins_25us)}};

@@ -298,8 +298,8 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   });
   sim::SimLink<Dut> sim_link(spi, double(Card::kBuild.clock_hz));
   const std::unique_ptr<card::Link> wrapped = o.wrap_link ? o.wrap_link(sim_link) : nullptr;
-  const std::vector<uint32_t> words = words_with_watchdog(job, o.watchdog_s);
-  const uint64_t before_job = words.size() - job.words.size();  // the watchdog's CONFIG
+  WordSource words(job, watchdog_words(job, o.watchdog_s));
+  const uint64_t before_job = words.prefix_words();  // the watchdog's CONFIG
   card::ClientOptions co = feed_waits(keeping_alive(o.client, o.watchdog_s), !o.feed.empty(), bool(o.feed_toggle));
   co.axes = plan::kAxes;
   co.buffer_words = job.caps.command_buffer_words();
@@ -358,7 +358,7 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
     sent = fed.sent;
     run.feed = std::move(fed.applied);
     run.feed_scaled = !run.feed.empty();
-    if (sent == words.size() && gave_up == GaveUp::no) watchdog_off(client, o.watchdog_s, keep_waiting);
+    if (sent == words.total() && gave_up == GaveUp::no) watchdog_off(client, o.watchdog_s, keep_waiting);
   } catch (const card::CardError& e) {
     run.faults.push_back(host_fault(HostFault::link, e.what()));
   }
@@ -375,7 +375,7 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
     run.faults.push_back(host_fault(HostFault::stall,
                                     fmt::format("the card, stopped, took no command word for {} cycles "
                                                 "(word {} of {} sent)",
-                                                kStallCycles, sent, words.size())));
+                                                kStallCycles, sent, words.total())));
   }
   // The final state: one POLL (the reply needs no command port, so it comes
   // even from a stalled card).
@@ -487,11 +487,10 @@ card::CardCaps connect_sim(std::string_view board, Engine engine) {
   throw std::invalid_argument(fmt::format("no simulated board '{}' (boards: {})", board, card::board_names()));
 }
 
-std::vector<uint32_t> words_with_watchdog(const CardJob& job, double watchdog_s) {
+std::vector<uint32_t> watchdog_words(const CardJob& job, double watchdog_s) {
   std::vector<uint32_t> words;
   // 0 s sends nothing; any other value (a bad one throws) its CONFIG.
   if (watchdog_s != 0) card::encode_watchdog(watchdog_s, uint32_t(job.clock_hz()), words);
-  words.insert(words.end(), job.words.begin(), job.words.end());
   return words;
 }
 

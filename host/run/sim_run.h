@@ -148,12 +148,12 @@ struct SimRunOptions {
 CardRun run_on_sim(const CardJob& job, const SimRunOptions& options);
 
 // The card's watchdog around a job (docs/CORE.md "Watchdog"), for both runners: the
-// job's words behind the CONFIG that sets it (none for 0 s; watchdog_units throws
+// CONFIG that sets it, sent before the job's words (none for 0 s; watchdog_units throws
 // std::invalid_argument for a timeout the field cannot hold), the client options
 // that keep it alive (a frame at least every quarter of it), and, after the run,
 // with the card stopped, the CONFIG that turns it off, so that a host that ends
 // cleanly leaves no watchdog to run out. A card still running keeps it.
-std::vector<uint32_t> words_with_watchdog(const CardJob& job, double watchdog_s);
+std::vector<uint32_t> watchdog_words(const CardJob& job, double watchdog_s);
 card::ClientOptions keeping_alive(card::ClientOptions client, double watchdog_s);
 void watchdog_off(card::CardClient& client, double watchdog_s, const card::CardClient::KeepWaiting& keep);
 

@@ -9,6 +9,21 @@ namespace cpstep::run {
 
 std::vector<TorchSwitch> torch_switches(const CardJob& job) {
   std::vector<TorchSwitch> out;
+  if (job.streamed) {
+    // The changes the planner recorded; each its wire segment's G-code block.
+    const uint64_t n = job.wire_segments();
+    bool level = false;
+    for (const CardJob::TorchChange& t : job.torch_changes) {
+      const uint64_t end_before = t.segment ? job.segment_end_cycle[t.segment - 1] : 0;
+      out.push_back({t.segment, t.on, end_before + 1, end_before + t.first_interval, t.loc});
+      level = t.on;
+    }
+    if (level) {
+      const uint64_t end = n ? job.segment_end_cycle[n - 1] : 0;
+      out.push_back({size_t(n), false, end + 1, end + 1, job.last_segment_loc});
+    }
+    return out;
+  }
   const std::vector<card::WireSegment>& segs = job.wire.segments;
   bool level = false;
   uint64_t end_before = 0;  // the last move event of the segment before, from START (0: START)
@@ -41,7 +56,7 @@ TorchVerdict check_torch(const CardJob& job, const std::vector<TorchEdge>& edges
     if (errors++ < listed) v.errors.push_back(std::move(text));
   };
   const auto where = [&](const TorchSwitch& s) {
-    return s.segment < job.wire.segments.size()
+    return s.segment < job.wire_segments()
                ? fmt::format("wire segment {} ({}:{})", s.segment + 1, job.job_file, s.loc.line)
                : fmt::format("the run's end ({}:{})", job.job_file, s.loc.line);
   };

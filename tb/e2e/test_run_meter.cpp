@@ -10,6 +10,7 @@
 // meter's memory stays bounded over a run far longer than its plan.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <string>
@@ -24,15 +25,17 @@
 #include "run/card_job.h"
 #include "run/measure.h"
 #include "run/sim_run.h"
+#include "run/torch.h"
 
 namespace cpstep::tb {
 namespace {
 
 const std::string kSource = CPSTEP_SOURCE_DIR;
 
-run::CardJob example(const std::string& name) {
+run::CardJob example(const std::string& name, bool streamed = false) {
   const auto caps = card::board_caps("hx8k");
-  auto prepared = run::prepare_job(kSource + "/examples/jobs/" + name, kSource + "/examples/machines/seed002.toml", *caps);
+  auto prepared = run::prepare_job(kSource + "/examples/jobs/" + name, kSource + "/examples/machines/seed002.toml", *caps,
+                                   {}, streamed);
   EXPECT_TRUE(prepared.ok()) << plan::join(prepared.errors);
   return std::move(*prepared.value);
 }
@@ -212,6 +215,64 @@ TEST_P(RunMeterJobs, EveryCardSegmentIsMadeAgainExactly) {
   if (std::string(GetParam()) == "tight_arcs.ngc" || std::string(GetParam()) == "bracket.ngc") {
     EXPECT_GT(conics, 0u);
   }
+}
+
+// A streamed job (run::CardJob::streamed: no chunk kept, the words made again as
+// they are sent) sends the whole job's words, word for word, in windows of any
+// size; its segment ends and counts are the whole job's; run on the card it
+// makes the same pins and measures.
+TEST_P(RunMeterJobs, AStreamedJobIsTheWholeJob) {
+  const run::CardJob whole = example(GetParam());
+  const run::CardJob streamed = example(GetParam(), true);
+  ASSERT_TRUE(streamed.streamed);
+  EXPECT_TRUE(streamed.words.empty());
+  for (const plan::PlannedCardSegment& c : streamed.planned.card) ASSERT_TRUE(c.chunks.empty() && !c.conic);
+  EXPECT_EQ(streamed.word_count(), whole.words.size());
+  EXPECT_EQ(streamed.wire_chunks(), whole.wire_chunks());
+  EXPECT_EQ(streamed.segment_end_word, whole.segment_end_word);
+  EXPECT_EQ(streamed.segment_end_cycle, whole.segment_end_cycle);
+  EXPECT_EQ(streamed.segment_end_moves, whole.segment_end_moves);
+  EXPECT_EQ(streamed.wire.start_after, whole.wire.start_after);
+  EXPECT_TRUE(streamed.wire.segments.empty());
+  EXPECT_EQ(streamed.wire_segments(), whole.wire.segments.size());
+  EXPECT_EQ(streamed.conic_segments(), whole.conic_segments());
+  const std::vector<run::TorchSwitch> ts = run::torch_switches(streamed), tw = run::torch_switches(whole);
+  ASSERT_EQ(ts.size(), tw.size());
+  for (size_t i = 0; i < ts.size(); ++i) {
+    EXPECT_EQ(std::tuple(ts[i].segment, ts[i].on, ts[i].earliest, ts[i].latest, ts[i].loc.line),
+              std::tuple(tw[i].segment, tw[i].on, tw[i].earliest, tw[i].latest, tw[i].loc.line))
+        << "torch switch " << i;
+  }
+  if (std::string(GetParam()) == "plasma.ngc") {
+    EXPECT_GT(ts.size(), 2u);
+  }
+  EXPECT_EQ(streamed.moves(), whole.moves());
+  EXPECT_EQ(run::chunk_cycles(streamed), run::chunk_cycles(whole));
+  EXPECT_EQ(run::ideal_cycles(streamed), run::ideal_cycles(whole));
+  for (const size_t window : {size_t{1}, size_t{97}, size_t{1} << 16}) {
+    run::WordSource src(streamed, {7, 8});
+    std::vector<uint32_t> words;
+    while (!src.exhausted()) {
+      const std::span<const uint32_t> w = src.window(window);
+      ASSERT_FALSE(w.empty());
+      const size_t n = std::min(w.size(), window);
+      words.insert(words.end(), w.begin(), w.begin() + std::ptrdiff_t(n));
+      src.consume(n);
+    }
+    ASSERT_EQ(words.size(), whole.words.size() + 2) << "window " << window;
+    EXPECT_EQ(words[0], 7u);
+    EXPECT_TRUE(std::equal(words.begin() + 2, words.end(), whole.words.begin())) << "window " << window;
+  }
+  // On the card: the same run, measured the same.
+  run::SimRunOptions o;
+  o.board = "hx8k";
+  const run::CardRun a = run::run_on_sim(whole, o), b = run::run_on_sim(streamed, o);
+  ASSERT_TRUE(b.ok()) << b.faults.front().name << ": " << b.faults.front().message;
+  EXPECT_EQ(a.move_cycles, b.move_cycles);
+  for (int x = 0; x < plan::kAxes; ++x) EXPECT_EQ(a.pulses[x].cycles, b.pulses[x].cycles) << "axis " << x;
+  EXPECT_EQ(a.position, b.position);
+  EXPECT_EQ(a.checked_segments, b.checked_segments);
+  expect_same_measure(run::measure_run(whole, a), run::measure_run(streamed, b));
 }
 
 INSTANTIATE_TEST_SUITE_P(Examples, RunMeterJobs,
