@@ -108,8 +108,10 @@ void RunMeter::start(uint64_t start_cycle, const plan::PerAxis<int64_t>& positio
   started_ = true;
   for (int a = 0; a < plan::kAxes; ++a) steps_[a] = position[a] + origin_[a];
   position_point();
-  // The curves, when the job has any, and the first checkpoint's.
-  auto parsed = plan::load_gcode(job_.job_file, plan::gcode_options(job_.machine));
+  // The curves, when the job has any (its step segments say), and the first checkpoint's.
+  bool nurbs = false;
+  for (const plan::StepSegment& s : job_.planned.step_segments) nurbs = nurbs || s.kind == plan::MotionKind::nurbs;
+  auto parsed = nurbs ? plan::load_gcode(job_.job_file, plan::gcode_options(job_.machine)) : plan::Result<plan::Job>{};
   if (parsed.ok()) {
     curves_ = std::make_unique<Curves>();
     curves_->parsed = std::move(*parsed.value);
