@@ -18,23 +18,36 @@ Windows peak_windows(const plan::AxisConfig& axis) {
           std::cbrt(6 / (0.1 * axis.max_jerk * spm))};
 }
 
-std::vector<plan::StepperSteps> klipper_path_steps(const CardJob& job) {
-  if (!(job.machine.planner.fit_arcs_mm > 0)) return plan::path_steps(job.planned, job.clock_hz());
+namespace {
+
+// The job as Klipper takes it: its own plan, or, when the machine file fits arcs to
+// G1 chains (planner.fit_arcs_mm), the feeds of the G-code as written (Klipper takes
+// the lines as they are). Empty when that plan fails.
+plan::PlannedJob klipper_plan(const CardJob& job) {
   plan::Machine m = job.machine;
   m.planner.fit_arcs_mm = 0;
   plan::PerAxis<double> start_mm{};
   for (int a = 0; a < plan::kAxes; ++a)
     if (m.axes[a].present) start_mm[a] = double(job.start[a]) / m.axes[a].steps_per_mm;
-  auto parsed = plan::load_gcode(job.job_file, plan::gcode_options(m, start_mm));
-  if (!parsed.ok()) return {};
-  auto segs = plan::make_step_segments(*parsed, m);
-  if (!segs.ok()) return {};
-  auto feeds = plan::plan_feeds(*segs.value, m, job.job_file);
-  if (!feeds.ok()) return {};
   plan::PlannedJob p;
+  auto parsed = plan::load_gcode(job.job_file, plan::gcode_options(m, start_mm));
+  if (!parsed.ok()) return p;
+  auto segs = plan::make_step_segments(*parsed, m);
+  if (!segs.ok()) return p;
+  auto feeds = plan::plan_feeds(*segs.value, m, job.job_file);
+  if (!feeds.ok()) return p;
   p.step_segments = std::move(*segs.value);
   p.feeds = std::move(*feeds.value);
-  return plan::path_steps(p, job.clock_hz());
+  return p;
+}
+
+bool fits_arcs(const CardJob& job) { return job.machine.planner.fit_arcs_mm > 0; }
+
+}  // namespace
+
+std::vector<plan::StepperSteps> klipper_path_steps(const CardJob& job) {
+  if (!fits_arcs(job)) return plan::path_steps(job.planned, job.clock_hz());
+  return plan::path_steps(klipper_plan(job), job.clock_hz());
 }
 
 std::pair<plan::QueueStepCost, plan::QueueStepCost> klipper_path_costs(const CardJob& job) {
@@ -43,13 +56,9 @@ std::pair<plan::QueueStepCost, plan::QueueStepCost> klipper_path_costs(const Car
     at25.add(stepper, cycle, dir);
     at1.add(stepper, cycle, dir);
   };
-  if (!(job.machine.planner.fit_arcs_mm > 0)) {
-    plan::for_each_path_step(job.planned, job.clock_hz(), add);
-  } else {
-    const std::vector<plan::StepperSteps> steps = klipper_path_steps(job);
-    for (size_t s = 0; s < steps.size(); ++s)
-      for (size_t k = 0; k < steps[s].cycles.size(); ++k) add(int(s), steps[s].cycles[k], steps[s].dirs[k]);
-  }
+  // Step by step, whichever plan: no step kept.
+  if (!fits_arcs(job)) plan::for_each_path_step(job.planned, job.clock_hz(), add);
+  else plan::for_each_path_step(klipper_plan(job), job.clock_hz(), add);
   return {at25.finish(), at1.finish()};
 }
 
@@ -105,7 +114,6 @@ RunMeter::~RunMeter() = default;
 
 void RunMeter::start(uint64_t start_cycle, const plan::PerAxis<int64_t>& position) {
   start_cycle_ = start_cycle;
-  started_ = true;
   for (int a = 0; a < plan::kAxes; ++a) steps_[a] = position[a] + origin_[a];
   position_point();
   // The curves, when the job has any (its step segments say), and the first checkpoint's.

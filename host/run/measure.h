@@ -144,7 +144,7 @@ class RunMeter {
   std::unique_ptr<Curves> curves_;
   std::vector<AxisState> axes_;
   uint64_t start_cycle_ = 0;
-  bool started_ = false, finished_ = false;
+  bool finished_ = false;
   plan::PerAxis<int64_t> steps_{}, origin_{};
   uint64_t last_edge_ = 0;
   // The series: samples at t = (i - pad_) dt_, i = 0, 1, ...
