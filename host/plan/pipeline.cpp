@@ -75,6 +75,20 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
         result.errors = feeds.errors;
         return result;
     }
+    // The card's time is counted in cycles from the job start (64-bit on the
+    // host): a job that would run past 2^62 of them (some 3,000 years at 48 MHz:
+    // a dwell or a feed no machine means) is refused where it passes that.
+    const double limit_s = std::ldexp(1.0, 62) / m.card.clock_hz;
+    for (std::size_t i = 0; i < feeds->size(); ++i) {
+        const PlannedSegment& f = (*feeds.value)[i];
+        if (!(f.t_start + f.duration <= limit_s)) {
+            result.errors.push_back({job.file, (*segs.value)[i].loc,
+                                     fmt::format("the job would last past {:.3g} s here (2^62 cycles of the card's "
+                                                 "{:g} Hz clock): a dwell or feed no job can run",
+                                                 limit_s, m.card.clock_hz)});
+            return result;
+        }
+    }
     PlannedJob pj;
     pj.step_segments = std::move(*segs.value);
     pj.feeds = std::move(*feeds.value);

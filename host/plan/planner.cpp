@@ -3,9 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <limits>
+#include <memory>
 #include <optional>
-#include <set>
+#include <stdexcept>
+#include <string>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -216,56 +220,158 @@ CurvatureBudget curvature_budget(double r, double v, const SegmentLimits& tangen
 
 double stop_distance(double v, double A, double J) { return ramp(v, 0, A, J).distance; }
 
-Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& segs,
-                                               const Machine& m, const std::string& job_file,
-                                               const FeedOptions& options, FeedStats* stats) {
-    FeedStats stats_;
-    Result<std::vector<PlannedSegment>> result;
-    const std::size_t n = segs.size();
-    std::vector<PlannedSegment> out(n);
-    std::set<std::size_t> warned_feed, warned_card;
-    // The smallest acceleration and jerk of any present axis: the centripetal
-    // terms point across the path, along any axis.
-    double a_normal = kInf, j_normal = kInf;
-    for (const auto& ax : m.axes) {
-        if (!ax.present) continue;
-        a_normal = std::min(a_normal, ax.max_accel);
-        j_normal = std::min(j_normal, ax.max_jerk);
+namespace {
+
+// A vector that holds the entries of global indices [base, end) and drops its
+// front in bulk: the streaming planner's window over the job.
+template <class T>
+class Window {
+public:
+    T& operator[](std::size_t i) { return v_[i - base_]; }
+    const T& operator[](std::size_t i) const { return v_[i - base_]; }
+    void push_back(const T& x) { v_.push_back(x); }
+    void reserve(std::size_t n) { v_.reserve(n); }
+    [[nodiscard]] std::size_t end() const { return base_ + v_.size(); }
+    [[nodiscard]] std::size_t held() const { return v_.size() - std::min(v_.size(), dropped_ - base_); }
+    // Entries before `i` are no longer needed (amortized: erased when they are
+    // at least half of what is held).
+    void drop_before(std::size_t i) {
+        i = std::min(i, end());
+        if (i <= dropped_) return;
+        dropped_ = i;
+        const std::size_t n = i - base_;
+        if (n >= 1024 && 2 * n >= v_.size()) {
+            v_.erase(v_.begin(), v_.begin() + static_cast<std::ptrdiff_t>(n));
+            base_ = i;
+        }
     }
 
-    std::vector<PerAxis<double>> dir(n);  // unrounded direction, mm
-    for (std::size_t i = 0; i < n; ++i) {
-        const StepSegment& s = segs[i];
-        PlannedSegment& p = out[i];
-        if (s.kind == MotionKind::dwell) continue;
+private:
+    std::vector<T> v_;
+    std::size_t base_ = 0, dropped_ = 0;
+};
+
+}  // namespace
+
+struct FeedPlanner::Impl {
+    // What planning needs of a step segment, and what it derives for it (a
+    // PlannedSegment's fields but the times and the profile).
+    struct Seg {
+        MotionKind kind = MotionKind::linear;
+        bool spindle_on = false;
+        SourceLoc loc;
+        double dwell_s = 0;
+        PerAxis<std::int64_t> delta{};
+        double radius_start = kInf;  // StepSegment::radius_start_mm
+        double length = 0, radius = kInf, cruise = 0;
+        SegmentLimits limits;
+        PerAxis<double> dir{};  // unrounded direction, mm
+        double junction = 0;    // speed cap at its start
+        char smooth = 0;        // the path goes on smoothly at its start
+    };
+    // Runs of segments joined smoothly whose cruise caps lie within a ratio
+    // 1 + kSpanRatio, and whose inner junction caps are no lower than the
+    // span's speed (plan_feeds' comment).
+    struct Span {
+        std::size_t first = 0, last = 0;  // segments [first, last)
+        double length = 0, vmax = kInf, a = kInf, j = kInf;
+        char joined = 0;  // continues the span before it smoothly (a group may cover both)
+    };
+
+    const Machine& m;
+    std::string file;
+    FeedOptions options;
+    FeedStats stats;
+    std::vector<Diagnostic> warnings, errors;
+    double a_normal = kInf, j_normal = kInf;
+
+    Window<Seg> segs;
+    std::size_t n = 0;                // segments pushed
+    bool finished = false;
+    std::size_t warned_feed = kNoBlock, warned_card = kNoBlock;  // the last block warned (a block's segments are consecutive)
+    static constexpr std::size_t kNoBlock = static_cast<std::size_t>(-1);
+
+    // Junctions: junction[i] is final for i < jdone (curvature steps and
+    // reversals need the segment after i).
+    std::size_t jdone = 0;
+    PerAxis<int> last_sign{};  // sign of each axis's last motion (reversals)
+
+    // Spans: made greedily; the one being made is kept open across pushes.
+    Window<Span> spans;
+    Window<double> entry;  // entry[k]: the backward pass's speed at span k's start (one past the last span too)
+    std::size_t span_next = 0;  // the segment the next span starts at
+    bool span_open = false;
+    Span open;
+    double open_lo = 0, open_hi = 0, open_sum_l = 0, open_sum_t = 0;
+    std::size_t open_k = 0;
+
+    // Backward pass: entry[0..final_upto] are final; the window ends at `horizon`.
+    std::size_t final_upto = 0, horizon = 0;
+    // A window being grown across pushes.
+    bool window_started = false;
+    std::size_t window_h = 0;
+    double window_dist = 0, window_vhi = 0, window_amin = kInf, window_jmin = kInf;
+
+    // Forward pass.
+    std::size_t k_fwd = 0;          // the next span to plan
+    std::size_t ready = 0;          // segments [0, ready) are planned
+    std::size_t handed = 0;         // segments handed out by next()
+    std::deque<PlannedSegment> planned;  // [handed, ready): planned, not yet handed out
+    double v_in = 0, t = 0;
+    std::vector<double> t_ends, best_t_ends;
+    std::size_t max_held = 0;
+
+    Impl(const Machine& machine, std::string job_file, const FeedOptions& o)
+        : m(machine), file(std::move(job_file)), options(o) {
+        // The smallest acceleration and jerk of any present axis: the centripetal
+        // terms point across the path, along any axis.
+        for (const auto& ax : m.axes) {
+            if (!ax.present) continue;
+            a_normal = std::min(a_normal, ax.max_accel);
+            j_normal = std::min(j_normal, ax.max_jerk);
+        }
+        entry.push_back(0);
+    }
+
+    [[nodiscard]] bool spans_complete() const { return finished && span_next >= n && !span_open; }
+
+    // The segment's own limits: feed, projected axis limits, the card's step
+    // rate, the curvature budget.
+    void limit(Seg& g, const StepSegment& s) {
+        g.kind = s.kind;
+        g.spindle_on = s.spindle_on;
+        g.loc = s.loc;
+        g.dwell_s = s.dwell_s;
+        g.delta = s.delta();
+        g.radius_start = s.radius_start_mm;
+        Seg& p = g;
+        if (s.kind == MotionKind::dwell) return;
         p.length = s.planned_length_mm(m);
         const SegmentLimits proj = project_limits(s.delta(), p.length, m);
         double v = proj.v;
         if (s.kind != MotionKind::rapid) {
-            if (s.feed > v * (1 + 1e-9) && warned_feed.insert(s.block).second) {
-                result.warnings.push_back(
-                    {job_file, s.loc,
-                     fmt::format("feed {:.4g} mm/s lowered to the axes' limit {:.4g} mm/s",
-                                 s.feed, v)});
+            if (s.feed > v * (1 + 1e-9) && warned_feed != s.block) {
+                warned_feed = s.block;
+                warnings.push_back({file, s.loc,
+                                    fmt::format("feed {:.4g} mm/s lowered to the axes' limit {:.4g} mm/s", s.feed, v)});
             }
             v = std::min(v, s.feed);
         }
         const double card = card_speed_limit(s.delta(), p.length, m);
         if (v > card) {
-            if (m.planner.on_limit == OnLimit::refuse) {
-                if (warned_card.insert(s.block).second) {
-                    result.errors.push_back(
-                        {job_file, s.loc,
-                         fmt::format("needs {:.4g} mm/s but the card's step timing allows "
-                                     "{:.4g} mm/s here (planner.on_limit = \"refuse\")",
-                                     v, card)});
+            if (warned_card != s.block) {
+                warned_card = s.block;
+                if (m.planner.on_limit == OnLimit::refuse) {
+                    errors.push_back({file, s.loc,
+                                      fmt::format("needs {:.4g} mm/s but the card's step timing allows "
+                                                  "{:.4g} mm/s here (planner.on_limit = \"refuse\")",
+                                                  v, card)});
+                } else {
+                    warnings.push_back({file, s.loc,
+                                        fmt::format("planned at {:.4g} mm/s instead of {:.4g} mm/s: the card's "
+                                                    "step timing allows no more",
+                                                    card, v)});
                 }
-            } else if (warned_card.insert(s.block).second) {
-                result.warnings.push_back(
-                    {job_file, s.loc,
-                     fmt::format("planned at {:.4g} mm/s instead of {:.4g} mm/s: the card's "
-                                 "step timing allows no more",
-                                 card, v)});
             }
             v = std::min(v, card);
         }
@@ -276,34 +382,48 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
         p.cruise = b.v;
         p.limits = {proj.v, b.a, b.j};
         // The unrounded direction (steps would make a one-step segment point along an axis).
-        dir[i] = path_direction(s, m);
+        g.dir = path_direction(s, m);
     }
-    if (!result.errors.empty()) return result;
 
-    // Junctions: the speed cap at the start of segment i, and whether the path
-    // goes on smoothly there (acceleration carried) or turns a corner / stops
-    // (acceleration zero). Zero at the ends, around dwells and where the spindle
-    // switches (the pierce must start at rest).
-    std::vector<double> junction(n + 1, 0.0);
-    std::vector<char> smooth(n + 1, 0);
-    for (std::size_t i = 1; i < n; ++i) {
-        const StepSegment& a = segs[i - 1];
-        const StepSegment& b = segs[i];
-        if (a.kind == MotionKind::dwell || b.kind == MotionKind::dwell ||
-            a.spindle_on != b.spindle_on) {
-            continue;
-        }
+    // Junction i's cap from its two segments: whether the path goes on smoothly
+    // there (acceleration carried) or turns a corner / stops (acceleration zero).
+    // Zero at the ends, around dwells and where the spindle switches (the pierce
+    // must start at rest).
+    void join(std::size_t i) {
+        const Seg& pa = segs[i - 1];
+        Seg& pb = segs[i];
+        const Seg& a = pa;
+        const Seg& b = pb;
+        if (a.kind == MotionKind::dwell || b.kind == MotionKind::dwell || a.spindle_on != b.spindle_on) return;
         double c = 0;
-        for (std::size_t k = 0; k < kAxes; ++k) c += dir[i - 1][k] * dir[i][k];
-        smooth[i] = std::acos(std::clamp(c, -1.0, 1.0)) <= kSmoothTurnRad;
-        const double jv = junction_speed(dir[i - 1], dir[i],
-                                         std::min(out[i - 1].limits.a, out[i].limits.a),
+        for (std::size_t k = 0; k < kAxes; ++k) c += pa.dir[k] * pb.dir[k];
+        pb.smooth = std::acos(std::clamp(c, -1.0, 1.0)) <= kSmoothTurnRad;
+        const double jv = junction_speed(pa.dir, pb.dir, std::min(pa.limits.a, pb.limits.a),
                                          m.planner.junction_deviation_mm);
         // The path's own bend at the junction point (a line running into an arc).
-        const double bend = curvature_speed(b.radius_start_mm, kCurvatureShare * a_normal,
-                                            kCurvatureShare * j_normal);
-        junction[i] = std::min({jv, bend, out[i - 1].cruise, out[i].cruise});
+        const double bend = curvature_speed(b.radius_start, kCurvatureShare * a_normal, kCurvatureShare * j_normal);
+        pb.junction = std::min({jv, bend, pa.cruise, pb.cruise});
     }
+
+    // Junction i made final: curvature steps and reversals (needs segment i + 1
+    // when there is one).
+    void settle(std::size_t i) {
+        Seg& g = segs[i];
+        if (i >= 1 && g.junction > 0) curvature_step(i);
+        // Axes that reverse where the path goes on (a zigzag's corners, or an axis
+        // that last moved some segments back): DIR hold and setup at that speed.
+        if (g.kind != MotionKind::dwell) {
+            const auto& d = g.delta;
+            for (std::size_t a = 0; a < kAxes; ++a) {
+                if (d[a] == 0) continue;
+                const int sign = d[a] > 0 ? 1 : -1;
+                if (last_sign[a] != 0 && sign != last_sign[a] && g.junction > 0)
+                    g.junction = std::min(g.junction, reversal_speed(g.dir[a], m.axes[a], g.limits.a, m));
+                last_sign[a] = sign;
+            }
+        }
+    }
+
     // Curvature steps: where the path's curvature jumps at a junction (a line
     // running into an arc tangentially, two arcs of different radii or turning
     // opposite ways) the centripetal acceleration steps by v^2 |k_b - k_a|. No
@@ -311,32 +431,35 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
     // does, it is counted as a ramp over planner.curvature_step_s, and each axis's
     // share of it kept within that axis's jerk times that time (docs/PLANNING.md,
     // "Curvature steps").
-    // The inside of a turn: the polyline's turn from `from` to `to`, square to `along`.
-    auto inward = [&](std::size_t from, std::size_t to, const PerAxis<double>& along) {
-        PerAxis<double> t{};
-        double tt = 0, ta = 0;
-        for (std::size_t k = 0; k < kAxes; ++k) ta += (dir[to][k] - dir[from][k]) * along[k];
-        for (std::size_t k = 0; k < kAxes; ++k) {
-            t[k] = dir[to][k] - dir[from][k] - ta * along[k];
-            tt += t[k] * t[k];
-        }
-        if (!(tt > 1e-24)) return std::optional<PerAxis<double>>{};
-        for (double& x : t) x /= std::sqrt(tt);
-        return std::optional<PerAxis<double>>{t};
-    };
-    // Junction j joins two moves smoothly (smooth[] is never set next to a dwell).
-    auto usable = [&](std::size_t j) { return j >= 1 && j < n && smooth[j]; };
-    for (std::size_t i = 1; i < n; ++i) {
-        if (!(junction[i] > 0)) continue;
-        const double ka = 1 / out[i - 1].radius, kb = 1 / out[i].radius;  // 0 when straight
-        if (ka == 0 && kb == 0) continue;
+    void curvature_step(std::size_t i) {
+        // The inside of a turn: the polyline's turn from `from` to `to`, square to `along`.
+        auto inward = [&](std::size_t from, std::size_t to, const PerAxis<double>& along) {
+            PerAxis<double> tv{};
+            double tt = 0, ta = 0;
+            const PerAxis<double>& df = segs[from].dir;
+            const PerAxis<double>& dt = segs[to].dir;
+            for (std::size_t k = 0; k < kAxes; ++k) ta += (dt[k] - df[k]) * along[k];
+            for (std::size_t k = 0; k < kAxes; ++k) {
+                tv[k] = dt[k] - df[k] - ta * along[k];
+                tt += tv[k] * tv[k];
+            }
+            if (!(tt > 1e-24)) return std::optional<PerAxis<double>>{};
+            for (double& x : tv) x /= std::sqrt(tt);
+            return std::optional<PerAxis<double>>{tv};
+        };
+        // Junction j joins two moves smoothly (smooth is never set next to a dwell).
+        auto usable = [&](std::size_t j) { return j >= 1 && j < n && segs[j].smooth; };
+        const double ka = 1 / segs[i - 1].radius, kb = 1 / segs[i].radius;  // 0 when straight
+        if (ka == 0 && kb == 0) return;
         // Each side's inward normal: from the polyline's turn inside that side's
         // curve when there is one (the next smooth junction), else this junction's.
         std::optional<PerAxis<double>> na, nb;
-        if (ka > 0) na = usable(i - 1) && 1 / out[i - 2].radius > 0 ? inward(i - 2, i - 1, dir[i - 1])
-                                                                    : inward(i - 1, i, dir[i - 1]);
-        if (kb > 0) nb = usable(i + 1) && 1 / out[i + 1].radius > 0 ? inward(i, i + 1, dir[i])
-                                                                    : inward(i - 1, i, dir[i]);
+        if (ka > 0)
+            na = usable(i - 1) && 1 / segs[i - 2].radius > 0 ? inward(i - 2, i - 1, segs[i - 1].dir)
+                                                                 : inward(i - 1, i, segs[i - 1].dir);
+        if (kb > 0)
+            nb = usable(i + 1) && 1 / segs[i + 1].radius > 0 ? inward(i, i + 1, segs[i].dir)
+                                                                 : inward(i - 1, i, segs[i].dir);
         // The step's size: |k_b - k_a| turning the same way, k_a + k_b opposite
         // ways (an unknown side counted as opposite); its direction the inward
         // normal of the sharper side (either, per axis, when a side is unknown).
@@ -350,7 +473,7 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
             }
         }
         const double dk = side > 0 ? std::abs(kb - ka) : ka + kb;
-        if (!(dk > 0)) continue;
+        if (!(dk > 0)) return;
         PerAxis<double> share;  // of the step, per axis
         share.fill(1);
         if (const auto& sharp = kb >= ka ? nb : na; side > 0 && sharp) {
@@ -363,76 +486,79 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
             if (m.axes[k].present && share[k] * dk > 0)
                 cap = std::min(cap, std::sqrt(m.axes[k].max_jerk * m.planner.curvature_step_s / (share[k] * dk)));
         }
-        junction[i] = std::min(junction[i], cap);
+        segs[i].junction = std::min(segs[i].junction, cap);
     }
-    // Axes that reverse where the path goes on (a zigzag's corners, or an axis
-    // that last moved some segments back): DIR hold and setup at that speed.
-    {
-        PerAxis<int> last{};  // sign of each axis's last motion
-        for (std::size_t i = 0; i < n; ++i) {
-            const StepSegment& s = segs[i];
-            if (s.kind == MotionKind::dwell) continue;
-            const auto d = s.delta();
-            for (std::size_t a = 0; a < kAxes; ++a) {
-                if (d[a] == 0) continue;
-                const int sign = d[a] > 0 ? 1 : -1;
-                if (last[a] != 0 && sign != last[a] && junction[i] > 0) {
-                    junction[i] = std::min(
-                        junction[i], reversal_speed(dir[i][a], m.axes[a], out[i].limits.a, m));
+
+    // Spans, as far as the junctions allow. One 7-phase profile covers a span,
+    // so speed and acceleration carry across the junctions inside it. A
+    // junction's cap limits the speed at that point only: it lowers the span's
+    // speed when the segment joins, but is not the cap of the segment after it
+    // (a line leaving an arc keeps its own cruise).
+    void make_spans() {
+        for (;;) {
+            if (!span_open) {
+                const std::size_t i = span_next;
+                if (i >= n) return;
+                if (segs[i].kind == MotionKind::dwell) {
+                    add_span({i, i + 1, 0, 0, 0, 0, 0});
+                    span_next = i + 1;
+                    continue;
                 }
-                last[a] = sign;
+                open = Span{i, i, 0, kInf, kInf, kInf, 0};
+                open_lo = kInf;
+                open_hi = 0;
+                open_sum_l = 0;
+                open_sum_t = 0;
+                open_k = i;
+                span_open = true;
             }
+            const std::size_t i = open.first;
+            for (;;) {
+                std::size_t& k = open_k;
+                if (k >= n) {
+                    if (!finished) return;
+                    break;
+                }
+                const Seg& g = segs[k];
+                if (!(g.kind != MotionKind::dwell && (k == i || g.smooth))) break;
+                if (k > i && k >= jdone) return;  // its junction is not final yet
+                const double cap = g.cruise;
+                double nlo = std::min(open_lo, cap);
+                if (k > i) nlo = std::min(nlo, g.junction);
+                const double nhi = std::max(open_hi, cap);
+                // The time the span loses by running at its lowest cap, against each cap.
+                const double loss = (open_sum_l + g.length) / nlo - (open_sum_t + g.length / cap);
+                if (k > i && (nhi > nlo * (1 + kSpanRatio) || loss > kSpanLossS)) break;
+                open_lo = nlo;
+                open_hi = nhi;
+                open_sum_l += g.length;
+                open_sum_t += g.length / cap;
+                open.length += g.length;
+                open.a = std::min(open.a, g.limits.a);
+                open.j = std::min(open.j, g.limits.j);
+                ++k;
+            }
+            open.last = open_k;
+            open.vmax = open_lo;
+            span_open = false;
+            span_next = open.last;
+            add_span(open);
         }
     }
 
-    // Spans: runs of segments joined smoothly whose cruise caps lie within a
-    // ratio 1 + kSpanRatio, and whose inner junction caps are no lower than the
-    // span's speed. One 7-phase profile covers a span, so speed and
-    // acceleration carry across the junctions inside it. A junction's cap
-    // limits the speed at that point only: it lowers the span's speed when the
-    // segment joins, but is not the cap of the segment after it (a line leaving
-    // an arc keeps its own cruise).
-    struct Span {
-        std::size_t first = 0, last = 0;  // segments [first, last)
-        double length = 0, vmax = kInf, a = kInf, j = kInf;
-    };
-    std::vector<Span> spans;
-    for (std::size_t i = 0; i < n;) {
-        if (segs[i].kind == MotionKind::dwell) {
-            spans.push_back({i, i + 1, 0, 0, 0, 0});
-            ++i;
-            continue;
-        }
-        Span sp{i, i, 0, kInf, kInf, kInf};
-        double lo = kInf, hi = 0, sum_l = 0, sum_t = 0;
-        std::size_t k = i;
-        while (k < n && segs[k].kind != MotionKind::dwell && (k == i || smooth[k])) {
-            const double cap = out[k].cruise;
-            double nlo = std::min(lo, cap);
-            if (k > i) nlo = std::min(nlo, junction[k]);
-            const double nhi = std::max(hi, cap);
-            // The time the span loses by running at its lowest cap, against each cap.
-            const double loss = (sum_l + out[k].length) / nlo - (sum_t + out[k].length / cap);
-            if (k > i && (nhi > nlo * (1 + kSpanRatio) || loss > kSpanLossS)) break;
-            lo = nlo;
-            hi = nhi;
-            sum_l += out[k].length;
-            sum_t += out[k].length / cap;
-            sp.length += out[k].length;
-            sp.a = std::min(sp.a, out[k].limits.a);
-            sp.j = std::min(sp.j, out[k].limits.j);
-            ++k;
-        }
-        sp.last = k;
-        sp.vmax = lo;
+    void add_span(Span sp) {
+        const std::size_t k = spans.end();
+        sp.joined = k > 0 && sp.length > 0 && spans[k - 1].length > 0 && segs[sp.first].smooth;
         spans.push_back(sp);
-        i = k;
+        entry.push_back(0);
     }
-    const std::size_t ns = spans.size();
-    // joined[k]: span k continues span k - 1 smoothly (a group may cover both).
-    std::vector<char> joined(ns, 0);
-    for (std::size_t k = 1; k < ns; ++k) {
-        joined[k] = spans[k].length > 0 && spans[k - 1].length > 0 && smooth[spans[k].first];
+
+    double cap_at(std::size_t si) const {  // speed cap where span si starts
+        const Span& sp = spans[si];
+        if (sp.length == 0) return 0.0;
+        double c = std::min(segs[sp.first].junction, sp.vmax);
+        if (si > 0) c = std::min(c, spans[si - 1].vmax);
+        return c;
     }
 
     // Backward pass over spans, streaming: entry[k] is the fastest speed at the
@@ -442,35 +568,46 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
     // entry before it are final. The window grows by at least the stopping
     // distance from its highest speed at a time until such a final entry lies
     // beyond what the forward pass needs (docs/PLANNING.md, "Lookahead").
-    std::vector<double> entry(ns + 1, 0.0);
-    auto cap_at = [&](std::size_t si) {  // speed cap where span si starts
-        const Span& sp = spans[si];
-        if (sp.length == 0) return 0.0;
-        double c = std::min(junction[sp.first], sp.vmax);
-        if (si > 0) c = std::min(c, spans[si - 1].vmax);
-        return c;
-    };
-    std::size_t final_upto = 0;  // entry[0..final_upto] are final
-    std::size_t horizon = 0;     // the window ends at the start of span `horizon`
-    const double window_stop = options.window_stop_factor;
-    auto make_final = [&](std::size_t need) {
-        need = std::min(need, ns);
+    // False while it waits for spans not yet made.
+    bool make_final(std::size_t need) {
+        const bool complete = spans_complete();
+        const std::size_t ns = spans.end();
+        if (complete) need = std::min(need, ns);
         while (final_upto < need) {
             // Grow the window by the stopping distance from its highest cap.
-            std::size_t h = std::max(horizon, final_upto);
-            double dist = 0, vhi = 0, amin = kInf, jmin = kInf;
-            do {
-                const Span& sp = spans[h];
-                dist += sp.length;
-                if (sp.length > 0) {
-                    vhi = std::max(vhi, sp.vmax);
-                    amin = std::min(amin, sp.a);
-                    jmin = std::min(jmin, sp.j);
+            if (!window_started) {
+                window_h = std::max(horizon, final_upto);
+                window_dist = 0;
+                window_vhi = 0;
+                window_amin = kInf;
+                window_jmin = kInf;
+            }
+            for (;;) {
+                if (window_started) {
+                    const bool more =
+                        window_h < need + 1 ||
+                        !(window_dist >= options.window_stop_factor * stop_distance(window_vhi, window_amin, window_jmin));
+                    // Whether a window that reaches the last span made ends at
+                    // the job's end is known only when the next span is made.
+                    if (window_h >= ns && !complete) return false;
+                    if (!more || window_h >= ns) break;
+                } else if (window_h >= ns) {
+                    return false;  // no span to start it with yet
                 }
-                ++h;
-            } while (h < ns && (h < need + 1 || !(dist >= window_stop * stop_distance(vhi, amin, jmin))));
+                const Span& sp = spans[window_h];
+                window_dist += sp.length;
+                if (sp.length > 0) {
+                    window_vhi = std::max(window_vhi, sp.vmax);
+                    window_amin = std::min(window_amin, sp.a);
+                    window_jmin = std::min(window_jmin, sp.j);
+                }
+                ++window_h;
+                window_started = true;
+            }
+            window_started = false;
+            const std::size_t h = window_h;
             horizon = h;
-            ++stats_.windows;
+            ++stats.windows;
             {
                 double mm = 0, sec = 0;
                 for (std::size_t q = need - 1 < h ? need - 1 : h; q < h; ++q) {
@@ -478,15 +615,15 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
                     if (spans[q].length > 0) sec += spans[q].length / spans[q].vmax;
                 }
                 const std::size_t from = std::min(need - 1, h);
-                stats_.max_lookahead_spans = std::max(stats_.max_lookahead_spans, h - from);
-                stats_.max_lookahead_mm = std::max(stats_.max_lookahead_mm, mm);
-                stats_.max_lookahead_s = std::max(stats_.max_lookahead_s, sec);
+                stats.max_lookahead_spans = std::max(stats.max_lookahead_spans, h - from);
+                stats.max_lookahead_mm = std::max(stats.max_lookahead_mm, mm);
+                stats.max_lookahead_s = std::max(stats.max_lookahead_s, sec);
             }
             entry[horizon] = 0;  // at rest at the window's end (the job's end when horizon = ns)
             std::size_t q = final_upto;
             for (std::size_t k = horizon; k-- > final_upto;) {
                 const Span& sp = spans[k];
-                ++stats_.backward_steps;
+                ++stats.backward_steps;
                 if (sp.length == 0) {
                     entry[k] = 0;
                 } else {
@@ -496,20 +633,16 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
                 }
                 q = std::max(q, k);  // bound by its own cap: final
             }
-            final_upto = horizon == ns ? ns : q;
+            final_upto = horizon == ns && complete ? ns : q;
         }
-    };
+        return true;
+    }
 
-    // Forward pass. Where spans k..m-1 join smoothly, one profile may cover them
-    // all (a group): from the entry speed to entry[m] with the smallest
-    // acceleration that fills the group, so that the speed follows a rising or
-    // falling cap with its acceleration carried across the span boundaries; it is
-    // taken when it stays under every segment's cap and junction cap and beats
-    // the spans one by one. Otherwise each span gets its own profile (zero
-    // acceleration at its ends).
-    std::vector<double> t_ends, best_t_ends;  // group candidate: time at each segment end
-    auto try_group = [&](std::size_t k, std::size_t me, double v0, Profile& prof,
-                         std::vector<double>& ends) -> bool {
+    // Where spans k..me-1 join smoothly, one profile may cover them all (a
+    // group): from the entry speed to entry[me] with the smallest acceleration
+    // that fills the group, so that the speed follows a rising or falling cap
+    // with its acceleration carried across the span boundaries.
+    bool try_group(std::size_t k, std::size_t me, double v0, Profile& prof, std::vector<double>& ends) {
         double L = 0, A = kInf, J = kInf;
         for (std::size_t q = k; q < me; ++q) {
             L += spans[q].length;
@@ -533,10 +666,11 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
         double s_at = 0, v_at = v0;
         for (std::size_t q = k; q < me; ++q) {
             for (std::size_t i = spans[q].first; i < spans[q].last; ++i) {
-                const double c = out[i].cruise * (1 + 1e-9);
-                if (v_at > c || (i > spans[k].first && v_at > junction[i] * (1 + 1e-9))) return false;
+                const Seg& g = segs[i];
+                const double c = g.cruise * (1 + 1e-9);
+                if (v_at > c || (i > spans[k].first && v_at > g.junction * (1 + 1e-9))) return false;
                 const bool last = q + 1 == me && i + 1 == spans[q].last;
-                s_at = last ? L : s_at + out[i].length;
+                s_at = last ? L : s_at + g.length;
                 const double te = last ? p->duration : p->time_at(s_at);
                 v_at = last ? p->v_exit : p->at(te).v;
                 if (v_at > c) return false;
@@ -545,88 +679,193 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
         }
         prof = *p;
         return true;
-    };
-    auto span_time = [&](std::size_t k, double v0, double& v1) {
+    }
+
+    double span_time(std::size_t k, double v0, double& v1) {
         const Span& sp = spans[k];
         v1 = reachable_speed(v0, sp.length, sp.a, sp.j, entry[k + 1]);
         auto p = make_profile(sp.length, v0, v1, sp.vmax, sp.a, sp.j);
         return p ? p->duration : kInf;
-    };
-    double v_in = 0, t = 0;
-    for (std::size_t k = 0; k < ns;) {
-        make_final(k + kMaxGroupSpans + 1);
-        const Span& sp = spans[k];
-        if (sp.length == 0) {
-            PlannedSegment& p = out[sp.first];
-            p.t_start = t;
-            p.duration = segs[sp.first].dwell_s;
-            t += p.duration;
-            v_in = 0;
-            ++k;
-            continue;
-        }
-        const double v0 = std::min(v_in, entry[k]);
-        // The longest group (2, 4, 8, ... spans) that stays under the caps.
-        std::size_t m_best = k + 1;
-        Profile prof;
-        Profile cand;
-        for (std::size_t g = 2; g <= kMaxGroupSpans; g *= 2) {
-            const std::size_t mg = k + g;
-            if (mg > final_upto || mg > ns) break;
-            bool ok = true;
-            for (std::size_t q = k + 1; q < mg && ok; ++q) ok = joined[q];
-            if (!ok || !try_group(k, mg, v0, cand, t_ends)) break;
-            // Taken only when faster than the spans one by one.
-            double tt = 0, vv = v0;
-            for (std::size_t q = k; q < mg; ++q) {
-                double v1;
-                tt += span_time(q, vv, v1);
-                vv = v1;
-            }
-            if (cand.duration > tt * (1 + 1e-12)) break;
-            m_best = mg;
-            prof = cand;
-            best_t_ends.swap(t_ends);
-        }
-        if (m_best == k + 1) {
-            const double v1 = reachable_speed(v0, sp.length, sp.a, sp.j, entry[k + 1]);
-            auto p = make_profile(sp.length, v0, v1, sp.vmax, sp.a, sp.j);
-            if (!p) {  // cannot happen after both passes; kept as a guard
-                result.errors.push_back({job_file, segs[sp.first].loc, "internal: no feasible profile"});
-                return result;
-            }
-            prof = *p;
-            best_t_ends.clear();
-            double s_at = 0;
-            for (std::size_t i = sp.first; i < sp.last; ++i) {
-                s_at += out[i].length;
-                best_t_ends.push_back(i + 1 == sp.last ? prof.duration : prof.time_at(s_at));
-            }
-        } else {
-            ++stats_.groups;
-        }
-        // Cut the profile at its segments' ends.
-        double s_at = 0, t_at = 0;
-        std::size_t e = 0;
-        for (std::size_t i = spans[k].first; i < spans[m_best - 1].last; ++i, ++e) {
-            PlannedSegment& p = out[i];
-            const double t_end = best_t_ends[e];
-            p.profile = prof.slice(t_at, t_end, s_at, p.length);
-            p.duration = p.profile.duration;
-            if (!(p.duration > 0) && p.length > 0) {  // a path that moves takes time; kept as a guard
-                result.errors.push_back({job_file, segs[i].loc, "internal: a segment planned with no duration"});
-                return result;
-            }
-            p.t_start = t;
-            t += p.duration;
-            s_at += p.length;
-            t_at = t_end;
-        }
-        v_in = prof.v_exit;
-        k = m_best;
     }
-    stats_.spans = ns;
-    if (stats) *stats = stats_;
+
+    // Forward pass. Where spans join smoothly a group may cover them (try_group);
+    // it is taken when it stays under every segment's cap and junction cap and
+    // beats the spans one by one. Otherwise each span gets its own profile (zero
+    // acceleration at its ends).
+    void forward() {
+        while (errors.empty()) {
+            if (k_fwd >= spans.end()) return;
+            if (!make_final(k_fwd + kMaxGroupSpans + 1)) return;
+            const std::size_t k = k_fwd;
+            const Span& sp = spans[k];
+            if (sp.length == 0) {
+                PlannedSegment p;
+                p.t_start = t;
+                p.duration = segs[sp.first].dwell_s;
+                t += p.duration;
+                planned.push_back(p);
+                v_in = 0;
+                ready = sp.last;
+                ++k_fwd;
+                continue;
+            }
+            const double v0 = std::min(v_in, entry[k]);
+            // The longest group (2, 4, 8, ... spans) that stays under the caps.
+            std::size_t m_best = k + 1;
+            Profile prof;
+            Profile cand;
+            for (std::size_t g = 2; g <= kMaxGroupSpans; g *= 2) {
+                const std::size_t mg = k + g;
+                if (mg > final_upto || mg > spans.end()) break;
+                bool ok = true;
+                for (std::size_t q = k + 1; q < mg && ok; ++q) ok = spans[q].joined;
+                if (!ok || !try_group(k, mg, v0, cand, t_ends)) break;
+                // Taken only when faster than the spans one by one.
+                double tt = 0, vv = v0;
+                for (std::size_t q = k; q < mg; ++q) {
+                    double v1;
+                    tt += span_time(q, vv, v1);
+                    vv = v1;
+                }
+                if (cand.duration > tt * (1 + 1e-12)) break;
+                m_best = mg;
+                prof = cand;
+                best_t_ends.swap(t_ends);
+            }
+            if (m_best == k + 1) {
+                const double v1 = reachable_speed(v0, sp.length, sp.a, sp.j, entry[k + 1]);
+                auto p = make_profile(sp.length, v0, v1, sp.vmax, sp.a, sp.j);
+                if (!p) {  // cannot happen after both passes; kept as a guard
+                    errors.push_back({file, segs[sp.first].loc, "internal: no feasible profile"});
+                    return;
+                }
+                prof = *p;
+                best_t_ends.clear();
+                double s_at = 0;
+                for (std::size_t i = sp.first; i < sp.last; ++i) {
+                    s_at += segs[i].length;
+                    best_t_ends.push_back(i + 1 == sp.last ? prof.duration : prof.time_at(s_at));
+                }
+            } else {
+                ++stats.groups;
+            }
+            // Cut the profile at its segments' ends.
+            double s_at = 0, t_at = 0;
+            std::size_t e = 0;
+            const std::size_t end = spans[m_best - 1].last;
+            for (std::size_t i = spans[k].first; i < end; ++i, ++e) {
+                const Seg& g = segs[i];
+                PlannedSegment p;
+                p.length = g.length;
+                p.radius = g.radius;
+                p.cruise = g.cruise;
+                p.limits = g.limits;
+                const double t_end = best_t_ends[e];
+                p.profile = prof.slice(t_at, t_end, s_at, p.length);
+                p.duration = p.profile.duration;
+                if (!(p.duration > 0) && p.length > 0) {  // a path that moves takes time; kept as a guard
+                    errors.push_back({file, segs[i].loc, "internal: a segment planned with no duration"});
+                    return;
+                }
+                p.t_start = t;
+                t += p.duration;
+                s_at += p.length;
+                t_at = t_end;
+                planned.push_back(p);
+            }
+            v_in = prof.v_exit;
+            ready = end;
+            k_fwd = m_best;
+        }
+    }
+
+    void advance() {
+        make_spans();
+        forward();
+        // What is no longer needed: segments planned (but the three newest,
+        // for the junctions), spans before the one planned next (and the one
+        // before it, for its cap).
+        segs.drop_before(std::min(ready, n >= 3 ? n - 3 : 0));
+        if (k_fwd >= 1) {
+            spans.drop_before(k_fwd - 1);
+            entry.drop_before(k_fwd - 1);
+        }
+        max_held = std::max(max_held, segs.held() + planned.size());
+    }
+};
+
+FeedPlanner::FeedPlanner(const Machine& m, std::string job_file, const FeedOptions& options)
+    : impl_(std::make_unique<Impl>(m, std::move(job_file), options)) {}
+FeedPlanner::~FeedPlanner() = default;
+FeedPlanner::FeedPlanner(FeedPlanner&&) noexcept = default;
+FeedPlanner& FeedPlanner::operator=(FeedPlanner&&) noexcept = default;
+
+void FeedPlanner::push(const StepSegment& s) {
+    Impl& p = *impl_;
+    if (p.finished) throw std::logic_error("FeedPlanner::push after finish");
+    const std::size_t i = p.n;
+    p.segs.push_back(Impl::Seg{});
+    ++p.n;
+    p.limit(p.segs[i], s);
+    if (i >= 1) {
+        p.join(i);
+        p.settle(i - 1);  // needs segment i
+        p.jdone = i;
+    }
+    if (p.errors.empty()) p.advance();
+}
+
+void FeedPlanner::finish() {
+    Impl& p = *impl_;
+    if (p.finished) return;
+    p.finished = true;
+    if (p.n >= 1) p.settle(p.n - 1);
+    p.jdone = p.n;
+    if (p.errors.empty()) p.advance();
+    p.stats.spans = p.spans.end();
+}
+
+std::optional<PlannedSegment> FeedPlanner::next() {
+    Impl& p = *impl_;
+    if (!p.errors.empty() || p.planned.empty()) return std::nullopt;
+    std::optional<PlannedSegment> out = p.planned.front();
+    p.planned.pop_front();
+    ++p.handed;
+    return out;
+}
+
+void FeedPlanner::reserve(std::size_t segments) { impl_->segs.reserve(segments); }
+
+std::size_t FeedPlanner::pushed() const { return impl_->n; }
+std::size_t FeedPlanner::handed_out() const { return impl_->handed; }
+bool FeedPlanner::done() const { return impl_->finished && impl_->handed == impl_->n && impl_->errors.empty(); }
+const std::vector<Diagnostic>& FeedPlanner::warnings() const { return impl_->warnings; }
+const std::vector<Diagnostic>& FeedPlanner::errors() const { return impl_->errors; }
+const FeedStats& FeedPlanner::stats() const { return impl_->stats; }
+std::size_t FeedPlanner::held() const { return impl_->segs.held() + impl_->planned.size(); }
+std::size_t FeedPlanner::max_held() const { return impl_->max_held; }
+
+Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& segs, const Machine& m,
+                                               const std::string& job_file, const FeedOptions& options,
+                                               FeedStats* stats) {
+    Result<std::vector<PlannedSegment>> result;
+    FeedPlanner planner(m, job_file, options);
+    planner.reserve(segs.size());
+    std::vector<PlannedSegment> out;
+    out.reserve(segs.size());
+    for (const StepSegment& s : segs) {
+        planner.push(s);
+        while (auto p = planner.next()) out.push_back(std::move(*p));
+    }
+    planner.finish();
+    while (auto p = planner.next()) out.push_back(std::move(*p));
+    result.warnings = planner.warnings();
+    if (!planner.errors().empty()) {
+        result.errors = planner.errors();
+        return result;
+    }
+    if (out.size() != segs.size()) throw std::logic_error("plan_feeds: a segment was not planned");
+    if (stats) *stats = planner.stats();
     result.value = std::move(out);
     return result;
 }

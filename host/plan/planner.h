@@ -6,6 +6,9 @@
 #pragma once
 
 #include <limits>
+#include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "plan/machine.h"
@@ -120,9 +123,48 @@ struct FeedStats {
 // Profiles for every step segment (dwells become pauses of their length).
 // Feeds above an axis's limit are lowered with a warning; moves beyond the
 // card's step rate are refused or slowed according to planner.on_limit.
+// The job's segments pushed through a FeedPlanner.
 Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& segs,
                                                const Machine& m, const std::string& job_file,
                                                const FeedOptions& options = {},
                                                FeedStats* stats = nullptr);
+
+// The same plan made as the step segments arrive, one at a time (a job read as
+// it is planned): next() hands out each segment's PlannedSegment, in order, as
+// soon as nothing after it can change it, bit for bit what plan_feeds() gives.
+// It holds the segments from the oldest not yet handed out to the lookahead's
+// reach (FeedStats::max_lookahead_*), not the job. A segment's warnings come
+// when it is pushed; after an error (a move beyond the card's step rate with
+// planner.on_limit = "refuse", or an internal one) nothing more is handed out,
+// but pushed segments are still checked, so errors() names every refused block.
+// Repeated warnings of one block are given once (a block's segments are
+// consecutive).
+class FeedPlanner {
+public:
+    FeedPlanner(const Machine& m, std::string job_file, const FeedOptions& options = {});
+    ~FeedPlanner();
+    FeedPlanner(FeedPlanner&&) noexcept;
+    FeedPlanner& operator=(FeedPlanner&&) noexcept;
+    FeedPlanner(const FeedPlanner&) = delete;
+    FeedPlanner& operator=(const FeedPlanner&) = delete;
+
+    void push(const StepSegment& s);  // the job's next step segment
+    void finish();                    // the job has no more
+    std::optional<PlannedSegment> next();
+    void reserve(std::size_t segments);  // room for this many held at once (a hint)
+
+    [[nodiscard]] std::size_t pushed() const;
+    [[nodiscard]] std::size_t handed_out() const;
+    [[nodiscard]] bool done() const;  // finished, every segment handed out, no error
+    [[nodiscard]] const std::vector<Diagnostic>& warnings() const;
+    [[nodiscard]] const std::vector<Diagnostic>& errors() const;
+    [[nodiscard]] const FeedStats& stats() const;  // spans: once finished
+    [[nodiscard]] std::size_t held() const;        // segments held now (in the window, or planned and not handed out)
+    [[nodiscard]] std::size_t max_held() const;    // the most held after a push
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace cpstep::plan

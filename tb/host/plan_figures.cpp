@@ -210,6 +210,47 @@ int bounds(const char* mpath, const char* jpath) {
     return 0;
 }
 
+// A fingerprint of the feed plan: FNV-1a over every planned segment's bits,
+// the feed statistics and the warnings (for checking that a change of the
+// planner's code leaves its plans bit for bit as they were).
+int fingerprint(const char* mpath, const char* jpath) {
+    const char* board = std::getenv("PLAN_FIGURES_BOARD");  // the default board unless set
+    auto m = load_bound(mpath, board && *board ? board : nullptr);
+    if (!m.ok()) { fmt::print(stderr, "{}\n", join(m.errors)); return 1; }
+    auto job = load_gcode(jpath, gcode_options(*m));
+    if (!job.ok()) { fmt::print(stderr, "{}\n", join(job.errors)); return 1; }
+    auto segs = make_step_segments(*job, *m);
+    if (!segs.ok()) { fmt::print(stderr, "{}\n", join(segs.errors)); return 1; }
+    std::uint64_t h = 1469598103934665603ULL;
+    const auto mix = [&](const void* p, std::size_t n) {
+        for (std::size_t i = 0; i < n; ++i) {
+            h ^= static_cast<const unsigned char*>(p)[i];
+            h *= 1099511628211ULL;
+        }
+    };
+    const auto num = [&](double x) { mix(&x, sizeof x); };
+    FeedStats st;
+    auto feeds = plan_feeds(*segs.value, *m, jpath, {}, &st);
+    for (const auto& w : feeds.warnings) mix(w.message.data(), w.message.size());
+    for (const auto& e : feeds.errors) mix(e.message.data(), e.message.size());
+    if (feeds.ok()) {
+        for (const PlannedSegment& f : *feeds.value) {
+            for (double x : {f.length, f.radius, f.t_start, f.duration, f.cruise, f.limits.v, f.limits.a, f.limits.j,
+                             f.profile.length, f.profile.v_entry, f.profile.v_exit, f.profile.v_peak,
+                             f.profile.duration})
+                num(x);
+            for (const Phase& ph : f.profile.phases)
+                for (double x : {ph.duration, ph.jerk, ph.t0, ph.s0, ph.v0, ph.a0}) num(x);
+        }
+    }
+    for (std::size_t x : {st.spans, st.groups, st.windows, st.backward_steps, st.max_lookahead_spans}) mix(&x, sizeof x);
+    num(st.max_lookahead_mm);
+    num(st.max_lookahead_s);
+    fmt::print("{} {} {} segments, {} warnings, {} errors: {:016x}\n", mpath, jpath, segs->size(),
+               feeds.warnings.size(), feeds.errors.size(), h);
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -218,7 +259,8 @@ int main(int argc, char** argv) {
     if (cmd == "chunks" && argc == 6) return chunks(argv[2], argv[3], argv[4], unsigned(std::atoi(argv[5])));
     if (cmd == "split") return split();
     if (cmd == "bounds" && argc == 4) return bounds(argv[2], argv[3]);
+    if (cmd == "fingerprint" && argc == 4) return fingerprint(argv[2], argv[3]);
     if (cmd == "speed" && argc >= 4) return speed(argv[2], argv[3], argc > 4 ? std::atoi(argv[4]) : 5);
-    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps]\n");
+    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps] | fingerprint MACHINE JOB\n");
     return 2;
 }

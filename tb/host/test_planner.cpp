@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -301,6 +303,35 @@ TEST(Planner, CollinearRapidIntoFeedFromRestToRestTakesTime) {
     for (std::size_t i = 1; i < ideal.size(); ++i) ASSERT_GT(ideal[i], ideal[i - 1] + 1) << i;
 }
 
+// A job that would outlast the card's cycle count (2^62 cycles of its clock,
+// 9.6e10 s at 48 MHz) is refused at the block where it would: a dwell of 10^99
+// seconds (fuzz finding 15: the pause's count of intervals overflowed), or a
+// move at a feed so slow that it would take as long. The rest of such a job,
+// and a long but possible dwell, are planned.
+TEST(Pipeline, AJobPastTheCardsCycleCountIsRefusedAtItsBlock) {
+    const Machine m = machine();
+    // (G-code numbers have no exponent.)
+    for (const std::string& g : {"G1 X1 F600\nG4 P1" + std::string(99, '0') + "\nG1 X2\n",
+                                 std::string("G1 X1 F600\nG4 P100000000000\nG1 X2\n"),
+                                 std::string("G1 X1 F600\nG1 X2 F0.000000000001\nG1 X3 F600\n")}) {
+        auto job = parse_gcode(g, "job.ngc");
+        ASSERT_TRUE(job.ok()) << g << join(job.errors);
+        auto pj = plan_job(*job, m);
+        ASSERT_FALSE(pj.ok()) << g;
+        ASSERT_EQ(pj.errors.size(), 1u) << g << join(pj.errors);
+        EXPECT_EQ(pj.errors[0].loc.line, 2) << g;
+        EXPECT_NE(pj.errors[0].message.find("the job would last past 9.61e+10 s here"), std::string::npos)
+            << join(pj.errors);
+    }
+    // A dwell of a year is long, not impossible: pause moves of up to 2^32 - 1 cycles.
+    auto job = parse_gcode("G1 X1 F600\nG4 P31536000\nG1 X2\n", "job.ngc");
+    ASSERT_TRUE(job.ok());
+    auto pj = plan_job(*job, m);
+    ASSERT_TRUE(pj.ok()) << join(pj.errors);
+    EXPECT_GT(pj->stats.duration_s, 31536000.0);
+    EXPECT_GE(double(pj->stats.pause_moves), std::floor(31536000.0 * 48e6 / double(kMaxMoveDelayCycles)));
+}
+
 // A pause is the next move's first interval on the card (32 bits of cycles): at
 // 48 MHz, 89.478 s at most. A longer one, and one after the last move, is run as
 // pause moves — moves that step no axis, a card segment of their own — each
@@ -478,4 +509,105 @@ dir_hold_ns = 40000
     EXPECT_EQ(reversals, 4);
     // The corners are not stops: y's reversal costs only what the driver needs.
     EXPECT_GT(pj->feeds[1].profile.v_entry, 1.0);
+}
+
+namespace {
+
+void expect_same_plan(const PlannedSegment& a, const PlannedSegment& b, std::size_t i) {
+    // Bit for bit: the streaming planner is the whole-job plan, not an approximation of it.
+    EXPECT_EQ(a.t_start, b.t_start) << "segment " << i;
+    EXPECT_EQ(a.duration, b.duration) << "segment " << i;
+    EXPECT_EQ(a.cruise, b.cruise) << "segment " << i;
+    EXPECT_EQ(a.profile.v_entry, b.profile.v_entry) << "segment " << i;
+    EXPECT_EQ(a.profile.v_exit, b.profile.v_exit) << "segment " << i;
+    for (std::size_t p = 0; p < a.profile.phases.size(); ++p) {
+        EXPECT_EQ(a.profile.phases[p].duration, b.profile.phases[p].duration) << "segment " << i << " phase " << p;
+        EXPECT_EQ(a.profile.phases[p].jerk, b.profile.phases[p].jerk) << "segment " << i << " phase " << p;
+    }
+}
+
+}  // namespace
+
+TEST(FeedPlanner, PlansAsTheSegmentsArriveHoldingTheLookaheadNotTheJob) {
+    // 20,000 segments: a zigzag whose corners slow the path, runs of short
+    // collinear moves, an arc now and then and a dwell.
+    const Machine m = machine();
+    std::string g = "G1 F3000\n";
+    double x = 10, y = 10;
+    for (int i = 0; i < 2000; ++i) {
+        for (int k = 0; k < 6; ++k) g += fmt::format("G1 X{:.3f} Y{:.3f}\n", x += 0.25, y);
+        g += fmt::format("G1 X{:.3f} Y{:.3f}\n", x, y += (i % 2 ? -2.0 : 2.0));
+        if (i % 50 == 7) g += fmt::format("G2 X{:.3f} Y{:.3f} I1 J0\n", x + 2, y), x += 2;
+        if (i % 400 == 9) g += "G4 P0.1\n";
+        if (x > 280) {
+            g += "G0 X10\n";
+            x = 10;
+        }
+    }
+    auto job = parse_gcode(g, "zigzag.ngc");
+    ASSERT_TRUE(job.ok()) << join(job.errors);
+    auto segs = make_step_segments(*job, m);
+    ASSERT_TRUE(segs.ok()) << join(segs.errors);
+    const std::size_t n = segs->size();
+    ASSERT_GT(n, 15000u);
+
+    FeedOptions whole;
+    whole.window_stop_factor = std::numeric_limits<double>::infinity();
+    auto reference = plan_feeds(*segs.value, m, "zigzag.ngc", whole);
+    ASSERT_TRUE(reference.ok()) << join(reference.errors);
+
+    FeedPlanner planner(m, "zigzag.ngc");
+    std::vector<PlannedSegment> got;
+    std::size_t first_out_at = 0;  // segments pushed when the first came out
+    for (const StepSegment& s : *segs.value) {
+        planner.push(s);
+        while (auto p = planner.next()) {
+            if (got.empty()) first_out_at = planner.pushed();
+            got.push_back(*p);
+        }
+    }
+    EXPECT_LT(planner.handed_out(), n) << "the last segments wait for the job's end";
+    planner.finish();
+    while (auto p = planner.next()) got.push_back(*p);
+    EXPECT_TRUE(planner.done());
+    EXPECT_TRUE(planner.errors().empty());
+    ASSERT_EQ(got.size(), n);
+    for (std::size_t i = 0; i < n; ++i) expect_same_plan(got[i], (*reference)[i], i);
+    EXPECT_EQ(planner.warnings().size(), reference.warnings.size());
+
+    // It held a window, not the job: the lookahead past the segment planned
+    // (a few corners ahead) and what the forward pass's groups may cover (65
+    // spans: 229 segments here before the first came out).
+    const FeedStats& st = planner.stats();
+    EXPECT_GT(st.windows, 100u);
+    EXPECT_LT(first_out_at, 400u);
+    std::printf("first out after %zu of %zu segments, at most %zu held\n", first_out_at, n, planner.max_held());
+    EXPECT_LT(planner.max_held(), 1500u) << "of " << n << " segments";
+}
+
+TEST(FeedPlanner, ARefusedMoveStopsItsOutputAndEveryRefusedBlockIsNamed) {
+    // Two moves beyond the card's step rate (planner.on_limit = "refuse"), with
+    // moves within it around them: nothing is handed out past the first error,
+    // and the second is named too.
+    const Machine m = machine("refuse", 2000, "TB6600");
+    auto job = parse_gcode("G1 X10 F600\nG1 X20\nG0 X200\nG1 X210 F600\nG0 X20\nG1 X10 F600\n", "job.ngc");
+    ASSERT_TRUE(job.ok()) << join(job.errors);
+    auto segs = make_step_segments(*job, m);
+    ASSERT_TRUE(segs.ok()) << join(segs.errors);
+    FeedPlanner planner(m, "job.ngc");
+    std::size_t out = 0;
+    for (const StepSegment& s : *segs.value) {
+        planner.push(s);
+        while (planner.next()) ++out;
+    }
+    planner.finish();
+    while (planner.next()) ++out;
+    EXPECT_FALSE(planner.done());
+    ASSERT_EQ(planner.errors().size(), 2u) << join(planner.errors());
+    EXPECT_EQ(planner.errors()[0].loc.line, 3);
+    EXPECT_EQ(planner.errors()[1].loc.line, 5);
+    EXPECT_LE(out, 2u) << "segments from the refused move on were handed out";
+    auto whole = plan_feeds(*segs.value, m, "job.ngc");
+    EXPECT_FALSE(whole.ok());
+    EXPECT_EQ(join(whole.errors), join(planner.errors()));
 }
