@@ -13,6 +13,8 @@
 
 #include <fmt/format.h>
 
+#include "plan/window.h"
+
 namespace cpstep::plan {
 
 namespace {
@@ -220,38 +222,7 @@ CurvatureBudget curvature_budget(double r, double v, const SegmentLimits& tangen
 
 double stop_distance(double v, double A, double J) { return ramp(v, 0, A, J).distance; }
 
-namespace {
-
-// A vector that holds the entries of global indices [base, end) and drops its
-// front in bulk: the streaming planner's window over the job.
-template <class T>
-class Window {
-public:
-    T& operator[](std::size_t i) { return v_[i - base_]; }
-    const T& operator[](std::size_t i) const { return v_[i - base_]; }
-    void push_back(const T& x) { v_.push_back(x); }
-    void reserve(std::size_t n) { v_.reserve(n); }
-    [[nodiscard]] std::size_t end() const { return base_ + v_.size(); }
-    [[nodiscard]] std::size_t held() const { return v_.size() - std::min(v_.size(), dropped_ - base_); }
-    // Entries before `i` are no longer needed (amortized: erased when they are
-    // at least half of what is held).
-    void drop_before(std::size_t i) {
-        i = std::min(i, end());
-        if (i <= dropped_) return;
-        dropped_ = i;
-        const std::size_t n = i - base_;
-        if (n >= 1024 && 2 * n >= v_.size()) {
-            v_.erase(v_.begin(), v_.begin() + static_cast<std::ptrdiff_t>(n));
-            base_ = i;
-        }
-    }
-
-private:
-    std::vector<T> v_;
-    std::size_t base_ = 0, dropped_ = 0;
-};
-
-}  // namespace
+using detail::Window;
 
 struct FeedPlanner::Impl {
     // What planning needs of a step segment, and what it derives for it (a

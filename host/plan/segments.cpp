@@ -3,12 +3,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <limits>
+#include <memory>
 #include <numbers>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
 
 #include <fmt/format.h>
 
 #include "plan/nurbs.h"
+#include "plan/window.h"
 
 namespace cpstep::plan {
 
@@ -183,6 +190,49 @@ double turn(const PerAxis<double>& a, const PerAxis<double>& b, const PerAxis<do
 
 }  // namespace
 
+namespace {
+
+// The path radius at point i of a polyline of n points (path_radii), from
+// accessors of its points, their smoothness and their arc radii: it reads at
+// most 65 points each side of i. n may be a bound (the polyline still
+// growing) when i + 65 < the points known.
+template <class Pts, class Smooth, class Arc>
+double radius_at(std::size_t i, std::size_t n, const Pts& pts, const Smooth& smooth, const Arc& arc_radius) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    if (i == 0 || i + 1 >= n || !smooth(i)) return inf;
+    if (arc_radius(i) < inf) return arc_radius(i);
+    // The smooth run around i, as far as fitting needs (at most 64 points a side).
+    std::size_t left = 1, right = 1;
+    double best = inf;
+    for (std::size_t m = 1;; m *= 2) {
+        // Widen each side to m points while the run stays smooth and straight-edged.
+        while (left < m && i >= left + 1 && smooth(i - left) && arc_radius(i - left) == inf) ++left;
+        while (right < m && i + right + 1 < n && smooth(i + right) && arc_radius(i + right) == inf) ++right;
+        const auto& A = pts(i - left);
+        const auto& B = pts(i + right);
+        const auto& P = pts(i);
+        const auto ab = sub(B, A), ap = sub(P, A), bp = sub(P, B);
+        const double lab = norm(ab);
+        double h = norm(ap);
+        if (lab > 0) {
+            const double t = dot(ap, ab) / (lab * lab);
+            PerAxis<double> off{};
+            for (std::size_t k = 0; k < kAxes; ++k) off[k] = ap[k] - t * ab[k];
+            h = norm(off);
+        }
+        // Circumradius |PA||PB| / (2h), with the noise added to h: never too large.
+        best = norm(ap) * norm(bp) / (2 * (h + kGeometryNoiseMm));
+        const bool grown = left == m || right == m;
+        if (h >= 10 * kGeometryNoiseMm || m >= 64 || !grown) break;
+    }
+    return best;
+}
+
+// How far radius_at() reads past its point.
+constexpr std::size_t kRadiusReach = 65;
+
+}  // namespace
+
 std::vector<double> path_radii(const std::vector<PerAxis<double>>& pts,
                                const std::vector<double>& arc_radius) {
     const std::size_t n = pts.size();
@@ -192,90 +242,104 @@ std::vector<double> path_radii(const std::vector<PerAxis<double>>& pts,
     // smooth[i]: the polyline goes on through point i with no corner.
     std::vector<char> smooth(n, 0);
     for (std::size_t i = 1; i + 1 < n; ++i) smooth[i] = turn(pts[i - 1], pts[i], pts[i + 1]) <= kSmoothTurnRad;
-    for (std::size_t i = 1; i + 1 < n; ++i) {
-        if (!smooth[i]) continue;
-        if (arc_radius[i] < inf) { r[i] = arc_radius[i]; continue; }
-        // The smooth run around i, as far as fitting needs (at most 64 points a side).
-        std::size_t left = 1, right = 1;
-        double best = inf;
-        for (std::size_t m = 1;; m *= 2) {
-            // Widen each side to m points while the run stays smooth and straight-edged.
-            while (left < m && i >= left + 1 && smooth[i - left] && arc_radius[i - left] == inf) ++left;
-            while (right < m && i + right + 1 < n && smooth[i + right] && arc_radius[i + right] == inf) ++right;
-            const auto& A = pts[i - left];
-            const auto& B = pts[i + right];
-            const auto& P = pts[i];
-            const auto ab = sub(B, A), ap = sub(P, A), bp = sub(P, B);
-            const double lab = norm(ab);
-            double h = norm(ap);
-            if (lab > 0) {
-                const double t = dot(ap, ab) / (lab * lab);
-                PerAxis<double> off{};
-                for (std::size_t k = 0; k < kAxes; ++k) off[k] = ap[k] - t * ab[k];
-                h = norm(off);
-            }
-            // Circumradius |PA||PB| / (2h), with the noise added to h: never too large.
-            best = norm(ap) * norm(bp) / (2 * (h + kGeometryNoiseMm));
-            const bool grown = left == m || right == m;
-            if (h >= 10 * kGeometryNoiseMm || m >= 64 || !grown) break;
-        }
-        r[i] = best;
-    }
+    for (std::size_t i = 1; i + 1 < n; ++i)
+        r[i] = radius_at(
+            i, n, [&](std::size_t k) -> const PerAxis<double>& { return pts[k]; },
+            [&](std::size_t k) { return smooth[k] != 0; }, [&](std::size_t k) { return arc_radius[k]; });
     return r;
 }
 
-Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machine& m) {
-    Result<std::vector<StepSegment>> result;
-    std::vector<StepSegment> out;
-    auto to_steps = [&](const PerAxis<double>& p) {
+struct StepSegmenter::Impl {
+    const Machine& m;
+    std::string file;
+    std::vector<Diagnostic> errors;
+    static constexpr double inf = std::numeric_limits<double>::infinity();
+
+    PerAxis<std::int64_t> pos{};
+    bool have_pos = false;
+    bool finished = false;
+    // The polyline of every point the blocks pass (arc chords, NURBS chords,
+    // line ends; a dwell repeats its point), in a window: its points, the arc
+    // radius each lies on (infinity: none), whether it goes on smoothly there
+    // (known once the point after it is), its path radius (radius_at(), NaN
+    // until made).
+    detail::Window<PerAxis<double>> verts;
+    detail::Window<double> arc_r;
+    detail::Window<char> smooth;
+    detail::Window<double> radius;
+    std::size_t cur_vertex = 0;
+    // Segments made, waiting for the points after them; each with its first point.
+    struct Pending {
+        StepSegment s;
+        std::size_t first = 0;
+    };
+    std::deque<Pending> pending;
+    bool last_was_dwell = false;  // the segment handed out before
+    std::deque<StepSegment> ready;
+    std::size_t handed = 0, max_held = 0;
+
+    Impl(const Machine& machine, std::string job_file) : m(machine), file(std::move(job_file)) {}
+
+    PerAxis<std::int64_t> to_steps(const PerAxis<double>& p) const {
         PerAxis<std::int64_t> s{};
         for (std::size_t a = 0; a < kAxes; ++a) {
             if (m.axes[a].present) s[a] = mm_to_steps(p[a], m.axes[a].steps_per_mm);
         }
         return s;
-    };
+    }
+
     // Whether p is inside the travel; reports the first offending axis once per block.
-    auto check = [&](const MotionBlock& b, const PerAxis<double>& p) {
+    bool check(const MotionBlock& b, const PerAxis<double>& p) {
         for (std::size_t a = 0; a < kAxes; ++a) {
             const auto& ax = m.axes[a];
             const char L = static_cast<char>(std::toupper(kAxisLetters[a]));
             if (!ax.present) {
                 if (std::abs(p[a]) > 1e-9) {
-                    result.errors.push_back(
-                        {job.file, b.loc,
-                         fmt::format("axis {} is not on this machine ({})", L, m.file)});
+                    errors.push_back({file, b.loc, fmt::format("axis {} is not on this machine ({})", L, m.file)});
                     return false;
                 }
                 continue;
             }
             const double eps = 1e-9;
             if (p[a] < ax.travel_min_mm - eps || p[a] > ax.travel_max_mm + eps) {
-                result.errors.push_back(
-                    {job.file, b.loc,
-                     fmt::format("{} {:.3f} mm is outside the travel {:g}..{:g} mm of axis {}", L,
-                                 p[a], ax.travel_min_mm, ax.travel_max_mm, kAxisLetters[a])});
+                errors.push_back({file, b.loc,
+                                  fmt::format("{} {:.3f} mm is outside the travel {:g}..{:g} mm of axis {}", L, p[a],
+                                              ax.travel_min_mm, ax.travel_max_mm, kAxisLetters[a])});
                 return false;
             }
         }
         return true;
-    };
+    }
 
-    PerAxis<std::int64_t> pos{};
-    bool have_pos = false;
-    // Every polyline point in mm (chord ends included, rounded away or not),
-    // the arc radius around it, and the range of points each segment covers.
-    constexpr double inf = std::numeric_limits<double>::infinity();
-    std::vector<PerAxis<double>> verts;
-    std::vector<double> arc_r;
-    std::vector<std::size_t> seg_first;  // per output segment: its start point
-    std::size_t cur_vertex = 0;
-    for (std::size_t bi = 0; bi < job.blocks.size(); ++bi) {
-        const MotionBlock& b = job.blocks[bi];
+    void add_vertex(const PerAxis<double>& p, double arc) {
+        const std::size_t i = verts.end();
+        verts.push_back(p);
+        arc_r.push_back(arc);
+        smooth.push_back(0);
+        radius.push_back(std::numeric_limits<double>::quiet_NaN());
+        // The point before it now has both neighbours.
+        if (i >= 2) smooth[i - 1] = turn(verts[i - 2], verts[i - 1], verts[i]) <= kSmoothTurnRad;
+    }
+
+    double radius_of(std::size_t v) {
+        double& r = radius[v];
+        if (std::isnan(r)) {
+            const std::size_t known = verts.end();
+            // The polyline's length is known once finished; before, a bound
+            // radius_at() never reaches (v + kRadiusReach < known).
+            const std::size_t n = finished ? (known < 3 ? 0 : known) : std::numeric_limits<std::size_t>::max();
+            r = radius_at(
+                v, n, [&](std::size_t k) -> const PerAxis<double>& { return verts[k]; },
+                [&](std::size_t k) { return smooth[k] != 0; }, [&](std::size_t k) { return arc_r[k]; });
+        }
+        return r;
+    }
+
+    void add_block(const MotionBlock& b, std::size_t bi) {
         if (!have_pos) {
             pos = to_steps(b.start);
             have_pos = true;
-            verts.push_back(b.start);
-            arc_r.push_back(inf);
+            add_vertex(b.start, inf);
         }
         StepSegment proto;
         proto.kind = b.kind;
@@ -287,54 +351,50 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
         if (b.kind == MotionKind::dwell) {
             proto.start = proto.end = pos;
             proto.dwell_s = b.dwell_s;
-            proto.from_mm = proto.to_mm = verts.back();
-            out.push_back(proto);
-            seg_first.push_back(verts.size() - 1);
-            // A dwell is a stop: the polyline restarts after it (a repeated point).
-            verts.push_back(verts.back());
-            arc_r.push_back(inf);
-            cur_vertex = verts.size() - 1;
-            continue;
+            proto.from_mm = proto.to_mm = verts[verts.end() - 1];
+            pending.push_back({proto, verts.end() - 1});
+            // A dwell is a stop: its point repeats, so the bend across it is no curve.
+            add_vertex(verts[verts.end() - 1], inf);
+            cur_vertex = verts.end() - 1;
+            return;
         }
         std::vector<PerAxis<double>> pts;
         const bool is_arc = b.kind == MotionKind::arc_cw || b.kind == MotionKind::arc_ccw;
-        double radius = inf;
+        double rad = inf;
         std::vector<double> curve_r;  // nurbs: the true radius at each point (start first)
         if (b.kind == MotionKind::nurbs) {
             pts = nurbs_chord_points(b, m.planner.arc_tolerance_mm, &curve_r);
             if (pts.empty()) {
-                result.errors.push_back(
-                    {job.file, b.loc,
-                     fmt::format("the curve needs more than {} chords within arc_tolerance_mm = {:g}",
-                                 Nurbs::kMaxChords, m.planner.arc_tolerance_mm)});
-                continue;
+                errors.push_back({file, b.loc,
+                                  fmt::format("the curve needs more than {} chords within arc_tolerance_mm = {:g}",
+                                              Nurbs::kMaxChords, m.planner.arc_tolerance_mm)});
+                return;
             }
             arc_r.back() = std::min(arc_r.back(), curve_r.front());  // the curve's start point
         } else if (is_arc) {
             const ArcGeom g = arc_geom(b);
             bool inside = true;
             for (const auto& p : arc_extremes(b, g)) inside = inside && check(b, p);
-            if (!inside) continue;
+            if (!inside) return;
             const double n = arc_chord_count(g, m.planner.arc_tolerance_mm);
             if (n > double(kMaxArcChords)) {
-                result.errors.push_back(
-                    {job.file, b.loc,
+                errors.push_back(
+                    {file, b.loc,
                      fmt::format("an arc of radius {:.6g} mm needs {:.3g} chords within arc_tolerance_mm = {:g}; "
                                  "at most {} are made",
                                  std::max(g.r0, g.r1), n, m.planner.arc_tolerance_mm, kMaxArcChords)});
-                continue;
+                return;
             }
             pts = arc_chord_points(b, g, static_cast<std::size_t>(n));
-            radius = std::min(g.r0, g.r1);  // in the arc's own plane (G17, G18 or G19)
-            arc_r.back() = std::min(arc_r.back(), radius);  // the arc's start point
+            rad = std::min(g.r0, g.r1);              // in the arc's own plane (G17, G18 or G19)
+            arc_r.back() = std::min(arc_r.back(), rad);  // the arc's start point
         } else {
             pts.push_back(b.end);
         }
         for (std::size_t pi = 0; pi < pts.size(); ++pi) {
             const auto& p = pts[pi];
             if (!check(b, p)) break;
-            verts.push_back(p);
-            arc_r.push_back(curve_r.empty() ? radius : curve_r[pi + 1]);
+            add_vertex(p, curve_r.empty() ? rad : curve_r[pi + 1]);
             const auto target = to_steps(p);
             if (target == pos) continue;  // shorter than a step: merged into the next
             StepSegment s = proto;
@@ -342,48 +402,120 @@ Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machin
             s.end = target;
             s.from_mm = verts[cur_vertex];
             s.to_mm = p;
-            seg_first.push_back(cur_vertex);
-            cur_vertex = verts.size() - 1;
+            const std::size_t first = cur_vertex;
+            cur_vertex = verts.end() - 1;
             bool too_long = false;
             for (std::size_t a = 0; a < kAxes; ++a) {
                 if (std::llabs(target[a] - pos[a]) >= (std::int64_t{1} << 31)) too_long = true;
             }
             if (too_long) {
-                result.errors.push_back({job.file, b.loc, "move of 2^31 steps or more on one axis"});
+                errors.push_back({file, b.loc, "move of 2^31 steps or more on one axis"});
                 break;
             }
-            out.push_back(s);
+            pending.push_back({s, first});
             pos = target;
         }
     }
-    if (result.errors.empty()) {
-        const auto r = path_radii(verts, arc_r);
-        for (std::size_t k = 0; k < out.size(); ++k) {
-            if (out[k].kind == MotionKind::dwell) continue;
-            const std::size_t last = k + 1 < out.size() ? seg_first[k + 1] : verts.size() - 1;
-            double rad = inf;
-            for (std::size_t v = seg_first[k] + 1; v < last && v < r.size(); ++v) rad = std::min(rad, r[v]);
-            const std::size_t v0 = seg_first[k], v1 = std::min(last, r.size() - 1);
-            // A dwell is a stop: the path's bend across it (through its repeated
-            // vertex) caps nothing. (A trailing dwell's repeated vertex, the
-            // polyline's last, used to give the move before it a radius of 0: a
-            // cruise of 0 and "internal: no feasible profile".)
-            const bool dwell_before = k > 0 && out[k - 1].kind == MotionKind::dwell;
-            const bool dwell_after = k + 1 < out.size() && out[k + 1].kind == MotionKind::dwell;
-            const double r0 = dwell_before ? inf : r[v0], r1 = dwell_after ? inf : r[v1];
-            // A chord whose both ends are on a curve is part of it. A straight
-            // block (G0/G1) between two arcs is not: the arcs' radii at its ends
-            // are theirs (the junction caps take them), the line is straight.
-            const bool straight_between_arcs =
-                (out[k].kind == MotionKind::linear || out[k].kind == MotionKind::rapid) &&
-                (arc_r[v0] < inf || arc_r[v1] < inf);
-            if (r0 < inf && r1 < inf && !straight_between_arcs) rad = std::min({rad, r0, r1});
-            out[k].radius_mm = rad;
-            out[k].radius_ends_max_mm = std::max(r0, r1);
-            out[k].radius_start_mm = r0;
+
+    // Segments whose radii are known: the segment after them is made, and the
+    // points far enough past their last (or the job has ended).
+    void settle() {
+        while (errors.empty() && !pending.empty()) {
+            Pending& k = pending.front();
+            const bool has_next = pending.size() >= 2;
+            if (!has_next && !finished) return;
+            const std::size_t last = has_next ? pending[1].first : verts.end() - 1;
+            if (!finished && last + kRadiusReach >= verts.end()) return;
+            StepSegment& s = k.s;
+            const bool dwell = s.kind == MotionKind::dwell;
+            if (!dwell) {
+                double rad = inf;
+                for (std::size_t v = k.first + 1; v < last; ++v) rad = std::min(rad, radius_of(v));
+                const std::size_t v0 = k.first, v1 = last;
+                // A dwell is a stop: the path's bend across it (through its repeated
+                // vertex) caps nothing. (A trailing dwell's repeated vertex, the
+                // polyline's last, used to give the move before it a radius of 0: a
+                // cruise of 0 and "internal: no feasible profile".)
+                const bool dwell_after = has_next && pending[1].s.kind == MotionKind::dwell;
+                const double r0 = last_was_dwell ? inf : radius_of(v0), r1 = dwell_after ? inf : radius_of(v1);
+                // A chord whose both ends are on a curve is part of it. A straight
+                // block (G0/G1) between two arcs is not: the arcs' radii at its ends
+                // are theirs (the junction caps take them), the line is straight.
+                const bool straight_between_arcs =
+                    (s.kind == MotionKind::linear || s.kind == MotionKind::rapid) && (arc_r[v0] < inf || arc_r[v1] < inf);
+                if (r0 < inf && r1 < inf && !straight_between_arcs) rad = std::min({rad, r0, r1});
+                s.radius_mm = rad;
+                s.radius_ends_max_mm = std::max(r0, r1);
+                s.radius_start_mm = r0;
+            }
+            last_was_dwell = dwell;
+            ready.push_back(std::move(s));
+            pending.pop_front();
         }
-        result.value = std::move(out);
+        // The points a segment still waiting may read (radius_at reaches
+        // kRadiusReach points back).
+        const std::size_t keep = pending.empty() ? cur_vertex : pending.front().first;
+        const std::size_t from = keep > kRadiusReach ? keep - kRadiusReach : 0;
+        verts.drop_before(from);
+        arc_r.drop_before(from);
+        smooth.drop_before(from);
+        radius.drop_before(from);
+        max_held = std::max(max_held, verts.held());
     }
+};
+
+StepSegmenter::StepSegmenter(const Machine& m, std::string job_file)
+    : impl_(std::make_unique<Impl>(m, std::move(job_file))) {}
+StepSegmenter::~StepSegmenter() = default;
+StepSegmenter::StepSegmenter(StepSegmenter&&) noexcept = default;
+StepSegmenter& StepSegmenter::operator=(StepSegmenter&&) noexcept = default;
+
+void StepSegmenter::push(const MotionBlock& b, std::size_t index) {
+    Impl& p = *impl_;
+    if (p.finished) throw std::logic_error("StepSegmenter::push after finish");
+    p.add_block(b, index);
+    p.settle();
+}
+
+void StepSegmenter::finish() {
+    Impl& p = *impl_;
+    if (p.finished) return;
+    p.finished = true;
+    p.settle();
+}
+
+std::optional<StepSegment> StepSegmenter::next() {
+    Impl& p = *impl_;
+    if (!p.errors.empty() || p.ready.empty()) return std::nullopt;
+    std::optional<StepSegment> s = std::move(p.ready.front());
+    p.ready.pop_front();
+    ++p.handed;
+    return s;
+}
+
+std::size_t StepSegmenter::handed_out() const { return impl_->handed; }
+bool StepSegmenter::done() const {
+    return impl_->finished && impl_->errors.empty() && impl_->pending.empty() && impl_->ready.empty();
+}
+const std::vector<Diagnostic>& StepSegmenter::errors() const { return impl_->errors; }
+std::size_t StepSegmenter::held_points() const { return impl_->verts.held(); }
+std::size_t StepSegmenter::max_held_points() const { return impl_->max_held; }
+
+Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machine& m) {
+    Result<std::vector<StepSegment>> result;
+    StepSegmenter segmenter(m, job.file);
+    std::vector<StepSegment> out;
+    for (std::size_t bi = 0; bi < job.blocks.size(); ++bi) {
+        segmenter.push(job.blocks[bi], bi);
+        while (auto s = segmenter.next()) out.push_back(std::move(*s));
+    }
+    segmenter.finish();
+    while (auto s = segmenter.next()) out.push_back(std::move(*s));
+    if (!segmenter.errors().empty()) {
+        result.errors = segmenter.errors();
+        return result;
+    }
+    result.value = std::move(out);
     return result;
 }
 

@@ -6,6 +6,9 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "plan/gcode.h"
@@ -101,6 +104,40 @@ std::vector<double> path_radii(const std::vector<PerAxis<double>>& pts,
 
 // All blocks of a job as step segments. Moves outside an axis's travel, or
 // along an axis the machine does not have, refuse the job with file:line:col.
+// The job's blocks pushed through a StepSegmenter.
 Result<std::vector<StepSegment>> make_step_segments(const Job& job, const Machine& machine);
+
+// The same step segments made as the blocks arrive, one at a time (a job read
+// as it is planned): next() hands out each segment, in order, once its radii
+// are known (path_radii() reads up to 65 points past a segment's end, and a
+// segment's end radius depends on the segment after it), bit for bit what
+// make_step_segments() gives. It holds the points from 65 before the oldest
+// segment not yet handed out to the newest, not the job (a block's own chords
+// are made whole: at most kMaxArcChords or Nurbs::kMaxChords). After an error
+// nothing more is handed out; later blocks are still checked.
+class StepSegmenter {
+public:
+    StepSegmenter(const Machine& m, std::string job_file);
+    ~StepSegmenter();
+    StepSegmenter(StepSegmenter&&) noexcept;
+    StepSegmenter& operator=(StepSegmenter&&) noexcept;
+    StepSegmenter(const StepSegmenter&) = delete;
+    StepSegmenter& operator=(const StepSegmenter&) = delete;
+
+    // The job's next block; `index` is its place among the job's blocks (StepSegment::block).
+    void push(const MotionBlock& block, std::size_t index);
+    void finish();  // the job has no more
+    std::optional<StepSegment> next();
+
+    [[nodiscard]] std::size_t handed_out() const;
+    [[nodiscard]] bool done() const;  // finished, every segment handed out, no error
+    [[nodiscard]] const std::vector<Diagnostic>& errors() const;
+    [[nodiscard]] std::size_t held_points() const;      // polyline points held now
+    [[nodiscard]] std::size_t max_held_points() const;  // the most held after a push
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace cpstep::plan

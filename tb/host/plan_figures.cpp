@@ -210,8 +210,8 @@ int bounds(const char* mpath, const char* jpath) {
     return 0;
 }
 
-// A fingerprint of the feed plan: FNV-1a over every planned segment's bits,
-// the feed statistics and the warnings (for checking that a change of the
+// A fingerprint of the step segments and the feed plan: FNV-1a over every
+// step segment's and planned segment's bits, the feed statistics and the warnings (for checking that a change of the
 // planner's code leaves its plans bit for bit as they were).
 int fingerprint(const char* mpath, const char* jpath) {
     const char* board = std::getenv("PLAN_FIGURES_BOARD");  // the default board unless set
@@ -229,6 +229,16 @@ int fingerprint(const char* mpath, const char* jpath) {
         }
     };
     const auto num = [&](double x) { mix(&x, sizeof x); };
+    for (const StepSegment& s : *segs.value) {
+        mix(s.start.data(), sizeof s.start);
+        mix(s.end.data(), sizeof s.end);
+        mix(&s.block, sizeof s.block);
+        for (double x : {s.feed, s.dwell_s, s.radius_mm, s.radius_ends_max_mm, s.radius_start_mm}) num(x);
+        for (double x : s.from_mm) num(x);
+        for (double x : s.to_mm) num(x);
+        const int flags = int(s.kind) * 4 + s.spindle_on * 2 + s.torch;
+        mix(&flags, sizeof flags);
+    }
     FeedStats st;
     auto feeds = plan_feeds(*segs.value, *m, jpath, {}, &st);
     for (const auto& w : feeds.warnings) mix(w.message.data(), w.message.size());

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <string>
 
 #include <fmt/format.h>
@@ -238,4 +240,61 @@ TEST(Segments, LineBetweenTwoArcsIsStraight) {
     }
     EXPECT_GT(arcs, 4u);
     EXPECT_EQ(lines, 1u);
+}
+
+// The step segments made block by block hold a window of the polyline, not the
+// job, and their radii are those of path_radii() over the whole polyline: a
+// spiral of 20,000 G1 points (radius 5 to 95 mm, each point 2 to 60 steps
+// apart) with a corner every 1,000 points.
+TEST(StepSegmenter, MakesTheSegmentsAsTheBlocksArriveWithTheWholePolylinesRadii) {
+    const Machine m = machine(80, 2000);
+    std::string g = "G1 F600 X1000 Y0\n";
+    std::vector<PerAxis<double>> pts{{1000, 0, 0, 0}};
+    const int n = 20000;
+    for (int i = 1; i <= n; ++i) {
+        const double a = i * 0.008, r = 5 + 90.0 * i / n;
+        PerAxis<double> p{1000 + r * std::cos(a) - 5, r * std::sin(a) * 0.5, 0, 0};
+        if (i % 1000 == 0) p[1] += 2;  // a corner
+        // The G-code's coordinates are what the planner sees: round as it prints them.
+        p[0] = std::round(p[0] * 1e6) / 1e6;
+        p[1] = std::round(p[1] * 1e6) / 1e6;
+        g += fmt::format("G1 X{:.6f} Y{:.6f}\n", p[0], p[1]);
+        pts.push_back(p);
+    }
+    auto job = parse_gcode(g, "spiral.ngc");
+    ASSERT_TRUE(job.ok()) << join(job.errors);
+    StepSegmenter segmenter(m, "spiral.ngc");
+    std::vector<StepSegment> got;
+    std::size_t first_out_at = 0;
+    for (std::size_t b = 0; b < job->blocks.size(); ++b) {
+        segmenter.push(job->blocks[b], b);
+        while (auto s = segmenter.next()) {
+            if (got.empty()) first_out_at = b + 1;
+            got.push_back(*s);
+        }
+    }
+    segmenter.finish();
+    while (auto s = segmenter.next()) got.push_back(*s);
+    ASSERT_TRUE(segmenter.done()) << join(segmenter.errors());
+    // Every point is a step or more from the one before: a segment per G1 after the first.
+    ASSERT_EQ(got.size(), std::size_t(n) + 1);
+    const std::vector<double> arc(pts.size() + 1, std::numeric_limits<double>::infinity());
+    std::vector<PerAxis<double>> poly{PerAxis<double>{}};  // the first G1 starts at the origin
+    poly.insert(poly.end(), pts.begin(), pts.end());
+    const auto r = path_radii(poly, arc);
+    std::size_t curved = 0;
+    for (std::size_t k = 0; k < got.size(); ++k) {
+        const double r0 = r[k], r1 = r[k + 1];
+        const double expect = r0 < INFINITY && r1 < INFINITY ? std::min(r0, r1) : INFINITY;
+        ASSERT_EQ(got[k].radius_mm, expect) << "segment " << k;
+        ASSERT_EQ(got[k].radius_start_mm, r0) << "segment " << k;
+        ASSERT_EQ(got[k].radius_ends_max_mm, std::max(r0, r1)) << "segment " << k;
+        curved += expect < INFINITY;
+    }
+    EXPECT_GT(curved, std::size_t(n) * 9 / 10);
+    // The window: a segment waits for 65 points past its end, no more.
+    EXPECT_LE(first_out_at, 70u);
+    EXPECT_LE(segmenter.max_held_points(), 200u) << "of " << poly.size() << " points";
+    std::printf("first out after %zu of %zu blocks, at most %zu points held\n", first_out_at, job->blocks.size(),
+                segmenter.max_held_points());
 }
