@@ -2,6 +2,7 @@
 #include "plan/pipeline.h"
 
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <span>
 #include <stdexcept>
@@ -12,6 +13,7 @@
 #include "plan/arc_fit.h"
 #include "plan/chunks.h"
 #include "plan/steptime.h"
+#include "plan/window.h"
 
 namespace cpstep::plan {
 
@@ -30,13 +32,15 @@ std::vector<double> pause_times(std::int64_t prev, double until, std::uint64_t n
     return times;
 }
 
-// What plan_conic_arc() takes for the arc of step segments [first, end).
-ConicArcInput arc_input(const PlannedJob& pj, const MotionBlock& block, std::size_t first, std::size_t end,
-                        const PerAxis<std::int64_t>& start, bool last_motion, const Machine& m) {
+// What plan_conic_arc() takes for the arc of the given chords and feeds
+// (step segments [first, first + chords.size())).
+ConicArcInput arc_input(const MotionBlock& block, std::span<const StepSegment> chords,
+                        std::span<const PlannedSegment> feeds, std::size_t first, const PerAxis<std::int64_t>& start,
+                        bool last_motion, const Machine& m) {
     ConicArcInput in;
     in.block = &block;
-    in.chords = std::span<const StepSegment>(pj.step_segments).subspan(first, end - first);
-    in.feeds = std::span<const PlannedSegment>(pj.feeds).subspan(first, end - first);
+    in.chords = chords;
+    in.feeds = feeds;
     in.first_step_segment = first;
     in.start = start;
     in.last_motion = last_motion;
@@ -48,7 +52,388 @@ ConicArcInput arc_input(const PlannedJob& pj, const MotionBlock& block, std::siz
     return in;
 }
 
+// Equal intervals, each under 2^32 - 1 cycles, that make up `cycles`.
+std::uint64_t intervals(double cycles) {
+    return static_cast<std::uint64_t>(std::floor(cycles / double(kMaxMoveDelayCycles))) + 1;
+}
+
 }  // namespace
+
+struct PlanStream::Impl {
+    const Machine& m;
+    std::string file;
+    ChunkLimits lim;
+    double tol;
+    StepSegmenter segmenter;
+    FeedPlanner feeds;
+    std::vector<Diagnostic> loop_warnings, loop_errors, time_errors;
+    double limit_s = 0;
+    PlanStats stats;
+    bool finished = false;
+    bool ended = false;  // the card loop reached the job's end
+
+    // Step segments made and not yet through the card loop, with their feeds
+    // as the feed planner hands them out (feed_end: feeds known for [.., feed_end)).
+    detail::Window<StepSegment> segs;
+    detail::Window<PlannedSegment> plan;
+    std::size_t feed_end = 0;
+    // The blocks of arcs whose chords are not yet through the loop (what
+    // plan_conic_arc() walks), by their index.
+    std::deque<std::pair<std::size_t, MotionBlock>> arc_blocks;
+
+    // Made, not yet handed out.
+    std::deque<StreamedStep> steps_out;
+    std::deque<PlannedCardSegment> cards_out;
+    std::uint64_t cards_made = 0;
+
+    // The card loop (plan_job()'s comments).
+    std::size_t i = 0;  // the next step segment
+    std::int64_t prev = 0;  // the job starts at cycle 0
+    static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+    std::size_t dwell_first = kNone;
+    SourceLoc dwell_loc;
+    double dwell_s = 0;
+    PerAxis<std::int64_t> pos{};
+    bool have_pos = false;
+    std::int64_t last_conic_event = std::numeric_limits<std::int64_t>::min() / 2;
+    bool conics = false;
+    std::size_t chords_until = 0;
+    double end_s = 0;  // the end of the last motion's feed
+
+    Impl(const Machine& machine, std::string job_file, const PlanOptions& options)
+        : m(machine),
+          file(std::move(job_file)),
+          lim(job_chunk_limits(machine, options)),
+          tol(machine.chunk_tolerance_cycles()),
+          segmenter(machine, file),
+          feeds(machine, file) {
+        conics = m.planner.arcs == ArcMode::conic && m.card.conic_width > 0;
+        limit_s = std::ldexp(1.0, 62) / m.card.clock_hz;
+    }
+
+    [[nodiscard]] bool failed() const {
+        return !segmenter.errors().empty() || !feeds.errors().empty() || !time_errors.empty() || !loop_errors.empty();
+    }
+
+    // Step segments to the feed planner, feeds to the loop.
+    void pump() {
+        while (auto s = segmenter.next()) {
+            feeds.push(*s);
+            segs.push_back(std::move(*s));
+        }
+        if (finished && segmenter.done()) feeds.finish();
+        while (time_errors.empty()) {
+            auto f = feeds.next();
+            if (!f) break;
+            // The card's time is counted in cycles from the job start (64-bit on
+            // the host): a job that would run past 2^62 of them (some 3,000 years
+            // at 48 MHz: a dwell or a feed no machine means) is refused where it
+            // passes that, before the card loop times it.
+            if (!(f->t_start + f->duration <= limit_s)) {
+                time_errors.push_back({file, segs[feed_end].loc,
+                                       fmt::format("the job would last past {:.3g} s here (2^62 cycles of the card's "
+                                                   "{:g} Hz clock): a dwell or feed no job can run",
+                                                   limit_s, m.card.clock_hz)});
+                break;
+            }
+            plan.push_back(std::move(*f));
+            ++feed_end;
+        }
+    }
+
+    // Step segment s done with (after the loop set where it starts): handed out.
+    void done_with(std::size_t s) { steps_out.push_back({s, segs[s], plan[s]}); }
+
+    void card(PlannedCardSegment&& c) {
+        cards_out.push_back(std::move(c));
+        ++cards_made;
+    }
+
+    // Pause moves from `prev` to cycle `until`, in `n` equal steps of at most
+    // 2^32 - 1 cycles (the last at `until`), as one card segment of their own.
+    bool add_pause(double until, std::uint64_t n) {
+        auto chunks = compress(pause_times(prev, until, n), prev, tol, lim);
+        if (!chunks.ok()) {
+            loop_errors.push_back({file, dwell_loc, fmt::format("pause timing: {}", chunks.error)});
+            return false;
+        }
+        const std::int64_t before = prev;
+        CardSegment pause;
+        pause.moves = static_cast<std::uint32_t>(n);
+        pause.u.fill(1);
+        pause.dir_positive.fill(true);
+        pause.loc = dwell_loc;
+        pause.step_segment = dwell_first;
+        pause.pause = true;
+        prev = chunks.last_event;
+        stats.pause_moves += n;
+        stats.chunks += chunks.chunks.size();
+        PlannedCardSegment c{pause, std::move(chunks.chunks), nullptr};
+        c.prev_event = before;
+        c.step_moves = n;
+        c.pause_until = until;
+        card(std::move(c));
+        return true;
+    }
+
+    // A pause before the move at `first_ideal` when it is further than one
+    // interval can time.
+    bool pause_before(double first_ideal) {
+        if (dwell_first != kNone && first_ideal - double(prev) > double(kMaxMoveDelayCycles)) {
+            // Longer than one interval: pause moves split the gap, the move
+            // after them times the last part (each at most 2^32 - 1 cycles).
+            const double gap = first_ideal - double(prev);
+            const std::uint64_t parts = intervals(gap);
+            return add_pause(double(prev) + gap * double(parts - 1) / double(parts), parts - 1);
+        }
+        return true;
+    }
+
+    // The card loop, as far as the step segments and feeds made allow.
+    void run() {
+        while (!failed() && !ended) {
+            const bool all_made = finished && segmenter.done() && feeds.done();
+            if (i >= feed_end) {
+                if (all_made) end();
+                return;
+            }
+            StepSegment& s = segs[i];
+            if (!have_pos) {
+                pos = s.start;  // where the first step segment starts
+                have_pos = true;
+            }
+            if (s.kind == MotionKind::dwell) {  // a pause shows as a longer first interval
+                if (dwell_first == kNone) {
+                    dwell_first = i;
+                    dwell_loc = s.loc;
+                }
+                dwell_s += s.dwell_s;
+                s.start = s.end = pos;
+                done_with(i++);
+                continue;
+            }
+            const bool arc = s.kind == MotionKind::arc_cw || s.kind == MotionKind::arc_ccw;
+            if (arc && m.planner.arcs == ArcMode::conic && i >= chords_until) {
+                // The arc's chords: the step segments of its block (all made
+                // once a segment of another block is, or the job has ended).
+                std::size_t e = i + 1;
+                while (e < segs.end() && segs[e].block == s.block) ++e;
+                if (e == segs.end() && !(finished && segmenter.done())) return;
+                if (e > feed_end) return;
+                // No motion after it: known at the next step segment that moves.
+                bool last_motion = true, known = false;
+                for (std::size_t n = e; n < segs.end(); ++n) {
+                    if (segs[n].kind != MotionKind::dwell) {
+                        last_motion = false;
+                        known = true;
+                        break;
+                    }
+                }
+                if (!known && !(finished && segmenter.done())) return;
+                if (!arc_segment(e, last_motion)) return;
+                continue;
+            }
+            if (!line_segment()) return;
+        }
+    }
+
+    // Step segments [i, e): one arc, walked by the card as a conic or sent as chords.
+    bool arc_segment(std::size_t e, bool last_motion) {
+        StepSegment& s = segs[i];
+        while (!arc_blocks.empty() && arc_blocks.front().first < s.block) arc_blocks.pop_front();
+        if (arc_blocks.empty() || arc_blocks.front().first != s.block)
+            throw std::logic_error("plan stream: an arc's block was not kept");
+        const MotionBlock& block = arc_blocks.front().second;
+        std::vector<StepSegment> chords;
+        std::vector<PlannedSegment> chord_feeds;
+        for (std::size_t c = i; c < e; ++c) {
+            chords.push_back(segs[c]);
+            chord_feeds.push_back(plan[c]);
+        }
+        const ConicArcInput in = arc_input(block, chords, chord_feeds, i, pos, last_motion, m);
+        std::variant<std::vector<ConicPiece>, std::string> pieces = std::string("the card has no conic walker");
+        ConicArcStats arc_stats;
+        if (conics) pieces = plan_conic_arc(in, m, &arc_stats);
+        if (auto* list = std::get_if<std::vector<ConicPiece>>(&pieces)) {
+            const double first = list->front().walk->ideal.front();
+            if (first - tol < double(last_conic_event) + double(conic_gap_cycles(m.card.conic_width)))
+                pieces = std::string("its first move comes too soon after the conic before it");
+        }
+        if (auto* list = std::get_if<std::vector<ConicPiece>>(&pieces)) {
+            if (!pause_before(list->front().walk->ideal.front())) return false;
+            auto source = std::make_shared<ArcSource>(ArcSource{block, i, e, in.start, in.last_motion});
+            for (std::size_t p = 0; p < list->size(); ++p) {
+                ConicPiece& piece = (*list)[p];
+                const std::int64_t before = prev;
+                auto chunks = compress(piece.walk->ideal, prev, tol, lim);
+                if (!chunks.ok()) {
+                    loop_errors.push_back({file, s.loc, fmt::format("timing: {}", chunks.error)});
+                    return false;
+                }
+                prev = chunks.last_event;
+                stats.moves += piece.segment.moves;
+                stats.chunks += chunks.chunks.size();
+                ++stats.conic_segments;
+                for (int a = 0; a < kAxes; ++a) pos[a] += piece.segment.delta[a];
+                PlannedCardSegment c{piece.segment, std::move(chunks.chunks), std::move(piece.walk)};
+                c.prev_event = before;
+                c.step_moves = piece.segment.moves;
+                c.arc = source;
+                c.arc_piece = p;
+                card(std::move(c));
+            }
+            last_conic_event = prev;
+            ++stats.conic_arcs;
+            stats.conic.max_node_deviation = std::max(stats.conic.max_node_deviation, arc_stats.max_node_deviation);
+            stats.conic.max_other_deviation =
+                std::max(stats.conic.max_other_deviation, arc_stats.max_other_deviation);
+            // The chords' step segments stay as the feed plan's record: they
+            // make no card segment of their own.
+            for (std::size_t c = i; c < e; ++c) {
+                segs[c].conic = true;
+                end_s = plan[c].t_start + plan[c].duration;
+                done_with(c);
+            }
+            i = e;
+            dwell_first = kNone;
+            dwell_s = 0;
+            return true;
+        }
+        ++stats.chord_arcs;
+        chords_until = e;
+        if (conics) loop_warnings.push_back({file, s.loc, "arc sent as chords: " + std::get<std::string>(pieces)});
+        return line_segment();
+    }
+
+    // Step segment i as card segments: its parts of at most the pattern capacity.
+    bool line_segment() {
+        StepSegment& s = segs[i];
+        s.start = pos;  // after a conic, where its walk ended
+        auto split = reduce_segment(s.delta(), m.card.pattern_capacity, m.planner.split_epsilon_steps);
+        stats.worst_split_error = std::max(stats.worst_split_error, split.deviation_bound - 0.5);
+        std::uint64_t total = 0;
+        for (const auto& part : split.parts) total += part.moves;
+        for (auto& part : split.parts) {
+            part.loc = s.loc;
+            part.step_segment = i;
+            const auto ideal = ideal_move_times(plan[i], total, part.first_move, part.moves, m.card.clock_hz);
+            if (!ideal.empty() && !pause_before(ideal.front())) return false;
+            const std::int64_t before = prev;
+            auto chunks = compress(ideal, prev, tol, lim);
+            if (!chunks.ok()) {
+                loop_errors.push_back({file, s.loc, fmt::format("timing: {}", chunks.error)});
+                return false;
+            }
+            prev = chunks.last_event;
+            stats.moves += part.moves;
+            stats.chunks += chunks.chunks.size();
+            for (int a = 0; a < kAxes; ++a) pos[a] += part.delta[a];
+            PlannedCardSegment c{part, std::move(chunks.chunks), nullptr};
+            c.prev_event = before;
+            c.step_moves = total;
+            card(std::move(c));
+        }
+        end_s = plan[i].t_start + plan[i].duration;
+        dwell_first = kNone;
+        dwell_s = 0;
+        done_with(i++);
+        return true;
+    }
+
+    // The job ends with its last move, or with the dwells after it: pause moves
+    // up to their end (the card runs until the last one).
+    void end() {
+        ended = true;
+        if (dwell_first != kNone && dwell_s > 0) {
+            const double until = double(prev) + dwell_s * m.card.clock_hz;
+            if (!add_pause(until, intervals(until - double(prev)))) return;
+            end_s = double(prev) / m.card.clock_hz;
+        }
+        stats.step_segments = i;
+        stats.card_segments = cards_made;
+        stats.duration_s = end_s;
+    }
+
+    void advance() {
+        pump();
+        run();
+        // What the loop no longer reads: step segments before the next, arcs'
+        // blocks before its block.
+        // (Step segments come in the order of their blocks.)
+        const std::size_t block = i < segs.end() ? segs[i].block : i > 0 ? segs[i - 1].block : 0;
+        while (!arc_blocks.empty() && arc_blocks.front().first < block) arc_blocks.pop_front();
+        segs.drop_before(i > 0 ? i - 1 : 0);
+        plan.drop_before(i);
+    }
+};
+
+PlanStream::PlanStream(const Machine& m, std::string job_file, const PlanOptions& options)
+    : impl_(std::make_unique<Impl>(m, std::move(job_file), options)) {}
+PlanStream::~PlanStream() = default;
+PlanStream::PlanStream(PlanStream&&) noexcept = default;
+PlanStream& PlanStream::operator=(PlanStream&&) noexcept = default;
+
+void PlanStream::push(const MotionBlock& block, std::size_t index) {
+    Impl& p = *impl_;
+    if (p.finished) throw std::logic_error("PlanStream::push after finish");
+    if ((block.kind == MotionKind::arc_cw || block.kind == MotionKind::arc_ccw) && p.m.planner.arcs == ArcMode::conic)
+        p.arc_blocks.emplace_back(index, block);
+    p.segmenter.push(block, index);
+    p.advance();
+}
+
+void PlanStream::finish() {
+    Impl& p = *impl_;
+    if (p.finished) return;
+    p.finished = true;
+    p.segmenter.finish();
+    p.advance();
+}
+
+std::optional<StreamedStep> PlanStream::next_step() {
+    Impl& p = *impl_;
+    if (p.steps_out.empty()) return std::nullopt;
+    std::optional<StreamedStep> s = std::move(p.steps_out.front());
+    p.steps_out.pop_front();
+    return s;
+}
+
+std::optional<PlannedCardSegment> PlanStream::next_card() {
+    Impl& p = *impl_;
+    if (p.cards_out.empty() || !p.steps_out.empty()) return std::nullopt;
+    std::optional<PlannedCardSegment> c = std::move(p.cards_out.front());
+    p.cards_out.pop_front();
+    return c;
+}
+
+bool PlanStream::done() const { return impl_->ended && !impl_->failed(); }
+
+std::vector<Diagnostic> PlanStream::warnings() const {
+    std::vector<Diagnostic> w = impl_->feeds.warnings();
+    w.insert(w.end(), impl_->loop_warnings.begin(), impl_->loop_warnings.end());
+    return w;
+}
+
+std::vector<Diagnostic> PlanStream::errors() const {
+    // The first stage's that has any: the step segments', the feed plan's, a
+    // job past the card's time, the card loop's (plan_job() made each stage
+    // whole before the next, so an earlier stage's errors are the job's).
+    if (!impl_->segmenter.errors().empty()) return impl_->segmenter.errors();
+    if (!impl_->feeds.errors().empty()) return impl_->feeds.errors();
+    if (!impl_->time_errors.empty()) return impl_->time_errors;
+    return impl_->loop_errors;
+}
+
+bool PlanStream::refused_before_the_card_loop() const {
+    return !impl_->segmenter.errors().empty() || !impl_->feeds.errors().empty() || !impl_->time_errors.empty();
+}
+
+const PlanStats& PlanStream::stats() const { return impl_->stats; }
+const ChunkLimits& PlanStream::chunk_limits() const { return impl_->lim; }
+std::size_t PlanStream::held() const {
+    return impl_->segs.held() + impl_->feeds.held() + impl_->segmenter.held_points() + impl_->steps_out.size() +
+           impl_->cards_out.size();
+}
 
 Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOptions& options) {
     Result<PlannedJob> result;
@@ -63,224 +448,47 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
                                              "card was asked (plan::bind_card())"});
         return result;
     }
-    auto segs = make_step_segments(job, m);
-    result.warnings = segs.warnings;
-    if (!segs.ok()) {
-        result.errors = segs.errors;
-        return result;
-    }
-    auto feeds = plan_feeds(*segs.value, m, job.file);
-    result.warnings.insert(result.warnings.end(), feeds.warnings.begin(), feeds.warnings.end());
-    if (!feeds.ok()) {
-        result.errors = feeds.errors;
-        return result;
-    }
-    // The card's time is counted in cycles from the job start (64-bit on the
-    // host): a job that would run past 2^62 of them (some 3,000 years at 48 MHz:
-    // a dwell or a feed no machine means) is refused where it passes that.
-    const double limit_s = std::ldexp(1.0, 62) / m.card.clock_hz;
-    for (std::size_t i = 0; i < feeds->size(); ++i) {
-        const PlannedSegment& f = (*feeds.value)[i];
-        if (!(f.t_start + f.duration <= limit_s)) {
-            result.errors.push_back({job.file, (*segs.value)[i].loc,
-                                     fmt::format("the job would last past {:.3g} s here (2^62 cycles of the card's "
-                                                 "{:g} Hz clock): a dwell or feed no job can run",
-                                                 limit_s, m.card.clock_hz)});
-            return result;
-        }
-    }
+    PlanStream stream(m, job.file, options);
     PlannedJob pj;
-    pj.step_segments = std::move(*segs.value);
-    pj.feeds = std::move(*feeds.value);
-    const ChunkLimits lim = job_chunk_limits(m, options);
-    pj.chunk_limits = lim;
-    // A card segment made: to the sink, then kept (without its chunks and walk
-    // when the sink is all that needs them).
-    const auto emit = [&](PlannedCardSegment& c) -> bool {
-        if (options.on_segment) {
-            if (auto e = options.on_segment(pj, pj.card.size() - 1)) {
-                result.errors.push_back(std::move(*e));
-                return false;
+    pj.chunk_limits = stream.chunk_limits();
+    // Each card segment as it is made: to the sink, then kept (without its
+    // chunks and walk when the sink is all that needs them).
+    std::optional<Diagnostic> refused;
+    const auto drain = [&] {
+        for (;;) {
+            while (auto s = stream.next_step()) {
+                pj.step_segments.push_back(std::move(s->segment));
+                pj.feeds.push_back(std::move(s->feed));
+            }
+            auto c = stream.next_card();
+            if (!c) return;
+            if (refused) continue;
+            PlannedCardSegment& kept = pj.card.emplace_back(std::move(*c));
+            if (options.on_segment) refused = options.on_segment(pj, pj.card.size() - 1);
+            if (!options.keep_chunks) {
+                std::vector<Chunk>().swap(kept.chunks);
+                kept.conic.reset();
             }
         }
-        if (!options.keep_chunks) {
-            std::vector<Chunk>().swap(c.chunks);
-            c.conic.reset();
-        }
-        return true;
     };
-    const double tol = m.chunk_tolerance_cycles();
-    std::int64_t prev = 0;  // the job starts at cycle 0
-    // Dwells since the last move: the card times a pause as the next move's first
-    // interval, at most 2^32 - 1 cycles; a longer one, and one after the last
-    // move, as pause moves (moves that step no axis) in between.
-    constexpr std::size_t kNone = static_cast<std::size_t>(-1);
-    std::size_t dwell_first = kNone;
-    double dwell_s = 0;
-    // Pause moves from `prev` to cycle `until`, in `n` equal steps of at most
-    // 2^32 - 1 cycles (the last at `until`), as one card segment of their own.
-    const auto add_pause = [&](double until, std::uint64_t n, std::size_t dwell) -> bool {
-        auto chunks = compress(pause_times(prev, until, n), prev, tol, lim);
-        if (!chunks.ok()) {
-            result.errors.push_back({job.file, pj.step_segments[dwell].loc, fmt::format("pause timing: {}", chunks.error)});
-            return false;
-        }
-        const std::int64_t before = prev;
-        CardSegment pause;
-        pause.moves = static_cast<std::uint32_t>(n);
-        pause.u.fill(1);
-        pause.dir_positive.fill(true);
-        pause.loc = pj.step_segments[dwell].loc;
-        pause.step_segment = dwell;
-        pause.pause = true;
-        prev = chunks.last_event;
-        pj.stats.pause_moves += n;
-        pj.stats.chunks += chunks.chunks.size();
-        PlannedCardSegment& c = pj.card.emplace_back(PlannedCardSegment{pause, std::move(chunks.chunks), nullptr});
-        c.prev_event = before;
-        c.step_moves = n;
-        c.pause_until = until;
-        return emit(c);
-    };
-    // Equal intervals, each under 2^32 - 1 cycles, that make up `cycles`.
-    const auto intervals = [](double cycles) {
-        return static_cast<std::uint64_t>(std::floor(cycles / double(kMaxMoveDelayCycles))) + 1;
-    };
-    // Where the card is: a conic's walk may end a step off its arc's rounded end,
-    // and the segment after it starts from there.
-    PerAxis<std::int64_t> pos{};
-    if (!pj.step_segments.empty()) pos = pj.step_segments.front().start;
-    // The last move of the last CONIC segment: the next one's first move comes
-    // conic_gap_cycles() after it at the earliest.
-    std::int64_t last_conic_event = std::numeric_limits<std::int64_t>::min() / 2;
-    const bool conics = m.planner.arcs == ArcMode::conic && m.card.conic_width > 0;
-    std::size_t chords_until = 0;  // an arc left to chords: its step segments up to here
-    // A pause before the move at `first_ideal` when it is further than one
-    // interval can time.
-    const auto pause_before = [&](double first_ideal) -> bool {
-        if (dwell_first != kNone && first_ideal - double(prev) > double(kMaxMoveDelayCycles)) {
-            // Longer than one interval: pause moves split the gap, the move
-            // after them times the last part (each at most 2^32 - 1 cycles).
-            const double gap = first_ideal - double(prev);
-            const std::uint64_t parts = intervals(gap);
-            return add_pause(double(prev) + gap * double(parts - 1) / double(parts), parts - 1, dwell_first);
-        }
-        return true;
-    };
-    for (std::size_t i = 0; i < pj.step_segments.size(); ++i) {
-        StepSegment& s = pj.step_segments[i];
-        if (s.kind == MotionKind::dwell) {  // a pause shows as a longer first interval
-            if (dwell_first == kNone) dwell_first = i;
-            dwell_s += s.dwell_s;
-            s.start = s.end = pos;
-            continue;
-        }
-        const bool arc = s.kind == MotionKind::arc_cw || s.kind == MotionKind::arc_ccw;
-        if (arc && m.planner.arcs == ArcMode::conic && i >= chords_until) {
-            // The arc's chords: the step segments of its block.
-            std::size_t e = i + 1;
-            while (e < pj.step_segments.size() && pj.step_segments[e].block == s.block) ++e;
-            bool last_motion = true;
-            for (std::size_t n = e; n < pj.step_segments.size(); ++n)
-                if (pj.step_segments[n].kind != MotionKind::dwell) last_motion = false;
-            const ConicArcInput in = arc_input(pj, job.blocks[s.block], i, e, pos, last_motion, m);
-            std::variant<std::vector<ConicPiece>, std::string> pieces = std::string("the card has no conic walker");
-            ConicArcStats arc_stats;
-            if (conics) pieces = plan_conic_arc(in, m, &arc_stats);
-            if (auto* list = std::get_if<std::vector<ConicPiece>>(&pieces)) {
-                const double first = list->front().walk->ideal.front();
-                if (first - tol < double(last_conic_event) + double(conic_gap_cycles(m.card.conic_width)))
-                    pieces = std::string("its first move comes too soon after the conic before it");
-            }
-            if (auto* list = std::get_if<std::vector<ConicPiece>>(&pieces)) {
-                if (!pause_before(list->front().walk->ideal.front())) return result;
-                auto source = std::make_shared<ArcSource>(ArcSource{*in.block, i, e, in.start, in.last_motion});
-                for (std::size_t p = 0; p < list->size(); ++p) {
-                    ConicPiece& piece = (*list)[p];
-                    const std::int64_t before = prev;
-                    auto chunks = compress(piece.walk->ideal, prev, tol, lim);
-                    if (!chunks.ok()) {
-                        result.errors.push_back({job.file, s.loc, fmt::format("timing: {}", chunks.error)});
-                        return result;
-                    }
-                    prev = chunks.last_event;
-                    pj.stats.moves += piece.segment.moves;
-                    pj.stats.chunks += chunks.chunks.size();
-                    ++pj.stats.conic_segments;
-                    for (int a = 0; a < kAxes; ++a) pos[a] += piece.segment.delta[a];
-                    PlannedCardSegment& c = pj.card.emplace_back(
-                        PlannedCardSegment{piece.segment, std::move(chunks.chunks), std::move(piece.walk)});
-                    c.prev_event = before;
-                    c.step_moves = piece.segment.moves;
-                    c.arc = source;
-                    c.arc_piece = p;
-                    if (!emit(c)) return result;
-                }
-                last_conic_event = prev;
-                ++pj.stats.conic_arcs;
-                pj.stats.conic.max_node_deviation =
-                    std::max(pj.stats.conic.max_node_deviation, arc_stats.max_node_deviation);
-                pj.stats.conic.max_other_deviation =
-                    std::max(pj.stats.conic.max_other_deviation, arc_stats.max_other_deviation);
-                // The chords' step segments stay as the feed plan's record: they
-                // make no card segment of their own.
-                for (std::size_t c = i; c < e; ++c) pj.step_segments[c].conic = true;
-                i = e - 1;
-                dwell_first = kNone;
-                dwell_s = 0;
-                continue;
-            }
-            ++pj.stats.chord_arcs;
-            chords_until = e;
-            if (conics)
-                result.warnings.push_back({job.file, s.loc,
-                                           "arc sent as chords: " + std::get<std::string>(pieces)});
-        }
-        s.start = pos;  // after a conic, where its walk ended
-        auto split = reduce_segment(s.delta(), m.card.pattern_capacity, m.planner.split_epsilon_steps);
-        pj.stats.worst_split_error = std::max(pj.stats.worst_split_error, split.deviation_bound - 0.5);
-        std::uint64_t total = 0;
-        for (const auto& part : split.parts) total += part.moves;
-        for (auto& part : split.parts) {
-            part.loc = s.loc;
-            part.step_segment = i;
-            const auto ideal = ideal_move_times(pj.feeds[i], total, part.first_move, part.moves,
-                                                m.card.clock_hz);
-            if (!ideal.empty() && !pause_before(ideal.front())) return result;
-            const std::int64_t before = prev;
-            auto chunks = compress(ideal, prev, tol, lim);
-            if (!chunks.ok()) {
-                result.errors.push_back({job.file, s.loc, fmt::format("timing: {}", chunks.error)});
-                return result;
-            }
-            prev = chunks.last_event;
-            pj.stats.moves += part.moves;
-            pj.stats.chunks += chunks.chunks.size();
-            for (int a = 0; a < kAxes; ++a) pos[a] += part.delta[a];
-            PlannedCardSegment& c = pj.card.emplace_back(PlannedCardSegment{part, std::move(chunks.chunks), nullptr});
-            c.prev_event = before;
-            c.step_moves = total;
-            if (!emit(c)) return result;
-        }
-        dwell_first = kNone;
-        dwell_s = 0;
+    for (std::size_t b = 0; b < job.blocks.size(); ++b) {
+        stream.push(job.blocks[b], b);
+        drain();
     }
-    // The job ends with its last move, or with the dwells after it: pause moves
-    // up to their end (the card runs until the last one).
-    double end_s = 0;
-    for (std::size_t i = pj.feeds.size(); i-- > 0;) {
-        if (pj.step_segments[i].kind == MotionKind::dwell) continue;
-        end_s = pj.feeds[i].t_start + pj.feeds[i].duration;
-        break;
+    stream.finish();
+    drain();
+    result.warnings = stream.warnings();
+    // A card segment the sink refused stopped the card loop there, after
+    // the stages before it had accepted the job.
+    if (refused && (stream.errors().empty() || !stream.refused_before_the_card_loop()) ) {
+        result.errors.push_back(std::move(*refused));
+        return result;
     }
-    if (dwell_first != kNone && dwell_s > 0) {
-        const double until = double(prev) + dwell_s * m.card.clock_hz;
-        if (!add_pause(until, intervals(until - double(prev)), dwell_first)) return result;
-        end_s = double(prev) / m.card.clock_hz;
+    if (!stream.errors().empty()) {
+        result.errors = stream.errors();
+        return result;
     }
-    pj.stats.step_segments = pj.step_segments.size();
-    pj.stats.card_segments = pj.card.size();
-    pj.stats.duration_s = end_s;
+    pj.stats = stream.stats();
     pj.stats.fit = fit;
     result.value = std::move(pj);
     return result;
@@ -326,7 +534,9 @@ RebuiltCardSegment rebuild_card_segment(const PlannedJob& job, std::size_t s, co
         ideal = pause_times(c.prev_event, c.pause_until, c.segment.moves);
     } else if (c.arc) {
         const ArcSource& a = *c.arc;
-        auto pieces = plan_conic_arc(arc_input(job, a.block, a.first, a.end, a.start, a.last_motion, m), m);
+        const std::span<const StepSegment> chords(job.step_segments.data() + a.first, a.end - a.first);
+        const std::span<const PlannedSegment> feeds(job.feeds.data() + a.first, a.end - a.first);
+        auto pieces = plan_conic_arc(arc_input(a.block, chords, feeds, a.first, a.start, a.last_motion, m), m);
         auto* list = std::get_if<std::vector<ConicPiece>>(&pieces);
         if (!list || c.arc_piece >= list->size())
             throw std::logic_error(fmt::format("rebuild_card_segment: card segment {}: its arc is not walked again", s));

@@ -3,9 +3,10 @@
 // Pure: no I/O, everything it needs is in its arguments.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
-#include <functional>
+#include <string>
 #include <vector>
 
 #include "plan/arc_fit.h"
@@ -81,7 +82,58 @@ struct PlanOptions {
     bool keep_chunks = true;
 };
 
+// The whole job planned: its blocks pushed through a PlanStream (after G1 chains
+// are fitted with arcs where the machine file asks), everything it hands out kept.
 Result<PlannedJob> plan_job(const Job& job, const Machine& machine, const PlanOptions& options = {});
+
+// A step segment through the card loop, with its feed (PlannedJob::step_segments
+// and feeds, index `index`).
+struct StreamedStep {
+    std::size_t index = 0;
+    StepSegment segment;
+    PlannedSegment feed;
+};
+
+// The plan made as the blocks arrive, one at a time (a job read as it is
+// planned): StepSegmenter, FeedPlanner and the card loop in a chain, each
+// holding a window, not the job. It hands out the step segments (with their
+// feeds) and the card segments (with their chunks and walks) of plan_job(),
+// bit for bit, in order; a card segment only once every step segment up to
+// its own has been handed out (next_step() until none, then next_card()).
+// The card loop waits for a conic arc's last chord and for the next move
+// after it (whether the walk must end on the arc's end step). After an error
+// nothing more is handed out; errors() are those plan_job() would give
+// (PlanOptions::on_segment and keep_chunks are plan_job()'s, not used here).
+class PlanStream {
+public:
+    PlanStream(const Machine& m, std::string job_file, const PlanOptions& options = {});
+    ~PlanStream();
+    PlanStream(PlanStream&&) noexcept;
+    PlanStream& operator=(PlanStream&&) noexcept;
+    PlanStream(const PlanStream&) = delete;
+    PlanStream& operator=(const PlanStream&) = delete;
+
+    // The job's next block; `index` is its place among the job's blocks.
+    void push(const MotionBlock& block, std::size_t index);
+    void finish();  // the job has no more
+    std::optional<StreamedStep> next_step();
+    std::optional<PlannedCardSegment> next_card();
+
+    [[nodiscard]] bool done() const;  // finished and through the card loop, no error
+    [[nodiscard]] std::vector<Diagnostic> warnings() const;
+    [[nodiscard]] std::vector<Diagnostic> errors() const;
+    // The errors came from a stage before the card loop (step segments, feeds,
+    // the job's length): plan_job() made those whole before the loop began.
+    [[nodiscard]] bool refused_before_the_card_loop() const;
+    [[nodiscard]] const PlanStats& stats() const;  // whole once done() (but `fit`: plan_job()'s)
+    [[nodiscard]] const ChunkLimits& chunk_limits() const;
+    // Step segments, feeds and polyline points held, and what is made but not handed out.
+    [[nodiscard]] std::size_t held() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 // Card segment `s` of a planned job made again from its step segments, feeds and
 // the segment's own record (PlannedCardSegment::prev_event, ...): chunks equal to

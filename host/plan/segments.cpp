@@ -423,9 +423,9 @@ struct StepSegmenter::Impl {
         while (errors.empty() && !pending.empty()) {
             Pending& k = pending.front();
             const bool has_next = pending.size() >= 2;
-            if (!has_next && !finished) return;
+            if (!has_next && !finished) break;
             const std::size_t last = has_next ? pending[1].first : verts.end() - 1;
-            if (!finished && last + kRadiusReach >= verts.end()) return;
+            if (!finished && last + kRadiusReach >= verts.end()) break;
             StepSegment& s = k.s;
             const bool dwell = s.kind == MotionKind::dwell;
             if (!dwell) {

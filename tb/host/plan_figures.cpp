@@ -256,8 +256,48 @@ int fingerprint(const char* mpath, const char* jpath) {
     for (std::size_t x : {st.spans, st.groups, st.windows, st.backward_steps, st.max_lookahead_spans}) mix(&x, sizeof x);
     num(st.max_lookahead_mm);
     num(st.max_lookahead_s);
-    fmt::print("{} {} {} segments, {} warnings, {} errors: {:016x}\n", mpath, jpath, segs->size(),
-               feeds.warnings.size(), feeds.errors.size(), h);
+    // The whole plan: its step segments after the card loop, card segments,
+    // chunks, walks and statistics.
+    auto pj = plan_job(*job, *m);
+    for (const auto& w : pj.warnings) mix(w.message.data(), w.message.size());
+    for (const auto& e : pj.errors) mix(e.message.data(), e.message.size());
+    std::size_t cards = 0;
+    if (pj.ok()) {
+        for (const StepSegment& s : pj->step_segments) {
+            mix(s.start.data(), sizeof s.start);
+            mix(s.end.data(), sizeof s.end);
+            const int conic = s.conic;
+            mix(&conic, sizeof conic);
+        }
+        for (const PlannedSegment& f : pj->feeds) num(f.t_start);
+        for (const PlannedCardSegment& c : pj->card) {
+            const CardSegment& g = c.segment;
+            const std::uint64_t ints[] = {std::uint64_t(g.major), g.moves, g.first_move, g.step_segment,
+                                          std::uint64_t(g.pause), std::uint64_t(c.prev_event), c.step_moves,
+                                          c.arc_piece, std::uint64_t(g.loc.line)};
+            mix(ints, sizeof ints);
+            for (std::size_t a = 0; a < kAxes; ++a) {
+                const std::int64_t per[] = {g.dir_positive[a], g.u[a], g.v[a], g.delta[a]};
+                mix(per, sizeof per);
+            }
+            num(c.pause_until);
+            for (const Chunk& k : c.chunks) mix(&k, sizeof k);
+            if (c.conic) {
+                mix(c.conic->moves.data(), c.conic->moves.size());
+                for (double t : c.conic->ideal) num(t);
+            }
+        }
+        const PlanStats& ps = pj->stats;
+        const std::uint64_t counts[] = {ps.moves, ps.pause_moves, ps.chunks, ps.step_segments, ps.card_segments,
+                                        ps.conic_arcs, ps.conic_segments, ps.chord_arcs};
+        mix(counts, sizeof counts);
+        for (double x : {ps.worst_split_error, ps.duration_s, ps.conic.max_node_deviation, ps.conic.max_other_deviation})
+            num(x);
+        cards = pj->card.size();
+    }
+    fmt::print("{} {} {} segments, {} warnings, {} errors; {} card segments, {} warnings, {} errors: {:016x}\n", mpath,
+               jpath, segs->size(), feeds.warnings.size(), feeds.errors.size(), cards, pj.warnings.size(),
+               pj.errors.size(), h);
     return 0;
 }
 

@@ -611,3 +611,100 @@ TEST(FeedPlanner, ARefusedMoveStopsItsOutputAndEveryRefusedBlockIsNamed) {
     EXPECT_FALSE(whole.ok());
     EXPECT_EQ(join(whole.errors), join(planner.errors()));
 }
+
+// The whole plan made as the blocks arrive: a zigzag of 3,000 turns with a
+// conic arc every 20, short dwells, a dwell longer than one move interval (pause
+// moves) and a trailing dwell, on a card with a conic walker. What comes out
+// is plan_job()'s, in order, each card segment after its step segment, while
+// the stream holds a window of the job.
+TEST(PlanStream, PlansTheJobAsItsBlocksArriveHoldingAWindow) {
+    Machine m = machine();
+    m.card.conic_width = 40;  // as bind_card() sets it for a card with a walker (HX8K)
+    m.card.max_moves = 1048575;
+    m.card.pattern_capacity = 1024;
+    std::string g = "G1 F1200 X10 Y10\n";
+    double x = 10, y = 10;
+    for (int i = 0; i < 3000; ++i) {
+        g += fmt::format("G1 X{:.3f} Y{:.3f}\n", x += 0.5, y);
+        g += fmt::format("G1 X{:.3f} Y{:.3f}\n", x, y += (i % 2 ? -3.0 : 3.0));
+        if (i % 20 == 5) {
+            g += fmt::format("G2 X{:.3f} Y{:.3f} I1.5 J0\n", x + 3, y);
+            x += 3;
+        }
+        if (i % 250 == 9) g += "G4 P0.05\n";
+        if (i == 1500) g += "G4 P200\n";
+        if (x > 280) {
+            g += "G0 X10\n";
+            x = 10;
+        }
+    }
+    g += "G4 P1\n";
+    auto job = parse_gcode(g, "job.ngc");
+    ASSERT_TRUE(job.ok()) << join(job.errors);
+    auto whole = plan_job(*job, m);
+    ASSERT_TRUE(whole.ok()) << join(whole.errors);
+    const PlannedJob& pj = *whole;
+    EXPECT_GT(pj.stats.conic_arcs, 100u);
+    EXPECT_GT(pj.stats.pause_moves, 1u);
+    ASSERT_GT(pj.step_segments.size(), 6000u);
+
+    PlanStream stream(m, "job.ngc");
+    std::vector<StreamedStep> steps;
+    std::vector<PlannedCardSegment> cards;
+    std::size_t first_card_at = 0, max_held = 0;
+    const auto drain = [&](std::size_t pushed) {
+        for (;;) {
+            while (auto s = stream.next_step()) steps.push_back(std::move(*s));
+            auto c = stream.next_card();
+            if (!c) return;
+            if (!c->segment.pause) ASSERT_LT(c->segment.step_segment, steps.size()) << "card segment " << cards.size();
+            if (cards.empty()) first_card_at = pushed;
+            cards.push_back(std::move(*c));
+        }
+    };
+    for (std::size_t b = 0; b < job->blocks.size(); ++b) {
+        stream.push(job->blocks[b], b);
+        drain(b + 1);
+        max_held = std::max(max_held, stream.held());
+    }
+    stream.finish();
+    drain(job->blocks.size());
+    ASSERT_TRUE(stream.done()) << join(stream.errors());
+    EXPECT_EQ(join(stream.warnings()), join(whole.warnings));
+
+    ASSERT_EQ(steps.size(), pj.step_segments.size());
+    for (std::size_t i = 0; i < steps.size(); ++i) {
+        ASSERT_EQ(steps[i].index, i);
+        ASSERT_EQ(steps[i].segment.start, pj.step_segments[i].start) << "step segment " << i;
+        ASSERT_EQ(steps[i].segment.end, pj.step_segments[i].end) << "step segment " << i;
+        ASSERT_EQ(steps[i].segment.conic, pj.step_segments[i].conic) << "step segment " << i;
+        ASSERT_EQ(steps[i].feed.t_start, pj.feeds[i].t_start) << "step segment " << i;
+    }
+    ASSERT_EQ(cards.size(), pj.card.size());
+    for (std::size_t c = 0; c < cards.size(); ++c) {
+        const PlannedCardSegment& a = cards[c];
+        const PlannedCardSegment& b = pj.card[c];
+        ASSERT_EQ(a.segment.step_segment, b.segment.step_segment) << "card segment " << c;
+        ASSERT_EQ(a.segment.delta, b.segment.delta) << "card segment " << c;
+        ASSERT_EQ(a.segment.moves, b.segment.moves) << "card segment " << c;
+        ASSERT_EQ(a.segment.pause, b.segment.pause) << "card segment " << c;
+        ASSERT_EQ(a.chunks, b.chunks) << "card segment " << c;
+        ASSERT_EQ(a.prev_event, b.prev_event) << "card segment " << c;
+        ASSERT_EQ(a.conic != nullptr, b.conic != nullptr) << "card segment " << c;
+        if (a.conic) ASSERT_EQ(a.conic->moves, b.conic->moves) << "card segment " << c;
+    }
+    EXPECT_EQ(stream.stats().moves, pj.stats.moves);
+    EXPECT_EQ(stream.stats().chunks, pj.stats.chunks);
+    EXPECT_EQ(stream.stats().pause_moves, pj.stats.pause_moves);
+    EXPECT_EQ(stream.stats().duration_s, pj.stats.duration_s);
+
+    // A window, not the job: the first card segments before a hundred blocks
+    // are in, and at most some hundreds of step segments, feeds and points held.
+    EXPECT_LT(first_card_at, 100u);
+    EXPECT_LT(max_held, 2000u) << "of " << pj.step_segments.size() << " step segments";
+    std::printf("first card segment after %zu of %zu blocks; at most %zu held (%zu step segments, %zu card segments, "
+                "%llu conic arcs, %llu pause moves)\n",
+                first_card_at, job->blocks.size(), max_held, pj.step_segments.size(), pj.card.size(),
+                static_cast<unsigned long long>(pj.stats.conic_arcs),
+                static_cast<unsigned long long>(pj.stats.pause_moves));
+}
