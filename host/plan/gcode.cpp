@@ -6,9 +6,13 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <optional>
 #include <sstream>
+#include <string>
+#include <string_view>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -1346,7 +1350,7 @@ public:
             error(line_, (wi ? wi : wj)->col, "G5 needs both I and J, or neither (to continue the previous G5)");
             return;
         } else if (!wi) {
-            if (!g5_next_ij_ || *g5_next_ij_block_ != job_.blocks.size()) {
+            if (!g5_next_ij_ || *g5_next_ij_block_ != block_count()) {
                 error(line_, at.col, "G5 without I and J continues a previous G5: give I and J on the first");
                 return;
             }
@@ -1368,7 +1372,7 @@ public:
         g5_next_ij_.reset();
         if (mode == g(5)) {
             g5_next_ij_ = -pq;
-            g5_next_ij_block_ = job_.blocks.size();
+            g5_next_ij_block_ = block_count();
         }
     }
 
@@ -1381,6 +1385,14 @@ public:
     }
 
     bool ended() const { return ended_; }
+    // The blocks made so far, moved out between lines (stream_gcode), and how
+    // many the program has made in all.
+    void take_blocks(std::vector<MotionBlock>& out) {
+        for (MotionBlock& b : job_.blocks) out.push_back(std::move(b));
+        taken_ += job_.blocks.size();
+        job_.blocks.clear();
+    }
+    std::size_t block_count() const { return taken_ + job_.blocks.size(); }
     void note_after_end(int line) {
         if (!probe_failed_) warn(line, 1, "text after the program end (M2/M30) is ignored");
     }
@@ -1391,6 +1403,7 @@ private:
     GcodeOptions opt_;
     State st_;
     Job job_;
+    std::size_t taken_ = 0;  // blocks moved out by take_blocks()
     gcode::Parameters params_;
     bool ended_ = false;
     bool probe_failed_ = false;  // a G38 move failed: the program stops there
@@ -1475,51 +1488,144 @@ std::vector<Diagnostic> summarize_repeats(std::vector<Diagnostic> diags) {
 
 std::span<const std::string_view> ignored_codes() { return kIgnored; }
 
+namespace {
+
+// Binary data (a NUL byte, or mostly bytes that are neither printable ASCII,
+// whitespace nor UTF-8, in the first 4 KiB) is refused whole with one error,
+// instead of one error per line of noise.
+constexpr std::size_t kBinaryHead = 4096;
+std::optional<Diagnostic> binary_data(std::string_view head, std::string_view file) {
+    head = head.substr(0, kBinaryHead);
+    std::size_t odd = 0;
+    bool nul = false;
+    for (const char ch : head) {
+        const auto c = static_cast<unsigned char>(ch);
+        nul = nul || c == 0;
+        odd += c < 0x20 && c != '\n' && c != '\r' && c != '\t' && c != '\f' && c != '\v';
+        odd += c == 0x7f;
+    }
+    if (nul || (head.size() >= 64 && odd * 10 > head.size())) {
+        return Diagnostic{std::string(file), {1, 1},
+                          nul ? "not a G-code text file: it holds NUL bytes (binary data)"
+                              : fmt::format("not a G-code text file: {} of its first {} bytes are "
+                                            "control characters (binary data)",
+                                            odd, head.size())};
+    }
+    return std::nullopt;
+}
+
+// A UTF-8 byte-order mark (as some Windows editors write) is not part of line 1.
+constexpr std::string_view kBom = "\xEF\xBB\xBF";
+
+// Line `line` of the program (without its newline): false once the program
+// has ended and text after it was noted.
+bool run_program_line(Parser& p, std::string_view s, int line) {
+    if (p.ended()) {
+        if (!gcode::read_line(s, {}).empty()) {
+            p.note_after_end(line);
+            return false;
+        }
+        return true;
+    }
+    p.reset_line_flags();
+    p.run_line(s, line);
+    return true;
+}
+
+}  // namespace
+
 Result<Job> parse_gcode(std::string_view text, std::string_view file, const GcodeOptions& options) {
-    // Binary data (a NUL byte, or mostly bytes that are neither printable ASCII,
-    // whitespace nor UTF-8, in the first 4 KiB) is refused whole with one error,
-    // instead of one error per line of noise.
-    {
-        const std::string_view head = text.substr(0, 4096);
-        std::size_t odd = 0;
-        bool nul = false;
-        for (const char ch : head) {
-            const auto c = static_cast<unsigned char>(ch);
-            nul = nul || c == 0;
-            odd += c < 0x20 && c != '\n' && c != '\r' && c != '\t' && c != '\f' && c != '\v';
-            odd += c == 0x7f;
-        }
-        if (nul || (head.size() >= 64 && odd * 10 > head.size())) {
-            Result<Job> r;
-            r.errors.push_back({std::string(file), {1, 1},
-                                nul ? "not a G-code text file: it holds NUL bytes (binary data)"
-                                    : fmt::format("not a G-code text file: {} of its first {} bytes are "
-                                                  "control characters (binary data)",
-                                                  odd, head.size())});
-            return r;
-        }
+    if (auto e = binary_data(text, file)) {
+        Result<Job> r;
+        r.errors.push_back(std::move(*e));
+        return r;
     }
     Parser p(file, options);
     int line = 0;
-    // A UTF-8 byte-order mark (as some Windows editors write) is not part of line 1.
-    std::size_t pos = text.starts_with("\xEF\xBB\xBF") ? 3 : 0;
+    std::size_t pos = text.starts_with(kBom) ? kBom.size() : 0;
     while (pos <= text.size()) {
         auto nl = text.find('\n', pos);
         if (nl == std::string_view::npos) nl = text.size();
-        const std::string_view s = text.substr(pos, nl - pos);
-        ++line;
-        if (p.ended()) {
-            if (!gcode::read_line(s, {}).empty()) {
-                p.note_after_end(line);
-                break;
-            }
-        } else {
-            p.reset_line_flags();
-            p.run_line(s, line);
-        }
+        if (!run_program_line(p, text.substr(pos, nl - pos), ++line)) break;
         pos = nl + 1;
     }
     return p.finish();
+}
+
+Result<Job> stream_gcode(const std::filesystem::path& path, const GcodeOptions& options,
+                         const std::function<void(MotionBlock&&, std::size_t)>& sink) {
+    Result<Job> r;
+    if (options.probe) {
+        r.errors.push_back({path.string(), {}, "a program with probe moves is read whole (parse_gcode), not streamed"});
+        return r;
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        r.errors.push_back({path.string(), {}, "cannot open file"});
+        return r;
+    }
+    const std::string file = path.string();
+    Parser p(file, options);
+    std::vector<MotionBlock> made;
+    std::size_t handed = 0;
+    const auto hand_out = [&] {
+        p.take_blocks(made);
+        for (MotionBlock& b : made) sink(std::move(b), handed++);
+        made.clear();
+    };
+    // The file in pieces of 64 KiB; a line that runs past one waits for the next.
+    std::string buf(std::size_t{1} << 16, '\0'), carry;
+    bool first = true;
+    int line = 0;
+    bool go_on = true;
+    while (go_on) {
+        in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+        const auto got = static_cast<std::size_t>(in.gcount());
+        std::string_view piece(buf.data(), got);
+        if (first) {
+            // The first piece holds the first 4 KiB, or the whole file.
+            if (auto e = binary_data(piece, file)) {
+                r.errors.push_back(std::move(*e));
+                return r;
+            }
+            if (piece.starts_with(kBom)) piece.remove_prefix(kBom.size());
+            first = false;
+        }
+        const bool last = got < buf.size();
+        std::size_t pos = 0;
+        for (;;) {
+            const auto nl = piece.find('\n', pos);
+            if (nl == std::string_view::npos) break;
+            std::string_view s = piece.substr(pos, nl - pos);
+            if (!carry.empty()) {
+                carry.append(s);
+                s = carry;
+            }
+            go_on = run_program_line(p, s, ++line);
+            carry.clear();
+            hand_out();
+            pos = nl + 1;
+            if (!go_on) break;
+        }
+        if (!go_on) break;
+        carry.append(piece.substr(pos));
+        if (last) {
+            // The text after the last newline (parse_gcode's last line, empty or not).
+            run_program_line(p, carry, ++line);
+            hand_out();
+            break;
+        }
+    }
+    auto done = p.finish();
+    if (done.value)
+        for (MotionBlock& b : done.value->blocks) sink(std::move(b), handed++);  // a curve the end closed
+    r.errors = std::move(done.errors);
+    r.warnings = std::move(done.warnings);
+    if (r.errors.empty()) {
+        r.value = std::move(done.value);
+        r.value->blocks.clear();
+    }
+    return r;
 }
 
 bool has_probe_words(std::string_view text) {

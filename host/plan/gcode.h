@@ -142,4 +142,16 @@ Result<Job> parse_gcode(std::string_view text, std::string_view file,
                         const GcodeOptions& options = {});
 Result<Job> load_gcode(const std::filesystem::path& path, const GcodeOptions& options = {});
 
+// The program read from a file a piece at a time, each block handed to `sink`
+// (with its index among the program's blocks) once its line is read: the blocks
+// load_gcode() gives, in memory that does not grow with the file (each block is
+// made whole: a canned cycle's holes, a G5.2 curve's points). The result holds
+// the program's errors and warnings, and a Job without blocks when it is
+// accepted. A refused program may have handed blocks out before its error was
+// read: a caller that must not act on part of a bad program reads it twice
+// (docs/HOST.md "Streamed"). A program with probe moves (options.probe) is read
+// whole, not this way.
+Result<Job> stream_gcode(const std::filesystem::path& path, const GcodeOptions& options,
+                         const std::function<void(MotionBlock&&, std::size_t)>& sink);
+
 }  // namespace cpstep::plan

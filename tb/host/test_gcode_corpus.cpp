@@ -5,11 +5,18 @@
 // file:line:col on every error.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <regex>
 #include <string>
 
+#include <unistd.h>
+
+#include <fmt/format.h>
+
 #include "cpstep/builds.h"
 #include "plan/gcode.h"
+#include "plan/nurbs.h"
 #include "plan/pipeline.h"
 
 using namespace cpstep::plan;
@@ -104,4 +111,109 @@ TEST(CorpusRefused, EveryErrorHasFileLineColumn) {
         }
         EXPECT_EQ(got, c.errors) << c.file;
     }
+}
+
+namespace {
+
+// Two blocks the same, field by field (a curve: the same control points).
+void expect_same_block(const MotionBlock& a, const MotionBlock& b, std::size_t i) {
+    ASSERT_EQ(a.kind, b.kind) << "block " << i;
+    ASSERT_EQ(a.loc, b.loc) << "block " << i;
+    ASSERT_EQ(a.start, b.start) << "block " << i;
+    ASSERT_EQ(a.end, b.end) << "block " << i;
+    ASSERT_EQ(a.center_x, b.center_x) << "block " << i;
+    ASSERT_EQ(a.center_y, b.center_y) << "block " << i;
+    ASSERT_EQ(a.center_z, b.center_z) << "block " << i;
+    ASSERT_EQ(a.feed, b.feed) << "block " << i;
+    ASSERT_EQ(a.dwell_s, b.dwell_s) << "block " << i;
+    ASSERT_EQ(a.spindle_on, b.spindle_on) << "block " << i;
+    ASSERT_EQ(a.output0, b.output0) << "block " << i;
+    ASSERT_EQ(a.plane, b.plane) << "block " << i;
+    ASSERT_EQ(a.pause, b.pause) << "block " << i;
+    ASSERT_EQ(a.tool, b.tool) << "block " << i;
+    ASSERT_EQ(a.curve != nullptr, b.curve != nullptr) << "block " << i;
+    if (a.curve) {
+        ASSERT_EQ(a.curve->points().size(), b.curve->points().size()) << "block " << i;
+        for (std::size_t k = 0; k < a.curve->points().size(); ++k)
+            ASSERT_EQ(a.curve->points()[k], b.curve->points()[k]) << "block " << i;
+    }
+}
+
+// The file read whole and streamed: the same blocks, errors and warnings.
+void expect_stream_is_whole(const std::string& path, const GcodeOptions& o) {
+    SCOPED_TRACE(path);
+    auto whole = load_gcode(path, o);
+    std::vector<MotionBlock> got;
+    auto streamed = stream_gcode(path, o, [&](MotionBlock&& b, std::size_t i) {
+        ASSERT_EQ(i, got.size());
+        got.push_back(std::move(b));
+    });
+    EXPECT_EQ(join(streamed.errors), join(whole.errors));
+    EXPECT_EQ(join(streamed.warnings), join(whole.warnings));
+    EXPECT_EQ(streamed.ok(), whole.ok());
+    if (!whole.ok()) return;
+    ASSERT_EQ(got.size(), whole->blocks.size());
+    for (std::size_t i = 0; i < got.size(); ++i) expect_same_block(got[i], whole->blocks[i], i);
+}
+
+}  // namespace
+
+// Every program of the corpus and every example job (but the probing one)
+// streamed block by block gives what load_gcode() gives.
+TEST(StreamGcode, EveryCorpusProgramAndExampleJobStreamsAsItReadsWhole) {
+    const Machine m = bound_machine("router.toml");
+    std::size_t files = 0;
+    for (const char* dir : {"/gcode/", "/jobs/"}) {
+        for (const auto& e : std::filesystem::directory_iterator(std::string(CPSTEP_EXAMPLES_DIR) + dir)) {
+            const std::string path = e.path().string();
+            if (path.ends_with("README.md") || path.ends_with("probe.ngc")) continue;
+            expect_stream_is_whole(path, gcode_options(m));
+            expect_stream_is_whole(path, {});
+            ++files;
+        }
+    }
+    EXPECT_GT(files, 15u);
+}
+
+// Lines across the 64 KiB pieces it reads, a byte-order mark, CR LF, no newline
+// at the end, text after M2, binary data and an unopenable file.
+TEST(StreamGcode, PiecesMarksLineEndsAndRefusals) {
+    const auto dir = std::filesystem::temp_directory_path() / fmt::format("cpstep_stream_{}", ::getpid());
+    std::filesystem::create_directories(dir);
+    const auto write = [&](const std::string& name, const std::string& text) {
+        const auto p = dir / name;
+        std::ofstream(p, std::ios::binary) << text;
+        return p.string();
+    };
+    std::string long_lines = "\xEF\xBB\xBFG21 G90 G1 F600\r\n";
+    for (int i = 0; long_lines.size() < 300000; ++i) {
+        long_lines += fmt::format("G1 X{:.4f} Y{:.4f} (", 10 + (i % 50) * 0.1, 10 + (i % 7) * 0.3);
+        long_lines += std::string(std::size_t(i * 37 % 3000), 'c') + ")\r\n";
+    }
+    expect_stream_is_whole(write("long.ngc", long_lines), {});
+    expect_stream_is_whole(write("no_newline.ngc", "G1 X1 F100\nG1 X2"), {});
+    expect_stream_is_whole(write("after_end.ngc", "G1 X1 F100\nM2\nG1 X5\n"), {});
+    expect_stream_is_whole(write("bad_line.ngc", "G1 X1 F100\nG1 X2 Q\nG1 X3\n"), {});
+    expect_stream_is_whole(write("binary.ngc", std::string("G1 X1\n\0\0\0", 9)), {});
+    expect_stream_is_whole(write("open_curve.ngc", "G1 X1 F100\nG5.2 X1 Y2 P1 L3\nX2 Y3 P1\nX3 Y1 P1\n"), {});
+    auto missing = stream_gcode(dir / "none.ngc", {}, [](MotionBlock&&, std::size_t) {});
+    EXPECT_EQ(join(missing.errors), (dir / "none.ngc").string() + ": cannot open file");
+    std::filesystem::remove_all(dir);
+}
+
+// Blocks come out as their lines are read: a program whose error is on its
+// last line has handed out every block before it when the error is found.
+TEST(StreamGcode, BlocksComeOutBeforeTheRestIsRead) {
+    const auto path = std::filesystem::temp_directory_path() / fmt::format("cpstep_stream_late_{}.ngc", ::getpid());
+    {
+        std::ofstream out(path);
+        out << "G1 F600\n";
+        for (int i = 0; i < 100000; ++i) out << fmt::format("G1 X{} Y{}\n", 10 + i % 2, 10 + i % 3);
+        out << "G1 X1 Q\n";
+    }
+    std::size_t n = 0;
+    auto r = stream_gcode(path, {}, [&](MotionBlock&&, std::size_t) { ++n; });
+    EXPECT_FALSE(r.ok());
+    EXPECT_GE(n, 100000u);
+    std::filesystem::remove(path);
 }
