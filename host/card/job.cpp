@@ -91,7 +91,13 @@ std::optional<plan::Diagnostic> to_wire_segment(const plan::PlannedJob& job, siz
                                                 std::span<const plan::Chunk> chunks_in, const plan::ConicWalk* conic,
                                                 const std::string& file, const CardLimits& card,
                                                 std::vector<WireSegment>& out) {
-  const plan::CardSegment& seg = job.card[s].segment;
+  return to_wire_segment(job.card[s].segment, torch_of(job, job.card[s].segment), chunks_in, conic, file, card, out);
+}
+
+std::optional<plan::Diagnostic> to_wire_segment(const plan::CardSegment& seg, bool torch,
+                                                std::span<const plan::Chunk> chunks_in, const plan::ConicWalk* conic,
+                                                const std::string& file, const CardLimits& card,
+                                                std::vector<WireSegment>& out) {
   std::vector<plan::Chunk> chunks(chunks_in.begin(), chunks_in.end());
   for (const plan::Chunk& c : chunks) {
     if (!in_card_form(c)) {
@@ -129,7 +135,7 @@ std::optional<plan::Diagnostic> to_wire_segment(const plan::PlannedJob& job, siz
         w.dir_positive.push_back(seg.delta[a] >= 0);
         w.v.push_back(seg.v[a]);
       }
-      w.torch = torch_of(job, seg);
+      w.torch = torch;
       w.chunks = take_moves(chunks, next_chunk, n);
       w.conic = WireSegment::Conic{piece.cw, unsigned(piece.axis_u), unsigned(piece.axis_v), piece.words(),
                                    piece.cont};
@@ -183,7 +189,7 @@ std::optional<plan::Diagnostic> to_wire_segment(const plan::PlannedJob& job, siz
       w.dir_positive.push_back(seg.delta[a] >= 0);
       w.v.push_back(uint32_t(d[a] >> k));
     }
-    w.torch = torch_of(job, seg);
+    w.torch = torch;
     w.chunks = take_moves(chunks, next_chunk, n);
     out.push_back(std::move(w));
     done += n;

@@ -58,9 +58,15 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
                               const CardLimits& card = {});
 
 // One planned card segment (job.card[s] with these chunks and walk: its own, or
-// made again by plan::rebuild_card_segment) as wire segments, appended to `out`
+// made again) as wire segments, appended to `out`
 // (none marked `end`); an error when the card cannot take it.
 std::optional<plan::Diagnostic> to_wire_segment(const plan::PlannedJob& job, size_t s,
+                                                std::span<const plan::Chunk> chunks, const plan::ConicWalk* conic,
+                                                const std::string& file, const CardLimits& card,
+                                                std::vector<WireSegment>& out);
+// The same for a card segment and its torch level (its step segment's), as a
+// plan streamed card segment by card segment hands them out.
+std::optional<plan::Diagnostic> to_wire_segment(const plan::CardSegment& seg, bool torch,
                                                 std::span<const plan::Chunk> chunks, const plan::ConicWalk* conic,
                                                 const std::string& file, const CardLimits& card,
                                                 std::vector<WireSegment>& out);

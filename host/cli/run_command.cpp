@@ -232,7 +232,7 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
                  f.event.kind == run::FeedEvent::Kind::toggle ? " (SIGUSR1)"
                  : f.event.at_s > 0 ? fmt::format(" (asked for {:.6f} s)", f.event.at_s) : "");
     fmt::print("checked    position_o at {} of {} card segment ends, {} off the plan\n", r.checked_segments,
-               j.checkpoints.size(), r.position_mismatches);
+               j.checkpoint_count, r.position_mismatches);
     if (m.curve.positions)
       fmt::print("curves     stepped path vs {} NURBS curve{}: max {:.5f} mm, rms {:.5f} mm over {} positions "
                  "(worst at X{:.4f} Y{:.4f}, line {})\n",

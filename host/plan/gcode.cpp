@@ -8,8 +8,10 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -1626,6 +1628,64 @@ Result<Job> stream_gcode(const std::filesystem::path& path, const GcodeOptions& 
         r.value->blocks.clear();
     }
     return r;
+}
+
+struct GcodeBlockReader::Impl {
+    std::shared_ptr<const std::string> text;
+    std::string file;
+    Parser parser;
+    std::size_t pos = 0;
+    int line = 0;
+    bool started = false, lines_done = false;
+    std::vector<MotionBlock> made;
+    std::size_t next_made = 0;
+    std::optional<Result<Job>> done;
+
+    Impl(std::shared_ptr<const std::string> t, std::string f, const GcodeOptions& o)
+        : text(std::move(t)), file(std::move(f)), parser(file, o) {}
+};
+
+GcodeBlockReader::GcodeBlockReader(std::shared_ptr<const std::string> text, std::string file,
+                                   const GcodeOptions& options)
+    : impl_(std::make_unique<Impl>(std::move(text), std::move(file), options)) {}
+GcodeBlockReader::~GcodeBlockReader() = default;
+
+std::optional<MotionBlock> GcodeBlockReader::next() {
+    Impl& p = *impl_;
+    const std::string_view text = *p.text;
+    for (;;) {
+        if (p.next_made < p.made.size()) return std::move(p.made[p.next_made++]);
+        p.made.clear();
+        p.next_made = 0;
+        if (p.done) return std::nullopt;
+        if (!p.started) {
+            p.started = true;
+            if (auto e = binary_data(text, p.file)) {
+                p.done.emplace().errors.push_back(std::move(*e));
+                return std::nullopt;
+            }
+            p.pos = text.starts_with(kBom) ? kBom.size() : 0;
+        }
+        if (!p.lines_done && p.pos <= text.size()) {
+            auto nl = text.find('\n', p.pos);
+            if (nl == std::string_view::npos) nl = text.size();
+            if (!run_program_line(p.parser, text.substr(p.pos, nl - p.pos), ++p.line)) p.lines_done = true;
+            p.pos = nl + 1;
+            p.parser.take_blocks(p.made);
+            continue;
+        }
+        // The end: what it closes (a curve) comes out only when the program is accepted.
+        p.done = p.parser.finish();
+        if (p.done->value) {
+            p.made = std::move(p.done->value->blocks);
+            p.done->value->blocks.clear();
+        }
+    }
+}
+
+const Result<Job>& GcodeBlockReader::result() const {
+    if (!impl_->done) throw std::logic_error("GcodeBlockReader::result before the program's end");
+    return *impl_->done;
 }
 
 bool has_probe_words(std::string_view text) {

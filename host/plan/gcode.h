@@ -142,6 +142,26 @@ Result<Job> parse_gcode(std::string_view text, std::string_view file,
                         const GcodeOptions& options = {});
 Result<Job> load_gcode(const std::filesystem::path& path, const GcodeOptions& options = {});
 
+// A program's blocks pulled one at a time from its text (held by the caller: a
+// run's copy of the file, from which it plans the job again as it sends it):
+// parse_gcode()'s blocks, a line read as each is asked for. next() gives none at
+// the program's end, and then result() holds its errors and warnings (an
+// accepted program's Job without its blocks); a refused program may have given
+// blocks before its error was read.
+class GcodeBlockReader {
+public:
+    GcodeBlockReader(std::shared_ptr<const std::string> text, std::string file, const GcodeOptions& options = {});
+    ~GcodeBlockReader();
+    GcodeBlockReader(const GcodeBlockReader&) = delete;
+    GcodeBlockReader& operator=(const GcodeBlockReader&) = delete;
+    std::optional<MotionBlock> next();
+    [[nodiscard]] const Result<Job>& result() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
 // The program read from a file a piece at a time, each block handed to `sink`
 // (with its index among the program's blocks) once its line is read: the blocks
 // load_gcode() gives, in memory that does not grow with the file (each block is

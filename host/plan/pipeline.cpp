@@ -171,7 +171,6 @@ struct PlanStream::Impl {
         PlannedCardSegment c{pause, std::move(chunks.chunks), nullptr};
         c.prev_event = before;
         c.step_moves = n;
-        c.pause_until = until;
         card(std::move(c));
         return true;
     }
@@ -261,7 +260,6 @@ struct PlanStream::Impl {
         }
         if (auto* list = std::get_if<std::vector<ConicPiece>>(&pieces)) {
             if (!pause_before(list->front().walk->ideal.front())) return false;
-            auto source = std::make_shared<ArcSource>(ArcSource{block, i, e, in.start, in.last_motion});
             for (std::size_t p = 0; p < list->size(); ++p) {
                 ConicPiece& piece = (*list)[p];
                 const std::int64_t before = prev;
@@ -278,8 +276,6 @@ struct PlanStream::Impl {
                 PlannedCardSegment c{piece.segment, std::move(chunks.chunks), std::move(piece.walk)};
                 c.prev_event = before;
                 c.step_moves = piece.segment.moves;
-                c.arc = source;
-                c.arc_piece = p;
                 card(std::move(c));
             }
             last_conic_event = prev;
@@ -450,10 +446,11 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
     }
     PlanStream stream(m, job.file, options);
     PlannedJob pj;
+    // About a step segment and a card segment a block (a hint: arcs make more).
+    pj.step_segments.reserve(job.blocks.size());
+    pj.feeds.reserve(job.blocks.size());
+    pj.card.reserve(job.blocks.size());
     pj.chunk_limits = stream.chunk_limits();
-    // Each card segment as it is made: to the sink, then kept (without its
-    // chunks and walk when the sink is all that needs them).
-    std::optional<Diagnostic> refused;
     const auto drain = [&] {
         for (;;) {
             while (auto s = stream.next_step()) {
@@ -462,13 +459,7 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
             }
             auto c = stream.next_card();
             if (!c) return;
-            if (refused) continue;
-            PlannedCardSegment& kept = pj.card.emplace_back(std::move(*c));
-            if (options.on_segment) refused = options.on_segment(pj, pj.card.size() - 1);
-            if (!options.keep_chunks) {
-                std::vector<Chunk>().swap(kept.chunks);
-                kept.conic.reset();
-            }
+            pj.card.push_back(std::move(*c));
         }
     };
     for (std::size_t b = 0; b < job.blocks.size(); ++b) {
@@ -478,12 +469,6 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
     stream.finish();
     drain();
     result.warnings = stream.warnings();
-    // A card segment the sink refused stopped the card loop there, after
-    // the stages before it had accepted the job.
-    if (refused && (stream.errors().empty() || !stream.refused_before_the_card_loop()) ) {
-        result.errors.push_back(std::move(*refused));
-        return result;
-    }
     if (!stream.errors().empty()) {
         result.errors = stream.errors();
         return result;
@@ -517,39 +502,6 @@ std::vector<double> ideal_times(const PlannedJob& job, double clock_hz) {
             out.insert(out.end(), t.begin(), t.end());
         }
     }
-    return out;
-}
-
-}  // namespace cpstep::plan
-
-namespace cpstep::plan {
-
-RebuiltCardSegment rebuild_card_segment(const PlannedJob& job, std::size_t s, const Machine& m) {
-    const PlannedCardSegment& c = job.card.at(s);
-    const ChunkLimits& lim = job.chunk_limits;
-    const double tol = m.chunk_tolerance_cycles();
-    RebuiltCardSegment out;
-    std::vector<double> ideal;
-    if (c.segment.pause) {
-        ideal = pause_times(c.prev_event, c.pause_until, c.segment.moves);
-    } else if (c.arc) {
-        const ArcSource& a = *c.arc;
-        const std::span<const StepSegment> chords(job.step_segments.data() + a.first, a.end - a.first);
-        const std::span<const PlannedSegment> feeds(job.feeds.data() + a.first, a.end - a.first);
-        auto pieces = plan_conic_arc(arc_input(a.block, chords, feeds, a.first, a.start, a.last_motion, m), m);
-        auto* list = std::get_if<std::vector<ConicPiece>>(&pieces);
-        if (!list || c.arc_piece >= list->size())
-            throw std::logic_error(fmt::format("rebuild_card_segment: card segment {}: its arc is not walked again", s));
-        out.conic = std::move((*list)[c.arc_piece].walk);
-        ideal = out.conic->ideal;
-    } else {
-        ideal = ideal_move_times(job.feeds.at(c.segment.step_segment), c.step_moves, c.segment.first_move,
-                                 c.segment.moves, m.card.clock_hz);
-    }
-    auto chunks = compress(ideal, c.prev_event, tol, lim);
-    if (!chunks.ok())
-        throw std::logic_error(fmt::format("rebuild_card_segment: card segment {}: {}", s, chunks.error));
-    out.chunks = std::move(chunks.chunks);
     return out;
 }
 

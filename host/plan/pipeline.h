@@ -20,29 +20,16 @@
 
 namespace cpstep::plan {
 
-// What plan_job() needs to make a CONIC piece's arc again (rebuild_card_segment).
-struct ArcSource {
-    MotionBlock block;                 // the arc's block (of the fitted job when arcs were fitted)
-    std::size_t first = 0, end = 0;    // its step segments [first, end)
-    PerAxis<std::int64_t> start{};     // where the card was at its start
-    bool last_motion = false;          // no motion after it
-};
-
 struct PlannedCardSegment {
     CardSegment segment;
     std::vector<Chunk> chunks;   // their counts sum to segment.moves
     // A CONIC segment (an arc's piece, plan/conic_arc.h): the plane's walk, every
     // move's ideal time; segment.step_segment is the arc's first chord.
     std::shared_ptr<const ConicWalk> conic;
-    // How its chunks (and walk) are made again, exactly, without the rest of the
-    // job's (rebuild_card_segment): the chunk time of the move before it, cycles
-    // from the job start; the moves of its step segment (all of its parts); a
-    // pause's last move's time; a CONIC piece's arc and its place among the pieces.
+    // The chunk time of the move before it, cycles from the job start, and the
+    // moves of its step segment (all of its parts: each move is timed against them).
     std::int64_t prev_event = 0;
     std::uint64_t step_moves = 0;
-    double pause_until = 0;
-    std::shared_ptr<const ArcSource> arc;
-    std::size_t arc_piece = 0;
 };
 
 struct PlanStats {
@@ -74,16 +61,11 @@ struct PlannedJob {
 struct PlanOptions {
     ChunkLimits chunk_limits;                // enable_add2 defaults from the machine
     bool add2_from_machine = true;
-    // Each card segment as it is made (the plan so far, the segment's index in
-    // its card), with its chunks and walk; a diagnostic refuses the job. Without keep_chunks the
-    // plan keeps the segment without them (rebuild_card_segment makes them
-    // again): a long job's plan then holds no chunk (run/card_job.h, streaming).
-    std::function<std::optional<Diagnostic>(const PlannedJob&, std::size_t)> on_segment;
-    bool keep_chunks = true;
 };
 
 // The whole job planned: its blocks pushed through a PlanStream (after G1 chains
-// are fitted with arcs where the machine file asks), everything it hands out kept.
+// are fitted with arcs where the machine file asks), everything it hands out
+// kept. (A job too long to keep: run::CardJob::streamed, run::PlanCursor.)
 Result<PlannedJob> plan_job(const Job& job, const Machine& machine, const PlanOptions& options = {});
 
 // A step segment through the card loop, with its feed (PlannedJob::step_segments
@@ -102,8 +84,7 @@ struct StreamedStep {
 // its own has been handed out (next_step() until none, then next_card()).
 // The card loop waits for a conic arc's last chord and for the next move
 // after it (whether the walk must end on the arc's end step). After an error
-// nothing more is handed out; errors() are those plan_job() would give
-// (PlanOptions::on_segment and keep_chunks are plan_job()'s, not used here).
+// nothing more is handed out; errors() are those plan_job() would give.
 class PlanStream {
 public:
     PlanStream(const Machine& m, std::string job_file, const PlanOptions& options = {});
@@ -134,18 +115,6 @@ private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
-
-// Card segment `s` of a planned job made again from its step segments, feeds and
-// the segment's own record (PlannedCardSegment::prev_event, ...): chunks equal to
-// job.card[s].chunks and, for a CONIC piece, a walk equal to job.card[s].conic.
-// For a sender that keeps a long job's card segments without their chunks and
-// makes them again as it sends (bounded memory). Throws std::logic_error when
-// it cannot (a plan that plan_job() did not make with this machine).
-struct RebuiltCardSegment {
-    std::vector<Chunk> chunks;
-    std::shared_ptr<const ConicWalk> conic;
-};
-RebuiltCardSegment rebuild_card_segment(const PlannedJob& job, std::size_t s, const Machine& machine);
 
 // The ideal time of every move of a planned job, in card clock cycles from the
 // job start, in execution order: what the chunks realize within the chunk

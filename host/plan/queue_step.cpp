@@ -13,22 +13,24 @@
 
 namespace cpstep::plan {
 
-void for_each_path_step(const PlannedJob& job, double clock_hz,
-                        const std::function<void(int, std::uint64_t, std::int8_t)>& step) {
-    for (std::size_t i = 0; i < job.step_segments.size() && i < job.feeds.size(); ++i) {
-        const StepSegment& s = job.step_segments[i];
-        const PlannedSegment& f = job.feeds[i];
-        const PerAxis<std::int64_t> d = s.delta();
-        for (int a = 0; a < kAxes; ++a) {
-            if (d[a] == 0) continue;
-            const std::int64_t n = d[a] < 0 ? -d[a] : d[a];
-            for (std::int64_t k = 1; k <= n; ++k) {
-                const double at = f.length * (static_cast<double>(k) - 0.5) / static_cast<double>(n);
-                step(a, static_cast<std::uint64_t>(std::llround((f.t_start + f.profile.time_at(at)) * clock_hz)),
-                     d[a] < 0 ? -1 : 1);
-            }
+void for_each_segment_step(const StepSegment& s, const PlannedSegment& f, double clock_hz,
+                           const std::function<void(int, std::uint64_t, std::int8_t)>& step) {
+    const PerAxis<std::int64_t> d = s.delta();
+    for (int a = 0; a < kAxes; ++a) {
+        if (d[a] == 0) continue;
+        const std::int64_t n = d[a] < 0 ? -d[a] : d[a];
+        for (std::int64_t k = 1; k <= n; ++k) {
+            const double at = f.length * (static_cast<double>(k) - 0.5) / static_cast<double>(n);
+            step(a, static_cast<std::uint64_t>(std::llround((f.t_start + f.profile.time_at(at)) * clock_hz)),
+                 d[a] < 0 ? -1 : 1);
         }
     }
+}
+
+void for_each_path_step(const PlannedJob& job, double clock_hz,
+                        const std::function<void(int, std::uint64_t, std::int8_t)>& step) {
+    for (std::size_t i = 0; i < job.step_segments.size() && i < job.feeds.size(); ++i)
+        for_each_segment_step(job.step_segments[i], job.feeds[i], clock_hz, step);
 }
 
 std::vector<StepperSteps> path_steps(const PlannedJob& job, double clock_hz) {

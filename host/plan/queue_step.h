@@ -26,6 +26,8 @@
 namespace cpstep::plan {
 
 struct PlannedJob;
+struct PlannedSegment;
+struct StepSegment;
 
 // One stepper's steps: the cycle of each step and its direction (+1 / -1).
 struct StepperSteps {
@@ -56,6 +58,9 @@ std::vector<StepperSteps> path_steps(const PlannedJob& job, double clock_hz);
 // index as the stepper): for QueueStepCounter, in bounded memory.
 void for_each_path_step(const PlannedJob& job, double clock_hz,
                         const std::function<void(int axis, std::uint64_t cycle, std::int8_t dir)>& step);
+// The steps of one step segment with its feed (a plan streamed segment by segment).
+void for_each_segment_step(const StepSegment& s, const PlannedSegment& feed, double clock_hz,
+                           const std::function<void(int axis, std::uint64_t cycle, std::int8_t dir)>& step);
 
 // Bytes of one integer in Klipper's variable-length encoding.
 unsigned klipper_vlq_bytes(std::int64_t v);

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: MIT
 // The streaming planners' window over a job (plan::FeedPlanner, plan::StepSegmenter):
-// entries of global indices [base, end) in a vector whose front is dropped in bulk.
+// entries of global indices [base, end) in blocks, the front ones freed as they are passed.
 #pragma once
 
 #include <algorithm>
 #include <cstddef>
+#include <deque>
 #include <vector>
 
 namespace cpstep::plan::detail {
@@ -12,30 +13,43 @@ namespace cpstep::plan::detail {
 template <class T>
 class Window {
 public:
-    T& operator[](std::size_t i) { return v_[i - base_]; }
-    const T& operator[](std::size_t i) const { return v_[i - base_]; }
-    T& back() { return v_.back(); }
-    void push_back(const T& x) { v_.push_back(x); }
-    void reserve(std::size_t n) { v_.reserve(n); }
-    [[nodiscard]] std::size_t end() const { return base_ + v_.size(); }
+    T& operator[](std::size_t i) {
+        const std::size_t k = i - base_;
+        return blocks_[k / kBlock][k % kBlock];
+    }
+    const T& operator[](std::size_t i) const {
+        const std::size_t k = i - base_;
+        return blocks_[k / kBlock][k % kBlock];
+    }
+    T& back() { return blocks_.back().back(); }
+    void push_back(const T& x) {
+        if (blocks_.empty() || blocks_.back().size() == kBlock) {
+            blocks_.emplace_back();
+            blocks_.back().reserve(kBlock);
+        }
+        blocks_.back().push_back(x);
+        ++end_;
+    }
+    void reserve(std::size_t) {}  // (it grows by blocks: nothing to reserve)
+    [[nodiscard]] std::size_t end() const { return end_; }
     // Entries held that are still wanted (not before drop_before's mark).
-    [[nodiscard]] std::size_t held() const { return end() - std::max(dropped_, base_); }
-    // Entries before `i` are no longer needed (amortized: erased when they are
-    // at least half of what is held).
+    [[nodiscard]] std::size_t held() const { return end_ - std::max(dropped_, base_); }
+    // Entries before `i` are no longer needed: their blocks are freed once
+    // passed. Blocks, not one vector: a window that grows to a long lookahead
+    // and shrinks again never copies what it holds nor leaves a large block
+    // behind (the process's peak memory), and allocates once in kBlock entries.
     void drop_before(std::size_t i) {
-        i = std::min(i, end());
-        if (i <= dropped_) return;
-        dropped_ = i;
-        const std::size_t n = i - base_;
-        if (n >= 1024 && 2 * n >= v_.size()) {
-            v_.erase(v_.begin(), v_.begin() + static_cast<std::ptrdiff_t>(n));
-            base_ = i;
+        dropped_ = std::max(dropped_, std::min(i, end_));
+        while (!blocks_.empty() && base_ + kBlock <= dropped_) {
+            blocks_.pop_front();
+            base_ += kBlock;
         }
     }
 
 private:
-    std::vector<T> v_;
-    std::size_t base_ = 0, dropped_ = 0;
+    static constexpr std::size_t kBlock = 256;
+    std::deque<std::vector<T>> blocks_;  // each of kBlock entries but the last
+    std::size_t base_ = 0, end_ = 0, dropped_ = 0;
 };
 
 }  // namespace cpstep::plan::detail

@@ -2,6 +2,7 @@
 #include "run/card_job.h"
 
 #include <algorithm>
+#include <deque>
 #include <fstream>
 #include <stdexcept>
 
@@ -29,6 +30,13 @@ uint64_t chunk_cycles_until(const std::vector<card::WireChunk>& chunks, uint64_t
   }
   return uint64_t(t);
 }
+
+// A streamed job planned from its blocks, or from its G-code's text (defined below).
+plan::Result<CardJob> plan_streamed(std::shared_ptr<const plan::Job> job, const plan::Machine& machine,
+                                    const card::CardCaps& caps, const plan::PerAxis<int64_t>& start);
+plan::Result<CardJob> plan_streamed_text(std::shared_ptr<const std::string> text, const std::string& file,
+                                         const plan::GcodeOptions& options, const plan::Machine& machine,
+                                         const card::CardCaps& caps, const plan::PerAxis<int64_t>& start);
 
 }  // namespace
 
@@ -58,14 +66,16 @@ plan::Result<plan::Machine> load_card_machine(const std::filesystem::path& machi
   return machine;
 }
 
-plan::Result<plan::Job> read_card_gcode(const std::filesystem::path& gcode, const plan::Machine& machine,
-                                        const plan::PerAxis<int64_t>& start) {
+namespace {
+
+// The G-code options for a machine on a card at `start` (absolute steps).
+plan::Result<plan::GcodeOptions> card_gcode_options(const plan::Machine& machine, const plan::PerAxis<int64_t>& start) {
+  plan::Result<plan::GcodeOptions> r;
   plan::PerAxis<double> start_mm{};
   for (int a = 0; a < plan::kAxes; ++a) {
     const plan::AxisConfig& ax = machine.axes[a];
     if (start[a] == 0) continue;
     if (!ax.present) {
-      plan::Result<plan::Job> r;
       r.errors.push_back({machine.file, {},
                           fmt::format("the card's axis {} is at {} steps, but the machine has no such axis",
                                       plan::kAxisLetters[a], start[a])});
@@ -73,7 +83,21 @@ plan::Result<plan::Job> read_card_gcode(const std::filesystem::path& gcode, cons
     }
     start_mm[a] = double(start[a]) / ax.steps_per_mm;
   }
-  return plan::load_gcode(gcode, plan::gcode_options(machine, start_mm));
+  r.value = plan::gcode_options(machine, start_mm);
+  return r;
+}
+
+}  // namespace
+
+plan::Result<plan::Job> read_card_gcode(const std::filesystem::path& gcode, const plan::Machine& machine,
+                                        const plan::PerAxis<int64_t>& start) {
+  auto options = card_gcode_options(machine, start);
+  if (!options.ok()) {
+    plan::Result<plan::Job> r;
+    r.errors = options.errors;
+    return r;
+  }
+  return plan::load_gcode(gcode, *options);
 }
 
 plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std::filesystem::path& machine_file,
@@ -85,13 +109,37 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
     r.errors = machine.errors;
     return r;
   }
-  auto job = read_card_gcode(gcode, *machine, start);
-  r.warnings.insert(r.warnings.end(), job.warnings.begin(), job.warnings.end());
-  if (!job.ok()) {
-    r.errors = job.errors;
-    return r;
+  plan::Result<CardJob> planned;
+  if (streamed && machine->planner.fit_arcs_mm == 0) {
+    // Streamed: the G-code's text kept (a copy of the file, which may change
+    // while the job runs), its blocks read and planned as they are needed,
+    // each time the plan is made again (PlanCursor). A program with probe
+    // moves, and one whose G1 chains are fitted with arcs, keep their blocks.
+    auto options = card_gcode_options(*machine, start);
+    if (!options.ok()) {
+      r.errors = options.errors;
+      return r;
+    }
+    std::ifstream in(gcode, std::ios::binary);
+    if (!in) {
+      r.errors.push_back({gcode.string(), {}, "cannot open file"});
+      return r;
+    }
+    auto text = std::make_shared<const std::string>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (!plan::has_probe_words(*text))
+      planned = plan_streamed_text(std::move(text), gcode.string(), *options, *machine, caps, start);
   }
-  auto planned = plan_card_job(*job, *machine, caps, start, streamed);
+  if (!planned.ok() && planned.errors.empty()) {
+    auto job = read_card_gcode(gcode, *machine, start);
+    r.warnings.insert(r.warnings.end(), job.warnings.begin(), job.warnings.end());
+    if (!job.ok()) {
+      r.errors = job.errors;
+      return r;
+    }
+    // A streamed job keeps its blocks (it plans them again as it runs): moved, not copied.
+    planned = streamed ? plan_streamed(std::make_shared<const plan::Job>(std::move(*job.value)), *machine, caps, start)
+                       : plan_card_job(*job, *machine, caps, start);
+  }
   r.warnings.insert(r.warnings.end(), planned.warnings.begin(), planned.warnings.end());
   r.warnings = plan::summarize_repeats(std::move(r.warnings));  // e.g. "feed lowered" once, with a count
   r.errors = std::move(planned.errors);
@@ -102,15 +150,34 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
   return r;
 }
 
+// A streamed job's blocks in order: its own, or read from its G-code's text.
+class BlockSource {
+ public:
+  explicit BlockSource(const CardJob& job) : job_(job) {
+    if (job.gcode_text) reader_.emplace(job.gcode_text, job.job_file, job.gcode_options);
+    else if (!job.blocks) throw std::logic_error("a streamed job with neither blocks nor G-code text");
+  }
+  std::optional<plan::MotionBlock> next() {
+    if (reader_) return reader_->next();
+    if (at_ < job_.blocks->blocks.size()) return job_.blocks->blocks[at_++];
+    return std::nullopt;
+  }
+  // The G-code reader's result once next() gave none (null: the blocks were the job's).
+  const plan::Result<plan::Job>* read_result() const { return reader_ ? &reader_->result() : nullptr; }
+
+ private:
+  const CardJob& job_;
+  std::optional<plan::GcodeBlockReader> reader_;
+  size_t at_ = 0;
+};
+
 namespace {
 
-// A streamed job's wire segments as the planner makes its card segments: each
-// converted, measured (its words, its chunks' cycles and moves) and kept
-// without its chunks but the first (the torch's timing needs it).
 // A streamed job's wire segments as the planner makes its card segments: each
 // converted, checked and measured (its words, the cycles and moves of its
 // chunks, its torch level), then dropped.
 struct WireSink {
+  WireSink(card::CardLimits l, std::string f) : limits(l), file(std::move(f)) {}
   card::CardLimits limits;
   std::string file;
   std::vector<uint64_t> words;       // per wire segment: its SEGMENT command's words
@@ -124,14 +191,14 @@ struct WireSink {
   std::vector<card::WireSegment> made;
   std::vector<uint32_t> scratch;
 
-  std::optional<plan::Diagnostic> take(const plan::PlannedJob& pj, size_t s) {
+  std::optional<plan::Diagnostic> take(const plan::PlannedCardSegment& c, bool torch_on) {
     made.clear();
-    if (auto e = card::to_wire_segment(pj, s, pj.card[s].chunks, pj.card[s].conic.get(), file, limits, made))
-      return e;
+    if (auto e = card::to_wire_segment(c.segment, torch_on, c.chunks, c.conic.get(), file, limits, made)) return e;
     for (const card::WireSegment& w : made) {
       scratch.clear();
       card::encode_segment(w, scratch);
       words.push_back(scratch.size());
+      const uint64_t before = cycle;
       cycle += chunk_cycles_until(w.chunks, UINT64_MAX);
       moves += uint64_t(w.u) << w.k;
       end_cycle.push_back(cycle);
@@ -140,40 +207,166 @@ struct WireSink {
       conics += w.conic.has_value();
       if (first_chunks.size() <= limits.segment_queue) first_chunks.push_back(w.chunks.size());
       if (w.torch != level) {
-        torch.push_back({size_t(segments), w.torch, w.chunks.empty() ? 1u : w.chunks.front().interval,
-                         pj.card[s].segment.loc});
+        torch.push_back({size_t(segments), w.torch, before, w.chunks.empty() ? 1u : w.chunks.front().interval,
+                         c.segment.loc});
         level = w.torch;
       }
       ++segments;
-      last_loc = pj.card[s].segment.loc;
+      last_loc = c.segment.loc;
     }
     return std::nullopt;
   }
 };
+
+// The torch level of a card segment: its step segment's.
+bool torch_of(const PlanCursor& cursor, const plan::PlannedCardSegment& c) {
+  return cursor.step(c.segment.step_segment).segment.torch;
+}
+
+// A streamed job: planned as its blocks go through a plan::PlanStream, each
+// card segment converted and measured by the sink, nothing of the plan kept
+// but its statistics and its source (the blocks, or the G-code's text).
+plan::Result<CardJob> plan_streamed_from(CardJob cj, const card::CardCaps& caps, const plan::PerAxis<int64_t>& start,
+                                         const plan::ArcFitStats& fit) {
+  plan::Result<CardJob> r;
+  const plan::Machine& machine = cj.machine;
+  if (!(machine.card.clock_hz > 0)) {
+    r.errors.push_back({machine.file, {}, "no card clock: the machine file gives no [card] clock_hz and no "
+                                          "card was asked (plan::bind_card())"});
+    return r;
+  }
+  WireSink sink(card::limits(caps), cj.job_file);
+  plan::PlanStream stream(machine, cj.job_file, cj.plan_options);
+  BlockSource source(cj);
+  std::optional<plan::Diagnostic> refused;
+  std::deque<plan::StreamedStep> steps;  // from the last card segment's step segment on
+  bool first_step = true;
+  plan::PerAxis<int64_t> plan_start = start, pos = start;
+  const auto drain = [&] {
+    for (;;) {
+      while (auto st = stream.next_step()) {
+        if (first_step) plan_start = pos = st->segment.start;
+        first_step = false;
+        cj.has_nurbs = cj.has_nurbs || st->segment.kind == plan::MotionKind::nurbs;
+        steps.push_back(std::move(*st));
+      }
+      auto c = stream.next_card();
+      if (!c) return;
+      if (refused) continue;
+      while (steps.size() > 1 && steps.front().index < c->segment.step_segment) steps.pop_front();
+      const bool torch = !steps.empty() && steps.front().index == c->segment.step_segment && steps.front().segment.torch;
+      refused = sink.take(*c, torch);
+      if (!c->segment.pause) {
+        ++cj.checkpoint_count;
+        for (int a = 0; a < plan::kAxes; ++a) pos[a] += c->segment.delta[a];
+      }
+    }
+  };
+  for (size_t b = 0;; ++b) {
+    auto block = source.next();
+    if (!block) break;
+    stream.push(*block, b);
+    drain();
+  }
+  stream.finish();
+  drain();
+  // The G-code's own errors first (a program read whole is refused before it is planned).
+  if (const plan::Result<plan::Job>* read = source.read_result()) {
+    r.warnings = read->warnings;
+    if (!read->ok()) {
+      r.errors = read->errors;
+      return r;
+    }
+  }
+  const std::vector<plan::Diagnostic> w = stream.warnings();
+  r.warnings.insert(r.warnings.end(), w.begin(), w.end());
+  if (refused && (stream.errors().empty() || !stream.refused_before_the_card_loop())) {
+    r.errors.push_back(std::move(*refused));
+    return r;
+  }
+  if (!stream.errors().empty()) {
+    r.errors = stream.errors();
+    return r;
+  }
+  cj.planned.stats = stream.stats();
+  cj.planned.stats.fit = fit;
+  cj.planned.chunk_limits = stream.chunk_limits();
+  // Where the plan starts (its first step segment's start, else the card's
+  // position) and where its last card segment ends.
+  cj.start = plan_start;
+  cj.final_position = pos;
+  cj.wire.start_after = card::start_after(sink.first_chunks, sink.limits);
+  std::vector<uint32_t> preamble;
+  card::encode_preamble(cj.machine, cj.wire.seek, preamble);
+  uint64_t words = preamble.size();
+  for (size_t i = 0; i < sink.segments; ++i) {
+    if (i == cj.wire.start_after) ++words;  // START
+    words += sink.words[i];
+    cj.segment_end_word.push_back(words);
+  }
+  if (cj.wire.start_after >= sink.segments) ++words;
+  cj.segment_end_cycle = std::move(sink.end_cycle);
+  cj.segment_end_moves = std::move(sink.end_moves);
+  cj.streamed_words = words;
+  cj.streamed_chunks = sink.chunks;
+  cj.streamed_segments = sink.segments;
+  cj.streamed_conics = sink.conics;
+  cj.torch_changes = std::move(sink.torch);
+  cj.last_segment_loc = sink.last_loc;
+  cj.end_cycle = sink.cycle;
+  r.value = std::move(cj);
+  return r;
+}
+
+// A streamed job's skeleton: what every consumer of it shares.
+CardJob streamed_job(std::string file, const plan::Machine& machine, const card::CardCaps& caps) {
+  CardJob cj;
+  cj.job_file = std::move(file);
+  cj.machine = machine;
+  cj.caps = caps;
+  cj.streamed = true;
+  cj.plan_options.chunk_limits = card::chunk_limits();  // add2 as the machine's planner.chunk_add2 says
+  return cj;
+}
+
+plan::Result<CardJob> plan_streamed(std::shared_ptr<const plan::Job> job, const plan::Machine& machine,
+                                    const card::CardCaps& caps, const plan::PerAxis<int64_t>& start) {
+  CardJob cj = streamed_job(job->file, machine, caps);
+  plan::ArcFitStats fit;
+  cj.blocks = machine.planner.fit_arcs_mm > 0
+                  ? std::make_shared<const plan::Job>(plan::fit_arcs(*job, machine.planner.fit_arcs_mm, &fit))
+                  : std::move(job);
+  return plan_streamed_from(std::move(cj), caps, start, fit);
+}
+
+plan::Result<CardJob> plan_streamed_text(std::shared_ptr<const std::string> text, const std::string& file,
+                                         const plan::GcodeOptions& options, const plan::Machine& machine,
+                                         const card::CardCaps& caps, const plan::PerAxis<int64_t>& start) {
+  CardJob cj = streamed_job(file, machine, caps);
+  cj.gcode_text = std::move(text);
+  cj.gcode_options = options;
+  return plan_streamed_from(std::move(cj), caps, start, {});
+}
+
 }  // namespace
 
 plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& machine, const card::CardCaps& caps,
                                     const plan::PerAxis<int64_t>& start, bool streamed) {
+  if (streamed) {
+    auto r = plan_streamed(std::make_shared<const plan::Job>(job), machine, caps, start);
+    if (r.value) r.value->warnings = r.warnings;
+    return r;
+  }
   plan::Result<CardJob> r;
   plan::PlanOptions options;
   options.chunk_limits = card::chunk_limits();  // add2 as the machine's planner.chunk_add2 says
-  WireSink sink{card::limits(caps), job.file};
-  if (streamed) {
-    options.on_segment = [&sink](const plan::PlannedJob& pj, size_t s) { return sink.take(pj, s); };
-    options.keep_chunks = false;
-  }
   auto planned = plan::plan_job(job, machine, options);
   r.warnings = planned.warnings;
   if (!planned.ok()) {
     r.errors = planned.errors;
     return r;
   }
-  plan::Result<card::WireJob> wire;
-  if (streamed) {
-    wire.value.emplace().start_after = card::start_after(sink.first_chunks, sink.limits);
-  } else {
-    wire = card::to_wire(*planned, job.file, card::limits(caps));
-  }
+  plan::Result<card::WireJob> wire = card::to_wire(*planned, job.file, card::limits(caps));
   if (!wire.ok()) {
     r.errors = wire.errors;
     return r;
@@ -185,28 +378,8 @@ plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& m
   cj.caps = caps;
   cj.planned = std::move(*planned.value);
   cj.wire = std::move(*wire.value);
-  cj.streamed = streamed;
-  if (streamed) {
-    std::vector<uint32_t> preamble;
-    card::encode_preamble(cj.machine, cj.wire.seek, preamble);
-    uint64_t w = preamble.size();
-    for (size_t i = 0; i < sink.segments; ++i) {
-      if (i == cj.wire.start_after) ++w;  // START
-      w += sink.words[i];
-      cj.segment_end_word.push_back(w);
-    }
-    if (cj.wire.start_after >= sink.segments) ++w;
-    cj.segment_end_cycle = std::move(sink.end_cycle);
-    cj.segment_end_moves = std::move(sink.end_moves);
-    cj.streamed_words = w;
-    cj.streamed_chunks = sink.chunks;
-    cj.streamed_segments = sink.segments;
-    cj.streamed_conics = sink.conics;
-    cj.torch_changes = std::move(sink.torch);
-    cj.last_segment_loc = sink.last_loc;
-  } else {
-    cj.words = card::encode_job(cj.machine, cj.wire);
-  }
+  cj.words = card::encode_job(cj.machine, cj.wire);
+  cj.plan_options = options;
 
   plan::PerAxis<int64_t> pos = start;
   if (!cj.planned.step_segments.empty()) pos = cj.planned.step_segments.front().start;
@@ -219,10 +392,14 @@ plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& m
     for (int a = 0; a < plan::kAxes; ++a) pos[a] += c.segment.delta[a];
     cj.checkpoints.push_back({moves, pos, c.segment.loc});
   }
+  cj.checkpoint_count = cj.checkpoints.size();
+  cj.final_position = cj.checkpoints.empty() ? cj.start : cj.checkpoints.back().position;
+  for (const plan::StepSegment& st : cj.planned.step_segments)
+    cj.has_nurbs = cj.has_nurbs || st.kind == plan::MotionKind::nurbs;
   // Where each SEGMENT command ends in the stream, and when it ends.
   uint64_t end_cycle = 0, end_moves = 0;
   size_t seg = 0;
-  for (size_t w = 0; !streamed && w < cj.words.size();) {
+  for (size_t w = 0; w < cj.words.size();) {
     const size_t len = card::command_words(cj.words[w], plan::kAxes);
     w += len;
     if (len == 1) continue;
@@ -235,6 +412,89 @@ plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& m
   }
   cj.warnings = r.warnings;
   return r;
+}
+
+PlanCursor::PlanCursor(const CardJob& job)
+    : job_(job), stream_(job.machine, job.job_file, job.plan_options), source_(std::make_unique<BlockSource>(job)) {}
+
+PlanCursor::~PlanCursor() = default;
+
+bool PlanCursor::pull() {
+  if (!finished_) {
+    if (auto b = source_->next()) {
+      stream_.push(*b, block_++);
+      return true;
+    }
+  }
+  if (finished_) return false;
+  stream_.finish();
+  finished_ = true;
+  return true;
+}
+
+const plan::PlannedCardSegment* PlanCursor::next_card() {
+  for (;;) {
+    while (auto st = stream_.next_step()) steps_.push_back(std::move(*st));
+    if (auto c = stream_.next_card()) {
+      card_ = std::move(*c);
+      ++card_index_;
+      // The step segments before this one's are done with.
+      while (!steps_.empty() && steps_.front().index < card_->segment.step_segment) steps_.pop_front();
+      return &*card_;
+    }
+    if (!pull()) {
+      if (!stream_.errors().empty())
+        throw std::logic_error("PlanCursor: the plan made again is refused: " + stream_.errors().front().str());
+      return nullptr;
+    }
+  }
+}
+
+const plan::StreamedStep& PlanCursor::step(size_t s) const {
+  if (steps_.empty() || s < steps_.front().index || s >= steps_.front().index + steps_.size())
+    throw std::logic_error(fmt::format("PlanCursor: step segment {} is not held", s));
+  return steps_[s - steps_.front().index];
+}
+
+bool PlanCursor::next_step(plan::StreamedStep& out) {
+  for (;;) {
+    if (auto st = stream_.next_step()) {
+      out = std::move(*st);
+      return true;
+    }
+    while (stream_.next_card()) {  // not wanted here
+    }
+    if (stream_.next_step()) continue;
+    if (!pull()) {
+      if (!stream_.errors().empty())
+        throw std::logic_error("PlanCursor: the plan made again is refused: " + stream_.errors().front().str());
+      return false;
+    }
+  }
+}
+
+CheckpointCursor::CheckpointCursor(const CardJob& job) : job_(job) {
+  if (job.streamed) {
+    plan_.emplace(job);
+    cp_.position = job.start;
+  }
+}
+
+const Checkpoint* CheckpointCursor::next() {
+  if (!job_.streamed) {
+    if (index_ >= job_.checkpoints.size()) return nullptr;
+    return &job_.checkpoints[index_++];
+  }
+  // The pins show neither a pause's moves nor a checkpoint for it.
+  for (const plan::PlannedCardSegment* c; (c = plan_->next_card()) != nullptr;) {
+    if (c->segment.pause) continue;
+    ++index_;
+    cp_.moves += c->segment.moves;
+    for (int a = 0; a < plan::kAxes; ++a) cp_.position[a] += c->segment.delta[a];
+    cp_.loc = c->segment.loc;
+    return &cp_;
+  }
+  return nullptr;
 }
 
 MoveClock::MoveClock(const CardJob& job) : job_(job) {
@@ -255,29 +515,34 @@ bool MoveClock::next() {
 }
 
 bool MoveClock::fill() {
-  const std::vector<plan::PlannedCardSegment>& card = job_.planned.card;
   ideal_.clear();
   chunk_.clear();
-  while (card_ < card.size()) {
-    const plan::PlannedCardSegment& c = card[card_];
-    // A streamed job's segment made again (its chunks and walk) as the clock enters it.
-    if (job_.streamed && into_ == 0 && rebuilt_for_ != card_) {
-      rebuilt_ = plan::rebuild_card_segment(job_.planned, card_, job_.machine);
-      rebuilt_for_ = card_;
-    }
-    const std::vector<plan::Chunk>& chunks = job_.streamed ? rebuilt_.chunks : c.chunks;
-    const plan::ConicWalk* conic = job_.streamed ? rebuilt_.conic.get() : c.conic.get();
-    if (into_ == 0 && (card_ == 0 || card[card_ - 1].segment.step_segment != c.segment.step_segment)) {
+  if (job_.streamed && !cursor_) {
+    cursor_.emplace(job_);
+    streamed_card_ = cursor_->next_card();
+  }
+  const std::vector<plan::PlannedCardSegment>& card = job_.planned.card;
+  for (;;) {
+    // The card segment the block is from (a streamed job's made again as the clock enters it).
+    const plan::PlannedCardSegment* cp = job_.streamed ? streamed_card_ : card_ < card.size() ? &card[card_] : nullptr;
+    if (!cp) return false;
+    const plan::PlannedCardSegment& c = *cp;
+    const std::vector<plan::Chunk>& chunks = c.chunks;
+    const plan::ConicWalk* conic = c.conic.get();
+    if (!job_.streamed && into_ == 0 &&
+        (card_ == 0 || card[card_ - 1].segment.step_segment != c.segment.step_segment)) {
       // A step segment's parts are consecutive; each move is timed against its total
       // (as plan::ideal_times does).
       total_ = 0;
       for (size_t e = card_; e < card.size() && card[e].segment.step_segment == c.segment.step_segment; ++e)
         total_ += card[e].segment.moves;
     }
+    if (job_.streamed) total_ = c.step_moves;  // the moves of its step segment, all of its parts
     const uint64_t left = c.segment.moves - into_;
     const uint64_t n = std::min(left, kBlock);
     if (n == 0) {
       ++card_;
+      if (job_.streamed) streamed_card_ = cursor_->next_card();
       into_ = 0;
       chunk_index_ = 0;
       chunk_move_ = 0;
@@ -301,8 +566,9 @@ bool MoveClock::fill() {
         const auto b = conic->ideal.begin() + std::ptrdiff_t(into_);
         ideal_.assign(b, b + std::ptrdiff_t(std::min<uint64_t>(n, conic->ideal.size() - into_)));
       } else {
-        ideal_ = plan::ideal_move_times(job_.planned.feeds[c.segment.step_segment], total_,
-                                        c.segment.first_move + into_, n, job_.clock_hz());
+        const plan::PlannedSegment& feed = job_.streamed ? cursor_->step(c.segment.step_segment).feed
+                                                         : job_.planned.feeds[c.segment.step_segment];
+        ideal_ = plan::ideal_move_times(feed, total_, c.segment.first_move + into_, n, job_.clock_hz());
       }
       chunk_ = std::move(times);
     }
@@ -314,7 +580,6 @@ bool MoveClock::fill() {
       if (m > 0) return true;
     }
   }
-  return false;
 }
 
 WordSource::WordSource(const CardJob& job, std::vector<uint32_t> prefix)
@@ -322,8 +587,7 @@ WordSource::WordSource(const CardJob& job, std::vector<uint32_t> prefix)
   total_ = prefix_ + job.word_count();
   if (!job.streamed) {
     buf_.insert(buf_.end(), job.words.begin(), job.words.end());
-    preamble_ = start_ = true;
-    card_ = job.planned.card.size();
+    preamble_ = start_ = cards_done_ = true;
   }
 }
 
@@ -350,15 +614,17 @@ bool WordSource::make_more() {
     return true;
   }
   const uint64_t segments = job_.wire_segments();
-  if (card_ >= job_.planned.card.size()) {
+  if (!cursor_ && !cards_done_) cursor_.emplace(job_);
+  const plan::PlannedCardSegment* c = cards_done_ ? nullptr : cursor_->next_card();
+  if (!c) {
+    cards_done_ = true;
     if (start_) return false;
     card::encode_control(true, false, false, buf_);  // a job of fewer segments than the queues hold
     start_ = true;
     return true;
   }
-  const plan::RebuiltCardSegment rb = plan::rebuild_card_segment(job_.planned, card_, job_.machine);
   made_.clear();
-  if (auto e = card::to_wire_segment(job_.planned, card_, rb.chunks, rb.conic.get(), job_.job_file,
+  if (auto e = card::to_wire_segment(c->segment, torch_of(*cursor_, *c), c->chunks, c->conic.get(), job_.job_file,
                                      card::limits(job_.caps), made_))
     throw std::logic_error("WordSource: a card segment the plan took is refused: " + e->str());
   ++card_;
@@ -370,10 +636,6 @@ bool WordSource::make_more() {
     w.end = wire_ + 1 == segments;
     card::encode_segment(w, buf_);
     ++wire_;
-  }
-  if (card_ >= job_.planned.card.size() && job_.wire.start_after >= segments && !start_) {
-    card::encode_control(true, false, false, buf_);
-    start_ = true;
   }
   return true;
 }

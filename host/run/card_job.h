@@ -6,7 +6,10 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <filesystem>
+#include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -48,14 +51,30 @@ struct CardJob {
   // where their torch level changes stand in for them.
   bool streamed = false;
   uint64_t streamed_words = 0, streamed_chunks = 0, streamed_segments = 0, streamed_conics = 0;
+  // Streamed: nor does the plan keep its step segments, feeds or card segments
+  // (planned holds its statistics), nor the checkpoints: PlanCursor makes them
+  // again from the blocks the plan was made from (after planner.fit_arcs_mm),
+  // with the chunk limits it was made with, as a consumer reaches them. What
+  // the run needs of them whole comes with the job.
+  std::shared_ptr<const plan::Job> blocks;
+  // Or the G-code's text (a copy of the file) and how it is read, when the job's
+  // blocks are those of the text as read (no planner.fit_arcs_mm, no probing).
+  std::shared_ptr<const std::string> gcode_text;
+  plan::GcodeOptions gcode_options;
+  plan::PlanOptions plan_options;
+  uint64_t checkpoint_count = 0;            // checkpoints.size()
+  plan::PerAxis<int64_t> final_position{};  // checkpoints.back().position (start when there is none)
+  bool has_nurbs = false;                   // a step segment of a G5.x curve
   struct TorchChange {
     size_t segment = 0;           // the wire segment that brings the new level
     bool on = false;
+    uint64_t end_before = 0;      // the end of the wire segment before it, cycles from START
     uint32_t first_interval = 0;  // its first move's delay (its first chunk's interval)
     plan::SourceLoc loc;          // its G-code block
   };
   std::vector<TorchChange> torch_changes;  // streamed only
   plan::SourceLoc last_segment_loc;        // streamed: the last wire segment's block
+  uint64_t end_cycle = 0;                  // streamed: the last wire segment's end, cycles from START
   [[nodiscard]] uint64_t word_count() const { return streamed ? streamed_words : words.size(); }
   [[nodiscard]] uint64_t wire_segments() const { return streamed ? streamed_segments : wire.segments.size(); }
   [[nodiscard]] uint64_t conic_segments() const;
@@ -67,6 +86,55 @@ struct CardJob {
   [[nodiscard]] uint64_t wire_chunks() const;
   card::CardCaps caps;                   // the card it is planned for
   [[nodiscard]] double clock_hz() const { return machine.card.clock_hz; }
+};
+
+// A streamed job's plan made again, in order (plan::PlanStream over the job's
+// blocks): its card segments with their chunks and walks, each with its step
+// segment and feed, or its step segments alone; in bounded memory. A job that
+// is not streamed is read from its plan.
+class BlockSource;  // a streamed job's blocks (card_job.cpp)
+
+class PlanCursor {
+ public:
+  explicit PlanCursor(const CardJob& job);
+  ~PlanCursor();
+  PlanCursor(const PlanCursor&) = delete;
+  PlanCursor& operator=(const PlanCursor&) = delete;
+  // The next card segment, or null past the last; valid until the next call.
+  const plan::PlannedCardSegment* next_card();
+  // Step segment s with its feed: that of the card segment next_card() gave
+  // last, or one made after it.
+  [[nodiscard]] const plan::StreamedStep& step(size_t s) const;
+  // The next step segment with its feed, in order (for a consumer that reads
+  // step segments, not card segments); false past the last.
+  bool next_step(plan::StreamedStep& out);
+
+ private:
+  bool pull();  // one more block into the plan (or its end); false when there is no more
+
+  const CardJob& job_;
+  plan::PlanStream stream_;
+  std::unique_ptr<BlockSource> source_;
+  size_t block_ = 0;
+  bool finished_ = false;
+  std::deque<plan::StreamedStep> steps_;  // made; from the current card segment's own on
+  std::optional<plan::PlannedCardSegment> card_;
+  size_t card_index_ = 0;
+};
+
+// The job's checkpoints in order (CardJob::checkpoints; a streamed job's made
+// again as PlanCursor reaches them, from CardJob::start).
+class CheckpointCursor {
+ public:
+  explicit CheckpointCursor(const CardJob& job);
+  // The next checkpoint, or null past the last; valid until the next call.
+  const Checkpoint* next();
+
+ private:
+  const CardJob& job_;
+  std::optional<PlanCursor> plan_;
+  size_t index_ = 0;
+  Checkpoint cp_;
 };
 
 // Every move of a job that steps, one at a time in execution order, with its
@@ -101,13 +169,14 @@ class MoveClock {
   std::vector<int64_t> chunk_;
   size_t at_ = 0;
   uint64_t moves_ = 0;
-  plan::RebuiltCardSegment rebuilt_;  // a streamed job's current card segment
-  size_t rebuilt_for_ = SIZE_MAX;
+  // A streamed job's plan, made again as the clock enters each card segment.
+  std::optional<PlanCursor> cursor_;
+  const plan::PlannedCardSegment* streamed_card_ = nullptr;
 };
 
 // The command words of a job as they are sent, behind `prefix` (the watchdog's
 // CONFIG, ...): a whole job's words, or a streamed job's made again card segment
-// by card segment (plan::rebuild_card_segment, card::to_wire_segment) into a
+// by card segment (PlanCursor, card::to_wire_segment) into a
 // window: the same words as encode_job() of the whole job, in bounded memory.
 class WordSource {
  public:
@@ -133,6 +202,8 @@ class WordSource {
   bool start_ = false;        // START made
   size_t card_ = 0, wire_ = 0;
   std::vector<card::WireSegment> made_;
+  std::optional<PlanCursor> cursor_;  // a streamed job's plan, made again
+  bool cards_done_ = false;
 };
 
 // Every move's ideal and chunk time at once (MoveClock run to the end): for

@@ -74,7 +74,8 @@ JobFeedRamp fit_feed_ramp(CardJob& job) {
   CardJob dry_job = job;
   for (Checkpoint& cp : dry_job.checkpoints)
     for (int x = 0; x < plan::kAxes; ++x) cp.position[x] -= job.start[x];
-  dry_job.start = {};
+  for (int x = 0; x < plan::kAxes; ++x) dry_job.final_position[x] -= job.start[x];
+  dry_job.start = {};  // a streamed job's checkpoints are made from it
   RunMeter meter(job);
   o.meter = &meter;
   o.record_pins = false;

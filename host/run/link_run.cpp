@@ -159,10 +159,10 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   if (o.progress) o.progress(run.moves_done, job.moves());
 
   add_card_faults(job, run);
-  if (!job.checkpoints.empty()) {
+  if (job.checkpoint_count) {
     plan::PerAxis<int64_t> want{}, moved{};
     for (int a = 0; a < plan::kAxes; ++a) {
-      want[a] = job.checkpoints.back().position[a] - job.start[a];
+      want[a] = job.final_position[a] - job.start[a];
       moved[a] = run.position[a] - run.start_position[a];
     }
     if (moved != want)

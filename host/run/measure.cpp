@@ -3,11 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <map>
 #include <tuple>
 #include <memory>
 
 #include "plan/gcode.h"
+#include "plan/planner.h"
+#include "plan/segments.h"
 #include "plan/nurbs.h"
 
 namespace cpstep::run {
@@ -57,15 +60,50 @@ std::pair<plan::QueueStepCost, plan::QueueStepCost> klipper_path_costs(const Car
     at1.add(stepper, cycle, dir);
   };
   // Step by step, whichever plan: no step kept.
-  if (!fits_arcs(job)) plan::for_each_path_step(job.planned, job.clock_hz(), add);
-  else plan::for_each_path_step(klipper_plan(job), job.clock_hz(), add);
+  if (fits_arcs(job)) {
+    // The G-code's lines as they are, read and planned as they stream (step
+    // segments and feeds: what klipper_plan() makes whole).
+    plan::Machine m = job.machine;
+    m.planner.fit_arcs_mm = 0;
+    plan::PerAxis<double> start_mm{};
+    for (int a = 0; a < plan::kAxes; ++a)
+      if (m.axes[a].present) start_mm[a] = double(job.start[a]) / m.axes[a].steps_per_mm;
+    plan::StepSegmenter segmenter(m, job.job_file);
+    plan::FeedPlanner feeds(m, job.job_file);
+    std::deque<plan::StepSegment> waiting;  // their feeds not yet out
+    const auto pump = [&] {
+      while (auto s = segmenter.next()) {
+        feeds.push(*s);
+        waiting.push_back(std::move(*s));
+      }
+      while (auto f = feeds.next()) {
+        plan::for_each_segment_step(waiting.front(), *f, job.clock_hz(), add);
+        waiting.pop_front();
+      }
+    };
+    auto read = plan::stream_gcode(job.job_file, plan::gcode_options(m, start_mm), [&](plan::MotionBlock&& b, size_t i) {
+      segmenter.push(b, i);
+      pump();
+    });
+    segmenter.finish();
+    pump();
+    feeds.finish();
+    pump();
+    if (!read.ok() || !segmenter.done() || !feeds.done()) return {};
+  } else if (job.streamed) {
+    PlanCursor cursor(job);
+    for (plan::StreamedStep st; cursor.next_step(st);) plan::for_each_segment_step(st.segment, st.feed, job.clock_hz(), add);
+  } else {
+    plan::for_each_path_step(job.planned, job.clock_hz(), add);
+  }
   return {at25.finish(), at1.finish()};
 }
 
 // The job's NURBS blocks by their G-code position, and the distance to the one
 // the card is on.
 struct RunMeter::Curves {
-  plan::Job parsed;
+  std::shared_ptr<const plan::Job> parsed;  // a streamed job's own blocks, or the G-code read again
+  std::deque<plan::MotionBlock> curves;     // or the curves of its G-code's text, read again
   std::map<std::pair<int, int>, const plan::MotionBlock*> by_loc;
   const plan::MotionBlock* current = nullptr;
   std::unique_ptr<plan::CurveDistance> distance;
@@ -117,20 +155,38 @@ void RunMeter::start(uint64_t start_cycle, const plan::PerAxis<int64_t>& positio
   for (int a = 0; a < plan::kAxes; ++a) steps_[a] = position[a] + origin_[a];
   position_point();
   // The curves, when the job has any (its step segments say), and the first checkpoint's.
-  bool nurbs = false;
-  for (const plan::StepSegment& s : job_.planned.step_segments) nurbs = nurbs || s.kind == plan::MotionKind::nurbs;
-  auto parsed = nurbs ? plan::load_gcode(job_.job_file, plan::gcode_options(job_.machine)) : plan::Result<plan::Job>{};
-  if (parsed.ok()) {
+  const bool nurbs = job_.has_nurbs;
+  std::shared_ptr<const plan::Job> blocks = job_.blocks;
+  if (nurbs && job_.gcode_text) {
+    // Only the curves of the job's text are kept.
     curves_ = std::make_unique<Curves>();
-    curves_->parsed = std::move(*parsed.value);
-    for (const auto& b : curves_->parsed.blocks)
+    plan::GcodeBlockReader reader(job_.gcode_text, job_.job_file, job_.gcode_options);
+    while (auto b = reader.next())
+      if (b->kind == plan::MotionKind::nurbs && b->curve) {
+        const plan::MotionBlock& kept = curves_->curves.emplace_back(std::move(*b));
+        curves_->by_loc[{kept.loc.line, kept.loc.col}] = &kept;
+      }
+    if (curves_->by_loc.empty()) curves_.reset();
+  } else if (nurbs && !blocks) {
+    auto parsed = plan::load_gcode(job_.job_file, plan::gcode_options(job_.machine));
+    if (parsed.ok()) blocks = std::make_shared<const plan::Job>(std::move(*parsed.value));
+  }
+  if (nurbs && blocks) {
+    curves_ = std::make_unique<Curves>();
+    curves_->parsed = std::move(blocks);
+    for (const auto& b : curves_->parsed->blocks)
       if (b.kind == plan::MotionKind::nurbs && b.curve) curves_->by_loc[{b.loc.line, b.loc.col}] = &b;
     if (curves_->by_loc.empty()) curves_.reset();
   }
-  checkpoint_ = 0;
   checkpoint_from_ = 0;
-  if (curves_ && !job_.checkpoints.empty()) {
-    curves_->current = curves_->at(job_.checkpoints[0].loc);
+  checkpoints_.reset();
+  checkpoint_ = nullptr;
+  if (curves_) {
+    checkpoints_.emplace(job_);
+    checkpoint_ = checkpoints_->next();
+  }
+  if (curves_ && checkpoint_) {
+    curves_->current = curves_->at(checkpoint_->loc);
     if (curves_->current) {
       curves_->distance = std::make_unique<plan::CurveDistance>(*curves_->current->curve);
       ++m_.curve.curves;
@@ -154,11 +210,10 @@ void RunMeter::position_point() {
 
 void RunMeter::curve_point() {
   if (!curves_) return;
-  const std::vector<Checkpoint>& cps = job_.checkpoints;
   const uint64_t i = m_.moves;  // the position after i moves
   for (;;) {
-    if (checkpoint_ >= cps.size()) return;
-    const Checkpoint& cp = cps[checkpoint_];
+    if (!checkpoint_) return;
+    const Checkpoint& cp = *checkpoint_;
     if (curves_->current && i >= checkpoint_from_ && i <= cp.moves) {
       const double z = curves_->current->curve->points().front()[2];
       const double x = double(steps_[0]) / axes_[0].spm, y = double(steps_[1]) / axes_[1].spm;
@@ -175,8 +230,9 @@ void RunMeter::curve_point() {
     if (i != cp.moves) return;
     // The card segment ends here: the next one starts at this position.
     checkpoint_from_ = cp.moves;
-    if (++checkpoint_ >= cps.size()) return;
-    const plan::MotionBlock* b = curves_->at(cps[checkpoint_].loc);
+    checkpoint_ = checkpoints_->next();
+    if (!checkpoint_) return;
+    const plan::MotionBlock* b = curves_->at(checkpoint_->loc);
     if (b && b != curves_->current) {
       curves_->distance = std::make_unique<plan::CurveDistance>(*b->curve);
       ++m_.curve.curves;
@@ -332,8 +388,22 @@ KinematicSeries RunMeter::series() const {
   const std::vector<double> speed_v = path_speed(kv, s.window.v), speed_a = path_speed(ka, s.window.a),
                             speed_j = path_speed(kj, s.window.j);
   const Derivatives dsa{speed_a, ka, s.window.a}, dsj{speed_j, kj, s.window.j};
-  const auto& feeds = job_.planned.feeds;
-  size_t f = 0;
+  // The plan's feeds in time order (a streamed job's made again as the series reaches them).
+  std::optional<PlanCursor> cursor;
+  if (job_.streamed) cursor.emplace(job_);
+  size_t next_feed = 0;
+  const auto feed_after = [&](std::optional<plan::PlannedSegment>& out) {
+    out.reset();
+    if (cursor) {
+      plan::StreamedStep st;
+      if (cursor->next_step(st)) out = std::move(st.feed);
+    } else if (next_feed < job_.planned.feeds.size()) {
+      out = job_.planned.feeds[next_feed++];
+    }
+  };
+  std::optional<plan::PlannedSegment> feed, following;
+  feed_after(feed);
+  feed_after(following);
   for (size_t g = pad_; g + pad_ < samples_; ++g) {
     const double t = (double(g) - double(pad_)) * dt;
     s.t.push_back(t);
@@ -346,11 +416,13 @@ KinematicSeries RunMeter::series() const {
     s.path_v.push_back(speed_v[g]);
     s.path_a.push_back(dsa.d1(g));
     s.path_j.push_back(dsj.d2(g));
-    while (f + 1 < feeds.size() && feeds[f + 1].t_start <= t) ++f;
+    while (following && following->t_start <= t) {
+      feed = std::move(following);
+      feed_after(following);
+    }
     plan::KinState st;
-    if (f < feeds.size() && feeds[f].profile.duration > 0 && t >= feeds[f].t_start &&
-        t <= feeds[f].t_start + feeds[f].profile.duration)
-      st = feeds[f].profile.at(t - feeds[f].t_start);
+    if (feed && feed->profile.duration > 0 && t >= feed->t_start && t <= feed->t_start + feed->profile.duration)
+      st = feed->profile.at(t - feed->t_start);
     s.plan_v.push_back(st.v);
     s.plan_a.push_back(st.a);
     s.plan_j.push_back(st.j);

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -154,7 +155,8 @@ class RunMeter {
   std::vector<plan::PerAxis<double>> path_;
   uint64_t path_stride_ = 1;
   // CurveDeviation: the checkpoint the current move belongs to.
-  size_t checkpoint_ = 0;
+  std::optional<CheckpointCursor> checkpoints_;
+  const Checkpoint* checkpoint_ = nullptr;
   uint64_t checkpoint_from_ = 0;  // moves before its card segment
   double curve_sum2_ = 0;
 };

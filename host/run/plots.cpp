@@ -94,7 +94,7 @@ std::string write_plots(const fs::path& dir, const CardJob& job, const RunMeter&
     std::ofstream plan(dir / "path_plan.dat");
     plan << "# x_mm y_mm z_mm a_mm at the planned step segments' ends\n";
     bool first = true;
-    for (const plan::StepSegment& s : job.planned.step_segments) {
+    const auto add = [&](const plan::StepSegment& s) {
       for (const auto* p : first ? std::vector{&s.start, &s.end} : std::vector{&s.end}) {
         plan::PerAxis<double> mm{};
         for (int a = 0; a < plan::kAxes; ++a)
@@ -102,6 +102,12 @@ std::string write_plots(const fs::path& dir, const CardJob& job, const RunMeter&
         plan << fmt::format("{:.6f} {:.6f} {:.6f} {:.6f}\n", mm[0], mm[1], mm[2], mm[3]);
       }
       first = false;
+    };
+    if (job.streamed) {  // the plan made again, step segment by step segment
+      PlanCursor cursor(job);
+      for (plan::StreamedStep st; cursor.next_step(st);) add(st.segment);
+    } else {
+      for (const plan::StepSegment& s : job.planned.step_segments) add(s);
     }
     if (!out || !plan) return fmt::format("cannot write the path data in {}", dir.string());
   }

@@ -161,7 +161,7 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
     if (!run.pins_observed) j["start_steps"] = run.start_position[a];
     j["final_steps"] = run.position[a];
     j["final_mm"] = double(run.position[a]) / ax.steps_per_mm;
-    j["planned_final_steps"] = job.checkpoints.empty() ? 0 : job.checkpoints.back().position[a];
+    j["planned_final_steps"] = job.checkpoint_count ? job.final_position[a] : 0;
     if (run.pins_observed) j["pulses"] = am.pulses;
     j["step_high_cycles"] = ax.pulse.step_high;
     j["step_low_cycles"] = ax.pulse.step_low;

@@ -254,7 +254,8 @@ CardJob counted_from_zero(const CardJob& job) {
   CardJob j = job;
   for (Checkpoint& c : j.checkpoints)
     for (int a = 0; a < plan::kAxes; ++a) c.position[a] -= job.start[a];
-  j.start = {};
+  for (int a = 0; a < plan::kAxes; ++a) j.final_position[a] -= job.start[a];
+  j.start = {};  // a streamed job's checkpoints are made from it
   return j;
 }
 

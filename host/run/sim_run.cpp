@@ -132,7 +132,8 @@ namespace {
 class Recorder {
  public:
   Recorder(const CardJob& job, CardRun& run, sim::VcdWriter* vcd, const SimRunOptions& o)
-      : job_(job), run_(run), vcd_(vcd), options_(o) {
+      : job_(job), run_(run), vcd_(vcd), options_(o), checkpoints_(job) {
+    checkpoint_ = checkpoints_.next();
     const plan::Machine& m = job.machine;
     for (int a = 0; a < plan::kAxes; ++a) {
       // Axes the machine does not use keep the card's reset polarity (active high, DIR high = +).
@@ -233,8 +234,8 @@ class Recorder {
   static constexpr uint32_t kAxisMask = (1u << plan::kAxes) - 1;
 
   void check_segment_end(const sim::CardOut& out) {
-    if (next_ >= job_.checkpoints.size()) return;
-    const Checkpoint& cp = job_.checkpoints[next_];
+    if (!checkpoint_) return;
+    const Checkpoint& cp = *checkpoint_;
     if (run_.move_events != cp.moves) return;
     ++run_.checked_segments;
     plan::PerAxis<int64_t> card{};
@@ -251,6 +252,7 @@ class Recorder {
                       axes_text(cp.position, job_.machine))));
     }
     ++next_;
+    checkpoint_ = checkpoints_.next();
   }
 
   const CardJob& job_;
@@ -267,6 +269,8 @@ class Recorder {
   uint64_t last_move_edge_ = 0;
   uint64_t end_cycle_ = 0;
   size_t next_ = 0;
+  CheckpointCursor checkpoints_;  // the plan's, in order
+  const Checkpoint* checkpoint_ = nullptr;
   plan::PerAxis<int64_t> pins_{};
 };
 

@@ -14,14 +14,10 @@ std::vector<TorchSwitch> torch_switches(const CardJob& job) {
     const uint64_t n = job.wire_segments();
     bool level = false;
     for (const CardJob::TorchChange& t : job.torch_changes) {
-      const uint64_t end_before = t.segment ? job.segment_end_cycle[t.segment - 1] : 0;
-      out.push_back({t.segment, t.on, end_before + 1, end_before + t.first_interval, t.loc});
+      out.push_back({t.segment, t.on, t.end_before + 1, t.end_before + t.first_interval, t.loc});
       level = t.on;
     }
-    if (level) {
-      const uint64_t end = n ? job.segment_end_cycle[n - 1] : 0;
-      out.push_back({size_t(n), false, end + 1, end + 1, job.last_segment_loc});
-    }
+    if (level) out.push_back({size_t(n), false, job.end_cycle + 1, job.end_cycle + 1, job.last_segment_loc});
     return out;
   }
   const std::vector<card::WireSegment>& segs = job.wire.segments;

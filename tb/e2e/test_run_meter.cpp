@@ -195,38 +195,72 @@ TEST_P(RunMeterJobs, TheLiveMeasureIsTheWholeRunsMeasure) {
   EXPECT_GE(ks.t.back(), m.job_time_s - 1e-9);
 }
 
-// Every card segment of a planned job made again from its own record
-// (plan::rebuild_card_segment): the same chunks and, for a CONIC piece, the same
-// walk, without the rest of the job's chunks (what a sender that keeps a long
-// job's segments without their chunks does).
+// Every card segment of a streamed job made again by a run::PlanCursor from the
+// job's blocks (what its sender, its clock and its checks do as the run reaches
+// it): the whole plan's card segments with the same chunks and, for a CONIC
+// piece, the same walk, its step segments and feeds, and its checkpoints.
 TEST_P(RunMeterJobs, EveryCardSegmentIsMadeAgainExactly) {
   const run::CardJob job = example(GetParam());
   size_t conics = 0;
-  for (size_t s = 0; s < job.planned.card.size(); ++s) {
-    const plan::PlannedCardSegment& c = job.planned.card[s];
-    const plan::RebuiltCardSegment r = plan::rebuild_card_segment(job.planned, s, job.machine);
-    ASSERT_EQ(r.chunks, c.chunks) << "card segment " << s << " (line " << c.segment.loc.line << ")";
-    ASSERT_EQ(bool(r.conic), bool(c.conic)) << "card segment " << s;
-    if (!c.conic) continue;
-    ++conics;
-    ASSERT_EQ(r.conic->ideal, c.conic->ideal) << "card segment " << s;
-    ASSERT_EQ(r.conic->words(), c.conic->words()) << "card segment " << s;
-  }
+  for (const plan::PlannedCardSegment& c : job.planned.card) conics += c.conic != nullptr;
   if (std::string(GetParam()) == "tight_arcs.ngc" || std::string(GetParam()) == "bracket.ngc") {
     EXPECT_GT(conics, 0u);
   }
+  // A streamed job's plan made again by a PlanCursor from its blocks: the
+  // whole plan's card segments, step segments and feeds, and its checkpoints.
+  const run::CardJob streamed = example(GetParam(), true);
+  run::PlanCursor cursor(streamed);
+  size_t s = 0;
+  for (const plan::PlannedCardSegment* c; (c = cursor.next_card()) != nullptr; ++s) {
+    ASSERT_LT(s, job.planned.card.size());
+    const plan::PlannedCardSegment& w = job.planned.card[s];
+    ASSERT_EQ(c->segment.step_segment, w.segment.step_segment) << "card segment " << s;
+    ASSERT_EQ(c->segment.delta, w.segment.delta) << "card segment " << s;
+    ASSERT_EQ(c->chunks, w.chunks) << "card segment " << s;
+    ASSERT_EQ(bool(c->conic), bool(w.conic)) << "card segment " << s;
+    if (c->conic) {
+      ASSERT_EQ(c->conic->words(), w.conic->words()) << "card segment " << s;
+    }
+    if (c->segment.pause) continue;
+    const plan::StreamedStep& st = cursor.step(c->segment.step_segment);
+    ASSERT_EQ(st.segment.start, job.planned.step_segments[st.index].start) << "card segment " << s;
+    ASSERT_EQ(st.feed.t_start, job.planned.feeds[st.index].t_start) << "card segment " << s;
+  }
+  EXPECT_EQ(s, job.planned.card.size());
+  run::CheckpointCursor cps(streamed);
+  size_t k = 0;
+  for (const run::Checkpoint* cp; (cp = cps.next()) != nullptr; ++k) {
+    ASSERT_LT(k, job.checkpoints.size());
+    ASSERT_EQ(cp->moves, job.checkpoints[k].moves) << "checkpoint " << k;
+    ASSERT_EQ(cp->position, job.checkpoints[k].position) << "checkpoint " << k;
+    ASSERT_EQ(cp->loc, job.checkpoints[k].loc) << "checkpoint " << k;
+  }
+  EXPECT_EQ(k, job.checkpoints.size());
 }
 
-// A streamed job (run::CardJob::streamed: no chunk kept, the words made again as
-// they are sent) sends the whole job's words, word for word, in windows of any
-// size; its segment ends and counts are the whole job's; run on the card it
-// makes the same pins and measures.
+// A streamed job (run::CardJob::streamed: nothing of the plan kept but its
+// blocks and statistics, the words made again as they are sent) sends the whole
+// job's words, word for word, in windows of any size; its segment ends and
+// counts are the whole job's; run on the card it makes the same pins and
+// measures.
 TEST_P(RunMeterJobs, AStreamedJobIsTheWholeJob) {
   const run::CardJob whole = example(GetParam());
   const run::CardJob streamed = example(GetParam(), true);
   ASSERT_TRUE(streamed.streamed);
   EXPECT_TRUE(streamed.words.empty());
-  for (const plan::PlannedCardSegment& c : streamed.planned.card) ASSERT_TRUE(c.chunks.empty() && !c.conic);
+  // Nothing of the plan kept per line: its blocks and statistics.
+  EXPECT_TRUE(streamed.planned.card.empty());
+  EXPECT_TRUE(streamed.planned.step_segments.empty());
+  EXPECT_TRUE(streamed.planned.feeds.empty());
+  EXPECT_TRUE(streamed.checkpoints.empty());
+  EXPECT_EQ(streamed.checkpoint_count, whole.checkpoints.size());
+  EXPECT_EQ(streamed.final_position, whole.checkpoints.back().position);
+  EXPECT_EQ(streamed.start, whole.start);
+  EXPECT_EQ(streamed.has_nurbs, whole.has_nurbs);
+  EXPECT_EQ(streamed.planned.stats.duration_s, whole.planned.stats.duration_s);
+  EXPECT_EQ(streamed.planned.stats.chunks, whole.planned.stats.chunks);
+  EXPECT_EQ(streamed.planned.stats.card_segments, whole.planned.stats.card_segments);
+  EXPECT_EQ(streamed.planned.stats.step_segments, whole.planned.stats.step_segments);
   EXPECT_EQ(streamed.word_count(), whole.words.size());
   EXPECT_EQ(streamed.wire_chunks(), whole.wire_chunks());
   EXPECT_EQ(streamed.segment_end_word, whole.segment_end_word);
@@ -281,6 +315,41 @@ INSTANTIATE_TEST_SUITE_P(Examples, RunMeterJobs,
                            std::string n = info.param;
                            return n.substr(0, n.find('.'));
                          });
+
+// A streamed job whose G1 chains are fitted with arcs (planner.fit_arcs_mm) keeps
+// its fitted blocks, not its text, and plans them again: the whole job's words,
+// checkpoints and measures all the same.
+TEST(RunMeter, AStreamedJobWithFittedArcsKeepsItsBlocks) {
+  const auto caps = card::board_caps("hx8k");
+  auto loaded = run::load_card_machine(kSource + "/examples/machines/seed002.toml", *caps);
+  ASSERT_TRUE(loaded.ok()) << plan::join(loaded.errors);
+  std::optional<plan::Machine> machine = *loaded.value;
+  machine->planner.fit_arcs_mm = 0.01;
+  auto job = run::read_card_gcode(kSource + "/examples/jobs/dense.ngc", *machine);
+  ASSERT_TRUE(job.ok()) << plan::join(job.errors);
+  auto whole = run::plan_card_job(*job, *machine, *caps);
+  auto streamed = run::plan_card_job(*job, *machine, *caps, {}, true);
+  ASSERT_TRUE(whole.ok() && streamed.ok()) << plan::join(whole.errors) << plan::join(streamed.errors);
+  ASSERT_TRUE(streamed->blocks && !streamed->gcode_text);
+  EXPECT_GT(streamed->planned.stats.fit.arcs, 0u);
+  EXPECT_EQ(streamed->planned.stats.fit.arcs, whole->planned.stats.fit.arcs);
+  run::WordSource src(*streamed);
+  std::vector<uint32_t> words;
+  while (!src.exhausted()) {
+    const std::span<const uint32_t> w = src.window(4096);
+    words.insert(words.end(), w.begin(), w.end());
+    src.consume(w.size());
+  }
+  EXPECT_EQ(words, whole->words);
+  run::CheckpointCursor cps(*streamed);
+  size_t k = 0;
+  for (const run::Checkpoint* cp; (cp = cps.next()) != nullptr; ++k) {
+    ASSERT_LT(k, whole->checkpoints.size());
+    ASSERT_EQ(cp->position, whole->checkpoints[k].position) << "checkpoint " << k;
+  }
+  EXPECT_EQ(k, whole->checkpoints.size());
+  EXPECT_EQ(run::ideal_cycles(*streamed), run::ideal_cycles(*whole));
+}
 
 // A run far longer than its plan (as under a feed hold, or a job of 10^8 moves):
 // the series' grid and the path plot stay within their bounds, and what they

@@ -274,13 +274,12 @@ int fingerprint(const char* mpath, const char* jpath) {
             const CardSegment& g = c.segment;
             const std::uint64_t ints[] = {std::uint64_t(g.major), g.moves, g.first_move, g.step_segment,
                                           std::uint64_t(g.pause), std::uint64_t(c.prev_event), c.step_moves,
-                                          c.arc_piece, std::uint64_t(g.loc.line)};
+                                          std::uint64_t(g.loc.line)};
             mix(ints, sizeof ints);
             for (std::size_t a = 0; a < kAxes; ++a) {
                 const std::int64_t per[] = {g.dir_positive[a], g.u[a], g.v[a], g.delta[a]};
                 mix(per, sizeof per);
             }
-            num(c.pause_until);
             for (const Chunk& k : c.chunks) mix(&k, sizeof k);
             if (c.conic) {
                 mix(c.conic->moves.data(), c.conic->moves.size());

@@ -657,7 +657,9 @@ TEST(PlanStream, PlansTheJobAsItsBlocksArriveHoldingAWindow) {
             while (auto s = stream.next_step()) steps.push_back(std::move(*s));
             auto c = stream.next_card();
             if (!c) return;
-            if (!c->segment.pause) ASSERT_LT(c->segment.step_segment, steps.size()) << "card segment " << cards.size();
+            if (!c->segment.pause) {
+                ASSERT_LT(c->segment.step_segment, steps.size()) << "card segment " << cards.size();
+            }
             if (cards.empty()) first_card_at = pushed;
             cards.push_back(std::move(*c));
         }
@@ -691,7 +693,9 @@ TEST(PlanStream, PlansTheJobAsItsBlocksArriveHoldingAWindow) {
         ASSERT_EQ(a.chunks, b.chunks) << "card segment " << c;
         ASSERT_EQ(a.prev_event, b.prev_event) << "card segment " << c;
         ASSERT_EQ(a.conic != nullptr, b.conic != nullptr) << "card segment " << c;
-        if (a.conic) ASSERT_EQ(a.conic->moves, b.conic->moves) << "card segment " << c;
+        if (a.conic) {
+            ASSERT_EQ(a.conic->moves, b.conic->moves) << "card segment " << c;
+        }
     }
     EXPECT_EQ(stream.stats().moves, pj.stats.moves);
     EXPECT_EQ(stream.stats().chunks, pj.stats.chunks);
