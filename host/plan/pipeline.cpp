@@ -52,6 +52,10 @@ ConicArcInput arc_input(const MotionBlock& block, std::span<const StepSegment> c
     return in;
 }
 
+// The most pause moves one pause may take (a dwell longer than one move
+// interval: docs/PLANNING.md "Dwells"): a chunk's count.
+constexpr std::uint64_t kMaxPauseMoves = 65535;
+
 // Equal intervals, each under 2^32 - 1 cycles, that make up `cycles`.
 std::uint64_t intervals(double cycles) {
     return static_cast<std::uint64_t>(std::floor(cycles / double(kMaxMoveDelayCycles))) + 1;
@@ -151,7 +155,20 @@ struct PlanStream::Impl {
 
     // Pause moves from `prev` to cycle `until`, in `n` equal steps of at most
     // 2^32 - 1 cycles (the last at `until`), as one card segment of their own.
-    bool add_pause(double until, std::uint64_t n) {
+    bool add_pause(double until, std::uint64_t n, double pause_cycles) {
+        // At most kMaxPauseMoves of them: a longer pause (the dwells from
+        // dwell_loc on, together) is refused before its moves are made.
+        if (n > kMaxPauseMoves) {
+            const double longest = double(kMaxPauseMoves + 1) * double(kMaxMoveDelayCycles) / m.card.clock_hz;
+            loop_errors.push_back(
+                {file, dwell_loc,
+                 fmt::format("a pause of {:.6g} s (the dwells from here to the next move) is longer than the "
+                             "card times: at most {} pause moves of 2^32 - 1 cycles and the move after them, "
+                             "{:.6g} s at its {:g} Hz clock",
+                             pause_cycles / m.card.clock_hz, kMaxPauseMoves,
+                             longest, m.card.clock_hz)});
+            return false;
+        }
         auto chunks = compress(pause_times(prev, until, n), prev, tol, lim);
         if (!chunks.ok()) {
             loop_errors.push_back({file, dwell_loc, fmt::format("pause timing: {}", chunks.error)});
@@ -183,7 +200,7 @@ struct PlanStream::Impl {
             // after them times the last part (each at most 2^32 - 1 cycles).
             const double gap = first_ideal - double(prev);
             const std::uint64_t parts = intervals(gap);
-            return add_pause(double(prev) + gap * double(parts - 1) / double(parts), parts - 1);
+            return add_pause(double(prev) + gap * double(parts - 1) / double(parts), parts - 1, gap);
         }
         return true;
     }
@@ -342,7 +359,7 @@ struct PlanStream::Impl {
         ended = true;
         if (dwell_first != kNone && dwell_s > 0) {
             const double until = double(prev) + dwell_s * m.card.clock_hz;
-            if (!add_pause(until, intervals(until - double(prev)))) return;
+            if (!add_pause(until, intervals(until - double(prev)), until - double(prev))) return;
             end_s = double(prev) / m.card.clock_hz;
         }
         stats.step_segments = i;

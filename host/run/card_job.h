@@ -43,19 +43,17 @@ struct CardJob {
   std::vector<uint64_t> segment_end_cycle;
   std::vector<uint64_t> segment_end_moves;
   std::vector<plan::Diagnostic> warnings;  // the planner's (also in the Result)
-  // Streamed (prepare_job(..., streamed)): the plan's card segments keep no
-  // chunks, `words` is empty, and WordSource makes the command words again,
-  // segment by segment, as they are sent: memory that grows with the job's
-  // segments, not its moves (docs/SIM.md "Memory").
-  // Nor does it keep wire segments: their count, the CONIC ones among them and
-  // where their torch level changes stand in for them.
+  // Streamed (prepare_job(..., streamed)): none of the plan is kept. `planned`
+  // holds its statistics, `words`, `wire.segments` and `checkpoints` are empty;
+  // a PlanCursor makes the plan again from the job's blocks or its G-code's text,
+  // with the chunk limits it was made with, as a consumer reaches it (WordSource
+  // the command words, segment by segment, as they are sent). What the run needs
+  // of it whole comes with the job: the words' and wire segments' counts, the
+  // CONIC ones, the torch's changes, the checkpoints' count and last position
+  // (docs/SIM.md "Memory").
   bool streamed = false;
   uint64_t streamed_words = 0, streamed_chunks = 0, streamed_segments = 0, streamed_conics = 0;
-  // Streamed: nor does the plan keep its step segments, feeds or card segments
-  // (planned holds its statistics), nor the checkpoints: PlanCursor makes them
-  // again from the blocks the plan was made from (after planner.fit_arcs_mm),
-  // with the chunk limits it was made with, as a consumer reaches them. What
-  // the run needs of them whole comes with the job.
+  // The blocks the plan was made from (after planner.fit_arcs_mm).
   std::shared_ptr<const plan::Job> blocks;
   // Or the G-code's text (a copy of the file) and how it is read, when the job's
   // blocks are those of the text as read (no planner.fit_arcs_mm, no probing).

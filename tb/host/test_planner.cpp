@@ -323,13 +323,31 @@ TEST(Pipeline, AJobPastTheCardsCycleCountIsRefusedAtItsBlock) {
         EXPECT_NE(pj.errors[0].message.find("the job would last past 9.61e+10 s here"), std::string::npos)
             << join(pj.errors);
     }
-    // A dwell of a year is long, not impossible: pause moves of up to 2^32 - 1 cycles.
-    auto job = parse_gcode("G1 X1 F600\nG4 P31536000\nG1 X2\n", "job.ngc");
+    // A dwell of 60 days is long, not impossible: pause moves of up to 2^32 - 1
+    // cycles, at most 65,535 of them (one chunk's count; 67.9 days at 48 MHz).
+    // Longer is refused before its moves are made (fuzz finding 16: a dwell of
+    // 70 years made 2.5 10^7 pause moves, 57 s and 900 MB), alone or made of
+    // dwells in a row, before a move or at the end.
+    const double days60 = 60 * 86400.0;
+    auto job = parse_gcode(fmt::format("G1 X1 F600\nG4 P{:.0f}\nG1 X2\n", days60), "job.ngc");
     ASSERT_TRUE(job.ok());
     auto pj = plan_job(*job, m);
     ASSERT_TRUE(pj.ok()) << join(pj.errors);
-    EXPECT_GT(pj->stats.duration_s, 31536000.0);
-    EXPECT_GE(double(pj->stats.pause_moves), std::floor(31536000.0 * 48e6 / double(kMaxMoveDelayCycles)));
+    EXPECT_GT(pj->stats.duration_s, days60);
+    EXPECT_EQ(double(pj->stats.pause_moves), std::floor(days60 * 48e6 / double(kMaxMoveDelayCycles)));
+    for (const std::string& g : {std::string("G1 X1 F600\nG4 P2226329287 X4\nG1 X2\n"),
+                                 std::string("G1 X1 F600\nG4 P3000000\nG4 P3000000\nG1 X2\n"),
+                                 std::string("G1 X1 F600\nG4 P3000000\nG4 P3000000\n")}) {
+        auto long_job = parse_gcode(g, "job.ngc");
+        ASSERT_TRUE(long_job.ok()) << join(long_job.errors);
+        auto refused = plan_job(*long_job, m);
+        ASSERT_FALSE(refused.ok()) << g;
+        ASSERT_EQ(refused.errors.size(), 1u) << join(refused.errors);
+        EXPECT_EQ(refused.errors[0].loc.line, 2) << g;
+        EXPECT_NE(refused.errors[0].message.find("is longer than the card times: at most 65535 pause moves"),
+                  std::string::npos)
+            << join(refused.errors);
+    }
 }
 
 // A pause is the next move's first interval on the card (32 bits of cycles): at
