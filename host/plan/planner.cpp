@@ -805,8 +805,6 @@ std::optional<PlannedSegment> FeedPlanner::next() {
     return out;
 }
 
-void FeedPlanner::reserve(std::size_t segments) { impl_->segs.reserve(segments); }
-
 std::size_t FeedPlanner::pushed() const { return impl_->n; }
 std::size_t FeedPlanner::handed_out() const { return impl_->handed; }
 bool FeedPlanner::done() const { return impl_->finished && impl_->handed == impl_->n && impl_->errors.empty(); }
@@ -821,7 +819,6 @@ Result<std::vector<PlannedSegment>> plan_feeds(const std::vector<StepSegment>& s
                                                FeedStats* stats) {
     Result<std::vector<PlannedSegment>> result;
     FeedPlanner planner(m, job_file, options);
-    planner.reserve(segs.size());
     std::vector<PlannedSegment> out;
     out.reserve(segs.size());
     for (const StepSegment& s : segs) {

@@ -151,7 +151,6 @@ public:
     void push(const StepSegment& s);  // the job's next step segment
     void finish();                    // the job has no more
     std::optional<PlannedSegment> next();
-    void reserve(std::size_t segments);  // room for this many held at once (a hint)
 
     [[nodiscard]] std::size_t pushed() const;
     [[nodiscard]] std::size_t handed_out() const;

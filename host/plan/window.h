@@ -30,7 +30,6 @@ public:
         blocks_.back().push_back(x);
         ++end_;
     }
-    void reserve(std::size_t) {}  // (it grows by blocks: nothing to reserve)
     [[nodiscard]] std::size_t end() const { return end_; }
     // Entries held that are still wanted (not before drop_before's mark).
     [[nodiscard]] std::size_t held() const { return end_ - std::max(dropped_, base_); }
