@@ -32,6 +32,7 @@
 #include "cli/sim_command.h"
 #include "cpstep/builds.h"
 #include "model/oracle.h"
+#include "run/card_job.h"
 #include "sim/engine_configs.h"
 #include "sim/engine_session.h"
 
@@ -207,6 +208,10 @@ int main(int argc, char** argv) {
     if (*intc) return cli::run_interp(io);
     if (*homc) return cli::run_home(hmo);
     if (*conc) return cli::run_conic(ko);
+  } catch (const cpstep::run::JobFileChanged& e) {
+    // A streamed job's file written over while the job ran (docs/HOST.md "Streamed").
+    fmt::print(stderr, "cpstep: {}; stopped\n", e.what());
+    return 1;
   } catch (const std::exception& e) {
     fmt::print(stderr, "cpstep: internal error: {}\n", e.what());
     return 1;

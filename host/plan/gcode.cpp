@@ -4,7 +4,10 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -15,6 +18,10 @@
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <fmt/format.h>
 
@@ -1556,124 +1563,185 @@ Result<Job> parse_gcode(std::string_view text, std::string_view file, const Gcod
 
 Result<Job> stream_gcode(const std::filesystem::path& path, const GcodeOptions& options,
                          const std::function<void(MotionBlock&&, std::size_t)>& sink) {
-    Result<Job> r;
     if (options.probe) {
+        Result<Job> r;
         r.errors.push_back({path.string(), {}, "a program with probe moves is read whole (parse_gcode), not streamed"});
         return r;
     }
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        r.errors.push_back({path.string(), {}, "cannot open file"});
-        return r;
-    }
-    const std::string file = path.string();
-    Parser p(file, options);
-    std::vector<MotionBlock> made;
+    GcodeBlockReader reader(path, options);
     std::size_t handed = 0;
-    const auto hand_out = [&] {
-        p.take_blocks(made);
-        for (MotionBlock& b : made) sink(std::move(b), handed++);
-        made.clear();
-    };
-    // The file in pieces of 64 KiB; a line that runs past one waits for the next.
-    std::string buf(std::size_t{1} << 16, '\0'), carry;
-    bool first = true;
-    int line = 0;
-    bool go_on = true;
-    while (go_on) {
-        in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
-        const auto got = static_cast<std::size_t>(in.gcount());
-        std::string_view piece(buf.data(), got);
-        if (first) {
-            // The first piece holds the first 4 KiB, or the whole file.
-            if (auto e = binary_data(piece, file)) {
-                r.errors.push_back(std::move(*e));
-                return r;
-            }
-            if (piece.starts_with(kBom)) piece.remove_prefix(kBom.size());
-            first = false;
-        }
-        const bool last = got < buf.size();
-        std::size_t pos = 0;
-        for (;;) {
-            const auto nl = piece.find('\n', pos);
-            if (nl == std::string_view::npos) break;
-            std::string_view s = piece.substr(pos, nl - pos);
-            if (!carry.empty()) {
-                carry.append(s);
-                s = carry;
-            }
-            go_on = run_program_line(p, s, ++line);
-            carry.clear();
-            hand_out();
-            pos = nl + 1;
-            if (!go_on) break;
-        }
-        if (!go_on) break;
-        carry.append(piece.substr(pos));
-        if (last) {
-            // The text after the last newline (parse_gcode's last line, empty or not).
-            run_program_line(p, carry, ++line);
-            hand_out();
-            break;
-        }
-    }
-    auto done = p.finish();
-    if (done.value)
-        for (MotionBlock& b : done.value->blocks) sink(std::move(b), handed++);  // a curve the end closed
-    r.errors = std::move(done.errors);
-    r.warnings = std::move(done.warnings);
-    if (r.errors.empty()) {
-        r.value = std::move(done.value);
-        r.value->blocks.clear();
-    }
-    return r;
+    while (auto b = reader.next()) sink(std::move(*b), handed++);
+    return reader.result();
 }
 
+// The program's text a piece at a time, each line (without its newline) handed
+// to the parser as soon as it is whole: a line that runs past one piece waits
+// for the next. The pieces are a text the caller holds (one piece) or a file's
+// kGcodePiece bytes each, recorded in a mark or checked against one.
 struct GcodeBlockReader::Impl {
-    std::shared_ptr<const std::string> text;
     std::string file;
     Parser parser;
-    std::size_t pos = 0;
+    std::shared_ptr<const std::string> text;
+    std::shared_ptr<const int> fd;  // the file, read with pread (null: it could not be opened)
+    GcodeFileMark* record = nullptr;
+    std::shared_ptr<const GcodeFileMark> check;
+    std::string buf, carry;
+    std::string_view piece;
+    std::size_t pos = 0;        // the piece's first byte not yet in a line
+    std::size_t pieces = 0;     // pieces read
+    std::uint64_t offset = 0;   // the file's bytes before the current piece
+    bool last = false;          // the current piece is the last
+    bool have_piece = false, lines_done = false;
     int line = 0;
-    bool started = false, lines_done = false;
     std::vector<MotionBlock> made;
     std::size_t next_made = 0;
     std::optional<Result<Job>> done;
 
-    Impl(std::shared_ptr<const std::string> t, std::string f, const GcodeOptions& o)
-        : text(std::move(t)), file(std::move(f)), parser(file, o) {}
+    Impl(std::string f, const GcodeOptions& o) : file(std::move(f)), parser(file, o) {}
+
+    void refuse(Diagnostic d) {
+        done.emplace().errors.push_back(std::move(d));
+        lines_done = true;
+    }
+
+    // The next piece into `piece`; false when the reading stopped (done holds why).
+    bool read_piece() {
+        if (text) {
+            piece = *text;
+            last = true;
+        } else {
+            if (!fd) {
+                refuse({file, {}, "cannot open file"});
+                return false;
+            }
+            buf.resize(kGcodePiece);
+            std::size_t got = 0;
+            while (got < buf.size()) {
+                const ssize_t n = ::pread(*fd, buf.data() + got, buf.size() - got, static_cast<off_t>(offset + got));
+                if (n < 0 && errno == EINTR) continue;
+                if (n < 0) {
+                    refuse({file, {line + 1, 1}, fmt::format("cannot read the file at byte {}: {}", offset + got,
+                                                             std::strerror(errno))});
+                    return false;
+                }
+                if (n == 0) break;
+                got += static_cast<std::size_t>(n);
+            }
+            piece = std::string_view(buf.data(), got);
+            last = got < buf.size();
+            const std::size_t hash = std::hash<std::string_view>{}(piece);
+            if (record) {
+                record->pieces.push_back(hash);
+                record->size = offset + got;
+            }
+            if (check) {
+                const std::uint64_t expect =
+                    check->size > offset ? std::min<std::uint64_t>(check->size - offset, kGcodePiece) : 0;
+                if (pieces >= check->pieces.size() || got != expect || check->pieces[pieces] != hash) {
+                    struct stat st {};
+                    const bool known = ::fstat(*fd, &st) == 0;
+                    refuse({file, {line + 1, 1},
+                            fmt::format("the file changed after the job was planned from it: bytes {} to {} "
+                                        "differ ({} bytes then, {} now)",
+                                        offset, offset + std::max<std::uint64_t>({got, expect, 1}) - 1, check->size,
+                                        known ? std::to_string(st.st_size) : std::string("unknown"))});
+                    return false;
+                }
+            }
+            offset += got;
+        }
+        if (pieces++ == 0) {
+            // The first piece holds the first 4 KiB, or the whole text.
+            if (auto e = binary_data(piece, file)) {
+                refuse(std::move(*e));
+                return false;
+            }
+            if (piece.starts_with(kBom)) piece.remove_prefix(kBom.size());
+        }
+        pos = 0;
+        have_piece = true;
+        return true;
+    }
+
+    // The next line into the parser; false when there is none (lines_done).
+    bool next_line() {
+        for (;;) {
+            if (!have_piece && !read_piece()) return false;
+            const auto nl = piece.find('\n', pos);
+            if (nl != std::string_view::npos) {
+                std::string_view s = piece.substr(pos, nl - pos);
+                if (!carry.empty()) {
+                    carry.append(s);
+                    s = carry;
+                }
+                pos = nl + 1;
+                if (!run_program_line(parser, s, ++line)) lines_done = true;
+                carry.clear();
+                return true;
+            }
+            carry.append(piece.substr(pos));
+            have_piece = false;
+            if (last) {
+                // The text after the last newline (parse_gcode's last line, empty or not).
+                run_program_line(parser, carry, ++line);
+                carry.clear();
+                lines_done = true;
+                return true;
+            }
+        }
+    }
 };
 
 GcodeBlockReader::GcodeBlockReader(std::shared_ptr<const std::string> text, std::string file,
                                    const GcodeOptions& options)
-    : impl_(std::make_unique<Impl>(std::move(text), std::move(file), options)) {}
+    : impl_(std::make_unique<Impl>(std::move(file), options)) {
+    impl_->text = std::move(text);
+}
+
+namespace {
+
+// The file opened for reading, closed with its last owner; null when it cannot be opened.
+std::shared_ptr<const int> open_file(const std::filesystem::path& path) {
+    int fd = -1;
+    do fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    while (fd < 0 && errno == EINTR);
+    if (fd < 0) return nullptr;
+    return std::shared_ptr<const int>(new int(fd), [](const int* p) {
+        ::close(*p);
+        delete p;
+    });
+}
+
+}  // namespace
+
+GcodeBlockReader::GcodeBlockReader(const std::filesystem::path& path, const GcodeOptions& options,
+                                   GcodeFileMark* mark)
+    : impl_(std::make_unique<Impl>(path.string(), options)) {
+    impl_->fd = open_file(path);
+    impl_->record = mark;
+    if (mark) *mark = GcodeFileMark{path.string(), 0, {}, impl_->fd};
+}
+
+GcodeBlockReader::GcodeBlockReader(std::shared_ptr<const GcodeFileMark> mark, const GcodeOptions& options)
+    : impl_(std::make_unique<Impl>(mark->path, options)) {
+    impl_->fd = mark->descriptor ? mark->descriptor : open_file(mark->path);
+    impl_->check = std::move(mark);
+}
+
 GcodeBlockReader::~GcodeBlockReader() = default;
 
 std::optional<MotionBlock> GcodeBlockReader::next() {
     Impl& p = *impl_;
-    const std::string_view text = *p.text;
     for (;;) {
         if (p.next_made < p.made.size()) return std::move(p.made[p.next_made++]);
         p.made.clear();
         p.next_made = 0;
         if (p.done) return std::nullopt;
-        if (!p.started) {
-            p.started = true;
-            if (auto e = binary_data(text, p.file)) {
-                p.done.emplace().errors.push_back(std::move(*e));
-                return std::nullopt;
-            }
-            p.pos = text.starts_with(kBom) ? kBom.size() : 0;
-        }
-        if (!p.lines_done && p.pos <= text.size()) {
-            auto nl = text.find('\n', p.pos);
-            if (nl == std::string_view::npos) nl = text.size();
-            if (!run_program_line(p.parser, text.substr(p.pos, nl - p.pos), ++p.line)) p.lines_done = true;
-            p.pos = nl + 1;
+        if (!p.lines_done && p.next_line()) {
             p.parser.take_blocks(p.made);
             continue;
         }
+        if (p.done) return std::nullopt;  // the reading stopped
         // The end: what it closes (a curve) comes out only when the program is accepted.
         p.done = p.parser.finish();
         if (p.done->value) {
@@ -1686,6 +1754,13 @@ std::optional<MotionBlock> GcodeBlockReader::next() {
 const Result<Job>& GcodeBlockReader::result() const {
     if (!impl_->done) throw std::logic_error("GcodeBlockReader::result before the program's end");
     return *impl_->done;
+}
+
+bool file_has_probe_words(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    for (std::string line; std::getline(in, line);)
+        if (has_probe_words(line)) return true;
+    return false;
 }
 
 bool has_probe_words(std::string_view text) {

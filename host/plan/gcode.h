@@ -4,6 +4,8 @@
 // offset, parameter and canned cycle resolved.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -136,21 +138,46 @@ std::span<const std::string_view> ignored_codes();
 // True when some line of `text` has a G38.2..G38.5 word (read word by word, as the
 // parser reads them; comments do not count). Builds no blocks: cheap beside parsing.
 bool has_probe_words(std::string_view text);
+// The same for a file read line by line (false when it cannot be read).
+bool file_has_probe_words(const std::filesystem::path& path);
 
 // Parse a whole job. Every error is collected; any error refuses the job.
 Result<Job> parse_gcode(std::string_view text, std::string_view file,
                         const GcodeOptions& options = {});
 Result<Job> load_gcode(const std::filesystem::path& path, const GcodeOptions& options = {});
 
-// A program's blocks pulled one at a time from its text (held by the caller: a
-// run's copy of the file, from which it plans the job again as it sends it):
-// parse_gcode()'s blocks, a line read as each is asked for. next() gives none at
-// the program's end, and then result() holds its errors and warnings (an
-// accepted program's Job without its blocks); a refused program may have given
-// blocks before its error was read.
+// What one reading of a G-code file found, so that a later reading knows it
+// reads the same bytes: the file's size and a hash (std::hash of the bytes) of
+// each piece of kGcodePiece bytes, in order (the last piece shorter, possibly
+// empty), and the file as it was opened then, kept open: a later reading reads
+// that file, even when another has since been saved under its name (as editors
+// and CAM programs save: a new file renamed over the old), and the hashes tell
+// when the file itself was written over. A run that plans its job again from
+// the file as it sends it keeps this, not the text (docs/HOST.md "Streamed").
+inline constexpr std::size_t kGcodePiece = std::size_t{1} << 16;
+struct GcodeFileMark {
+    std::string path;
+    std::uint64_t size = 0;
+    std::vector<std::size_t> pieces;
+    std::shared_ptr<const int> descriptor;  // the open file (closed with the last owner)
+};
+
+// A program's blocks pulled one at a time: parse_gcode()'s blocks, a line read
+// as each is asked for. next() gives none at the program's end, and then
+// result() holds its errors and warnings (an accepted program's Job without its
+// blocks); a refused program may have given blocks before its error was read.
 class GcodeBlockReader {
 public:
+    // From a text the caller holds (the whole text one piece).
     GcodeBlockReader(std::shared_ptr<const std::string> text, std::string file, const GcodeOptions& options = {});
+    // From a file, read a piece of kGcodePiece bytes at a time; with `mark`,
+    // what this reading finds is recorded there (its size and pieces' hashes).
+    GcodeBlockReader(const std::filesystem::path& path, const GcodeOptions& options, GcodeFileMark* mark = nullptr);
+    // From the file a mark was taken of, each piece checked against it as it is
+    // read: a piece that differs (the file changed since) stops the reading, and
+    // result() holds the error "the file changed after it was read", at the
+    // piece's first line, with the bytes that differ.
+    GcodeBlockReader(std::shared_ptr<const GcodeFileMark> mark, const GcodeOptions& options);
     ~GcodeBlockReader();
     GcodeBlockReader(const GcodeBlockReader&) = delete;
     GcodeBlockReader& operator=(const GcodeBlockReader&) = delete;

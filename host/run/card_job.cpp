@@ -31,12 +31,12 @@ uint64_t chunk_cycles_until(const std::vector<card::WireChunk>& chunks, uint64_t
   return uint64_t(t);
 }
 
-// A streamed job planned from its blocks, or from its G-code's text (defined below).
+// A streamed job planned from its blocks, or from its G-code file (defined below).
 plan::Result<CardJob> plan_streamed(std::shared_ptr<const plan::Job> job, const plan::Machine& machine,
                                     const card::CardCaps& caps, const plan::PerAxis<int64_t>& start);
-plan::Result<CardJob> plan_streamed_text(std::shared_ptr<const std::string> text, const std::string& file,
-                                         const plan::GcodeOptions& options, const plan::Machine& machine,
-                                         const card::CardCaps& caps, const plan::PerAxis<int64_t>& start);
+plan::Result<CardJob> plan_streamed_file(const std::filesystem::path& file, const plan::GcodeOptions& options,
+                                         const plan::Machine& machine, const card::CardCaps& caps,
+                                         const plan::PerAxis<int64_t>& start);
 
 }  // namespace
 
@@ -111,23 +111,22 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
   }
   plan::Result<CardJob> planned;
   if (streamed && machine->planner.fit_arcs_mm == 0) {
-    // Streamed: the G-code's text kept (a copy of the file, which may change
-    // while the job runs), its blocks read and planned as they are needed,
-    // each time the plan is made again (PlanCursor). A program with probe
-    // moves, and one whose G1 chains are fitted with arcs, keep their blocks.
+    // Streamed: the G-code file read again, a piece at a time, each time the
+    // plan is made again (PlanCursor), its blocks planned as they are needed;
+    // each piece checked against the reading the job was planned from, so that
+    // a file changed under a running job stops it rather than sends another
+    // plan. A program with probe moves, and one whose G1 chains are fitted
+    // with arcs, keep their blocks.
     auto options = card_gcode_options(*machine, start);
     if (!options.ok()) {
       r.errors = options.errors;
       return r;
     }
-    std::ifstream in(gcode, std::ios::binary);
-    if (!in) {
+    if (!std::ifstream(gcode, std::ios::binary)) {
       r.errors.push_back({gcode.string(), {}, "cannot open file"});
       return r;
     }
-    auto text = std::make_shared<const std::string>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    if (!plan::has_probe_words(*text))
-      planned = plan_streamed_text(std::move(text), gcode.string(), *options, *machine, caps, start);
+    if (!plan::file_has_probe_words(gcode)) planned = plan_streamed_file(gcode, *options, *machine, caps, start);
   }
   if (!planned.ok() && planned.errors.empty()) {
     auto job = read_card_gcode(gcode, *machine, start);
@@ -153,9 +152,11 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
 // A streamed job's blocks in order: its own, or read from its G-code's text.
 class BlockSource {
  public:
-  explicit BlockSource(const CardJob& job) : job_(job) {
-    if (job.gcode_text) reader_.emplace(job.gcode_text, job.job_file, job.gcode_options);
-    else if (!job.blocks) throw std::logic_error("a streamed job with neither blocks nor G-code text");
+  // With `record`: the job's G-code file read for the first time, its mark taken there.
+  explicit BlockSource(const CardJob& job, plan::GcodeFileMark* record = nullptr) : job_(job) {
+    if (record) reader_.emplace(std::filesystem::path(job.job_file), job.gcode_options, record);
+    else if (job.gcode_file) reader_.emplace(job.gcode_file, job.gcode_options);
+    else if (!job.blocks) throw std::logic_error("a streamed job with neither blocks nor a G-code file");
   }
   std::optional<plan::MotionBlock> next() {
     if (reader_) return reader_->next();
@@ -163,6 +164,7 @@ class BlockSource {
     return std::nullopt;
   }
   // The G-code reader's result once next() gave none (null: the blocks were the job's).
+  // A file read again that changed since the job was planned holds that error.
   const plan::Result<plan::Job>* read_result() const { return reader_ ? &reader_->result() : nullptr; }
 
  private:
@@ -180,9 +182,7 @@ struct WireSink {
   WireSink(card::CardLimits l, std::string f) : limits(l), file(std::move(f)) {}
   card::CardLimits limits;
   std::string file;
-  std::vector<uint64_t> words;       // per wire segment: its SEGMENT command's words
-  std::vector<uint64_t> end_cycle;   // per wire segment: its end, cycles from START
-  std::vector<uint64_t> end_moves;   // per wire segment: moves from START to its end
+  uint64_t words = 0;                // the SEGMENT commands' words
   std::vector<size_t> first_chunks;  // chunks of the first segment_queue + 1 (start_after)
   std::vector<CardJob::TorchChange> torch;
   uint64_t chunks = 0, cycle = 0, moves = 0, segments = 0, conics = 0;
@@ -197,12 +197,10 @@ struct WireSink {
     for (const card::WireSegment& w : made) {
       scratch.clear();
       card::encode_segment(w, scratch);
-      words.push_back(scratch.size());
+      words += scratch.size();
       const uint64_t before = cycle;
       cycle += chunk_cycles_until(w.chunks, UINT64_MAX);
       moves += uint64_t(w.u) << w.k;
-      end_cycle.push_back(cycle);
-      end_moves.push_back(moves);
       chunks += w.chunks.size();
       conics += w.conic.has_value();
       if (first_chunks.size() <= limits.segment_queue) first_chunks.push_back(w.chunks.size());
@@ -227,7 +225,8 @@ bool torch_of(const PlanCursor& cursor, const plan::PlannedCardSegment& c) {
 // card segment converted and measured by the sink, nothing of the plan kept
 // but its statistics and its source (the blocks, or the G-code's text).
 plan::Result<CardJob> plan_streamed_from(CardJob cj, const card::CardCaps& caps, const plan::PerAxis<int64_t>& start,
-                                         const plan::ArcFitStats& fit) {
+                                         const plan::ArcFitStats& fit,
+                                         std::shared_ptr<plan::GcodeFileMark> mark = nullptr) {
   plan::Result<CardJob> r;
   const plan::Machine& machine = cj.machine;
   if (!(machine.card.clock_hz > 0)) {
@@ -237,7 +236,7 @@ plan::Result<CardJob> plan_streamed_from(CardJob cj, const card::CardCaps& caps,
   }
   WireSink sink(card::limits(caps), cj.job_file);
   plan::PlanStream stream(machine, cj.job_file, cj.plan_options);
-  BlockSource source(cj);
+  BlockSource source(cj, mark.get());
   std::optional<plan::Diagnostic> refused;
   std::deque<plan::StreamedStep> steps;  // from the last card segment's step segment on
   bool first_step = true;
@@ -298,22 +297,14 @@ plan::Result<CardJob> plan_streamed_from(CardJob cj, const card::CardCaps& caps,
   cj.wire.start_after = card::start_after(sink.first_chunks, sink.limits);
   std::vector<uint32_t> preamble;
   card::encode_preamble(cj.machine, cj.wire.seek, preamble);
-  uint64_t words = preamble.size();
-  for (size_t i = 0; i < sink.segments; ++i) {
-    if (i == cj.wire.start_after) ++words;  // START
-    words += sink.words[i];
-    cj.segment_end_word.push_back(words);
-  }
-  if (cj.wire.start_after >= sink.segments) ++words;
-  cj.segment_end_cycle = std::move(sink.end_cycle);
-  cj.segment_end_moves = std::move(sink.end_moves);
-  cj.streamed_words = words;
+  cj.streamed_words = preamble.size() + sink.words + 1;  // and START
   cj.streamed_chunks = sink.chunks;
   cj.streamed_segments = sink.segments;
   cj.streamed_conics = sink.conics;
   cj.torch_changes = std::move(sink.torch);
   cj.last_segment_loc = sink.last_loc;
   cj.end_cycle = sink.cycle;
+  cj.gcode_file = std::move(mark);
   r.value = std::move(cj);
   return r;
 }
@@ -339,13 +330,12 @@ plan::Result<CardJob> plan_streamed(std::shared_ptr<const plan::Job> job, const 
   return plan_streamed_from(std::move(cj), caps, start, fit);
 }
 
-plan::Result<CardJob> plan_streamed_text(std::shared_ptr<const std::string> text, const std::string& file,
-                                         const plan::GcodeOptions& options, const plan::Machine& machine,
-                                         const card::CardCaps& caps, const plan::PerAxis<int64_t>& start) {
-  CardJob cj = streamed_job(file, machine, caps);
-  cj.gcode_text = std::move(text);
+plan::Result<CardJob> plan_streamed_file(const std::filesystem::path& file, const plan::GcodeOptions& options,
+                                         const plan::Machine& machine, const card::CardCaps& caps,
+                                         const plan::PerAxis<int64_t>& start) {
+  CardJob cj = streamed_job(file.string(), machine, caps);
   cj.gcode_options = options;
-  return plan_streamed_from(std::move(cj), caps, start, {});
+  return plan_streamed_from(std::move(cj), caps, start, {}, std::make_shared<plan::GcodeFileMark>());
 }
 
 }  // namespace
@@ -443,8 +433,7 @@ const plan::PlannedCardSegment* PlanCursor::next_card() {
       return &*card_;
     }
     if (!pull()) {
-      if (!stream_.errors().empty())
-        throw std::logic_error("PlanCursor: the plan made again is refused: " + stream_.errors().front().str());
+      refused();
       return nullptr;
     }
   }
@@ -462,15 +451,22 @@ bool PlanCursor::next_step(plan::StreamedStep& out) {
       out = std::move(*st);
       return true;
     }
-    while (stream_.next_card()) {  // not wanted here
-    }
-    if (stream_.next_step()) continue;
+    bool cards = false;
+    while (stream_.next_card()) cards = true;  // not wanted here
+    if (cards) continue;
     if (!pull()) {
-      if (!stream_.errors().empty())
-        throw std::logic_error("PlanCursor: the plan made again is refused: " + stream_.errors().front().str());
+      refused();
       return false;
     }
   }
+}
+
+void PlanCursor::refused() const {
+  // The G-code's file read again may differ from the one planned (changed since).
+  if (const plan::Result<plan::Job>* read = source_->read_result(); read && !read->ok())
+    throw JobFileChanged(read->errors.front().str());
+  if (!stream_.errors().empty())
+    throw std::logic_error("PlanCursor: the plan made again is refused: " + stream_.errors().front().str());
 }
 
 CheckpointCursor::CheckpointCursor(const CardJob& job) : job_(job) {
@@ -636,6 +632,9 @@ bool WordSource::make_more() {
     w.end = wire_ + 1 == segments;
     card::encode_segment(w, buf_);
     ++wire_;
+    end_cycle_ += chunk_cycles_until(w.chunks, UINT64_MAX);
+    end_moves_ += uint64_t(w.u) << w.k;
+    ends_.push_back({consumed_ + (buf_.size() - at_) - prefix_, end_cycle_, end_moves_});
   }
   return true;
 }
@@ -654,7 +653,28 @@ std::vector<int64_t> chunk_cycles(const CardJob& job) {
   return out;
 }
 
+double WordSource::buffered_seconds(uint64_t segments_done, uint64_t moves_done, uint64_t words_handed) {
+  if (!job_.streamed) return run::buffered_seconds(job_, segments_done, moves_done, words_handed);
+  // The ends of the segments before the one the card runs are done with (its
+  // own start is the end of the one before it).
+  if (segments_done < ends_first_) return 0;  // an older reply than one asked before: nothing known
+  while (!ends_.empty() && ends_first_ + 1 < segments_done) {
+    ends_.pop_front();
+    ++ends_first_;
+  }
+  const auto handed = std::upper_bound(ends_.begin(), ends_.end(), words_handed,
+                                       [](uint64_t w, const SegmentEnd& e) { return w < e.word; });
+  const uint64_t sent = ends_first_ + uint64_t(handed - ends_.begin());
+  if (sent <= segments_done) return 0;
+  // A streamed job keeps no chunks: the segment the card runs counts as done
+  // (less motion than it holds, never more).
+  const uint64_t next = ends_[segments_done - ends_first_].cycle;
+  const uint64_t end = ends_[sent - 1 - ends_first_].cycle;
+  return end > next ? double(end - next) / job_.clock_hz() : 0;
+}
+
 double buffered_seconds(const CardJob& job, uint64_t segments_done, uint64_t moves_done, uint64_t words_handed) {
+  if (job.streamed) throw std::logic_error("buffered_seconds: a streamed job keeps no segment ends (WordSource does)");
   const auto& ends = job.segment_end_word;
   const auto sent = uint64_t(std::upper_bound(ends.begin(), ends.end(), words_handed) - ends.begin());
   if (sent <= segments_done) return 0;
@@ -662,10 +682,7 @@ double buffered_seconds(const CardJob& job, uint64_t segments_done, uint64_t mov
   const uint64_t start = segments_done ? job.segment_end_cycle[segments_done - 1] : 0;
   const uint64_t before = segments_done ? job.segment_end_moves[segments_done - 1] : 0;
   const uint64_t into = moves_done > before ? moves_done - before : 0;
-  // A streamed job keeps no chunks: the segment the card runs counts as done (less
-  // motion than it holds, never more).
-  const uint64_t next = job.streamed ? job.segment_end_cycle[segments_done]
-                                     : start + chunk_cycles_until(job.wire.segments[segments_done].chunks, into + 1);
+  const uint64_t next = start + chunk_cycles_until(job.wire.segments[segments_done].chunks, into + 1);
   const uint64_t end = job.segment_end_cycle[sent - 1];
   return end > next ? double(end - next) / job.clock_hz() : 0;
 }

@@ -11,11 +11,13 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "card/job.h"
 #include "plan/common.h"
+#include "plan/gcode.h"
 #include "plan/machine.h"
 #include "plan/pipeline.h"
 
@@ -39,6 +41,7 @@ struct CardJob {
   // Per wire segment (the SEGMENT commands of `words`, in order): the word
   // index just past its last word, its end in cycles from START, and the card's
   // moves from START to its end (pause moves included, as the card counts).
+  // Empty for a streamed job (WordSource keeps those it made that the card holds).
   std::vector<uint64_t> segment_end_word;
   std::vector<uint64_t> segment_end_cycle;
   std::vector<uint64_t> segment_end_moves;
@@ -55,9 +58,11 @@ struct CardJob {
   uint64_t streamed_words = 0, streamed_chunks = 0, streamed_segments = 0, streamed_conics = 0;
   // The blocks the plan was made from (after planner.fit_arcs_mm).
   std::shared_ptr<const plan::Job> blocks;
-  // Or the G-code's text (a copy of the file) and how it is read, when the job's
-  // blocks are those of the text as read (no planner.fit_arcs_mm, no probing).
-  std::shared_ptr<const std::string> gcode_text;
+  // Or the G-code file (its mark: size and a hash per piece, taken as it was
+  // planned) and how it is read, when the job's blocks are those of the file as
+  // read (no planner.fit_arcs_mm, no probing): read again as it is planned
+  // again, a file written over since stops the cursor (JobFileChanged).
+  std::shared_ptr<const plan::GcodeFileMark> gcode_file;
   plan::GcodeOptions gcode_options;
   plan::PlanOptions plan_options;
   uint64_t checkpoint_count = 0;            // checkpoints.size()
@@ -86,6 +91,12 @@ struct CardJob {
   [[nodiscard]] double clock_hz() const { return machine.card.clock_hz; }
 };
 
+// A streamed job's G-code file written over since the job was planned from it
+// (what() names the file, the line and the bytes): the plan cannot be made again.
+struct JobFileChanged : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 // A streamed job's plan made again, in order (plan::PlanStream over the job's
 // blocks): its card segments with their chunks and walks, each with its step
 // segment and feed, or its step segments alone; in bounded memory. A job that
@@ -109,6 +120,7 @@ class PlanCursor {
 
  private:
   bool pull();  // one more block into the plan (or its end); false when there is no more
+  void refused() const;  // throws when the plan made again stopped on an error
 
   const CardJob& job_;
   plan::PlanStream stream_;
@@ -187,6 +199,13 @@ class WordSource {
   [[nodiscard]] uint64_t consumed() const { return consumed_; }
   [[nodiscard]] bool exhausted() const { return consumed_ == total_; }
   [[nodiscard]] size_t prefix_words() const { return prefix_; }
+  // The seconds of motion the card holds, at least (run::buffered_seconds(),
+  // with words_handed counted from the job's first word, after the prefix): a
+  // streamed job's from the ends of the wire segments this source made, kept
+  // from the one the card runs on (calls in the order of the card's replies:
+  // segments_done never goes back), so bounded by what the card holds; the
+  // segment the card runs counts as done.
+  double buffered_seconds(uint64_t segments_done, uint64_t moves_done, uint64_t words_handed);
 
  private:
   bool make_more();  // the next card segment's words; false at the end
@@ -202,6 +221,15 @@ class WordSource {
   std::vector<card::WireSegment> made_;
   std::optional<PlanCursor> cursor_;  // a streamed job's plan, made again
   bool cards_done_ = false;
+  // A streamed job's wire segments made, from segment ends_first_ on: the word
+  // just past each one's last (from the job's first word), its end in cycles
+  // from START and the moves from START to its end.
+  struct SegmentEnd {
+    uint64_t word = 0, cycle = 0, moves = 0;
+  };
+  std::deque<SegmentEnd> ends_;
+  uint64_t ends_first_ = 0;
+  uint64_t end_cycle_ = 0, end_moves_ = 0;
 };
 
 // Every move's ideal and chunk time at once (MoveClock run to the end): for
@@ -213,7 +241,8 @@ std::vector<int64_t> chunk_cycles(const CardJob& job);
 // (card::CardClient::BufferedTime): from its next move (`moves_done` of the
 // job's moves are made, `segments_done` of its segments) to the end of the last
 // segment whose words are among the first `words_handed` of `job.words`, in
-// planned time. A card that stretches moves only holds more.
+// planned time. A card that stretches moves only holds more. Not for a streamed
+// job (WordSource::buffered_seconds).
 double buffered_seconds(const CardJob& job, uint64_t segments_done, uint64_t moves_done, uint64_t words_handed);
 
 // The planner's view of a card's capabilities.

@@ -92,10 +92,10 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   const uint64_t before_job = words.size();  // the job's first word
   WordSource source(job, std::move(words));
   // The card's segment count goes on from the last job's.
-  client.set_buffered_time([&job, &first, before_job](const card::Reply& r, uint64_t handed) {
+  client.set_buffered_time([&source, &first, before_job](const card::Reply& r, uint64_t handed) {
     if (!card::decode_status(r.status).running) return std::numeric_limits<double>::infinity();
-    return buffered_seconds(job, uint32_t(r.segments - first.segments), uint32_t(r.moves - first.moves),
-                            handed > before_job ? handed - before_job : 0);
+    return source.buffered_seconds(uint32_t(r.segments - first.segments), uint32_t(r.moves - first.moves),
+                                   handed > before_job ? handed - before_job : 0);
   });
 
   const double timeout = o.timeout_s > 0 ? o.timeout_s : 2 * job.planned.stats.duration_s + 10;
@@ -136,6 +136,8 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
     }
   } catch (const card::CardError& e) {
     run.faults.push_back(host_fault(HostFault::link, e.what()));
+  } catch (const JobFileChanged& e) {
+    run.faults.push_back(host_fault(HostFault::source, changed_file_fault(e, source)));
   }
   if (gave_up == GaveUp::out_of_time)
     run.faults.push_back(host_fault(HostFault::timeout,

@@ -157,10 +157,10 @@ void RunMeter::start(uint64_t start_cycle, const plan::PerAxis<int64_t>& positio
   // The curves, when the job has any (its step segments say), and the first checkpoint's.
   const bool nurbs = job_.has_nurbs;
   std::shared_ptr<const plan::Job> blocks = job_.blocks;
-  if (nurbs && job_.gcode_text) {
-    // Only the curves of the job's text are kept.
+  if (nurbs && job_.gcode_file) {
+    // Only the curves of the job's file are kept.
     curves_ = std::make_unique<Curves>();
-    plan::GcodeBlockReader reader(job_.gcode_text, job_.job_file, job_.gcode_options);
+    plan::GcodeBlockReader reader(job_.gcode_file, job_.gcode_options);
     while (auto b = reader.next())
       if (b->kind == plan::MotionKind::nurbs && b->curve) {
         const plan::MotionBlock& kept = curves_->curves.emplace_back(std::move(*b));
@@ -334,7 +334,13 @@ RunMeasure RunMeter::finish(const CardRun& run) {
   if (m_.curve.positions) m_.curve.rms_mm = std::sqrt(curve_sum2_ / double(m_.curve.positions));
   if (run.pins_observed) {
     m_.klipper_pins_25us = pins_.finish();
-    std::tie(m_.klipper_25us, m_.klipper_1us) = klipper_path_costs(job_);
+    try {
+      std::tie(m_.klipper_25us, m_.klipper_1us) = klipper_path_costs(job_);
+    } catch (const JobFileChanged& e) {
+      // The run is done as planned; its path cannot be planned again.
+      m_.klipper_25us = m_.klipper_1us = {};
+      m_.klipper_25us.error = m_.klipper_1us.error = e.what();
+    }
   } else {
     m_.curve = {};
   }
@@ -396,7 +402,11 @@ KinematicSeries RunMeter::series() const {
     out.reset();
     if (cursor) {
       plan::StreamedStep st;
-      if (cursor->next_step(st)) out = std::move(st.feed);
+      try {
+        if (cursor->next_step(st)) out = std::move(st.feed);
+      } catch (const JobFileChanged&) {
+        cursor.reset();  // the plan's columns end there (the file written over since the job was planned)
+      }
     } else if (next_feed < job_.planned.feeds.size()) {
       out = job_.planned.feeds[next_feed++];
     }

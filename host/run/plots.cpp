@@ -105,7 +105,11 @@ std::string write_plots(const fs::path& dir, const CardJob& job, const RunMeter&
     };
     if (job.streamed) {  // the plan made again, step segment by step segment
       PlanCursor cursor(job);
-      for (plan::StreamedStep st; cursor.next_step(st);) add(st.segment);
+      try {
+        for (plan::StreamedStep st; cursor.next_step(st);) add(st.segment);
+      } catch (const JobFileChanged& e) {
+        plan << "# the planned path ends here: " << e.what() << "\n";
+      }
     } else {
       for (const plan::StepSegment& s : job.planned.step_segments) add(s);
     }

@@ -32,6 +32,7 @@ const char* host_fault_name(HostFault f) {
     case HostFault::late: return "LATE";
     case HostFault::engine: return "ENGINE";
     case HostFault::torch: return "TORCH";
+    case HostFault::source: return "SOURCE";
   }
   return "UNKNOWN";
 }
@@ -60,6 +61,11 @@ constexpr uint64_t kListedMismatches = 10;
 constexpr uint64_t kStallCycles = 1'000'000;
 
 }  // namespace
+
+std::string changed_file_fault(const JobFileChanged& e, const WordSource& words) {
+  return fmt::format("{}; the host sent no more (word {} of {}): the card ran what it held", e.what(),
+                     words.consumed(), words.total());
+}
 
 Fault host_fault(HostFault f, std::string message) {
   return {uint32_t(f), host_fault_name(f), std::move(message)};
@@ -309,9 +315,9 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   co.buffer_words = job.caps.command_buffer_words();
   card::CardClient client(wrapped ? *wrapped : sim_link, co);
   // A fresh card: its segment count starts at 0 with the job's first.
-  client.set_buffered_time([&job, before_job](const card::Reply& r, uint64_t handed) {
+  client.set_buffered_time([&words, before_job](const card::Reply& r, uint64_t handed) {
     if (!card::decode_status(r.status).running) return std::numeric_limits<double>::infinity();
-    return buffered_seconds(job, r.segments, r.moves, handed > before_job ? handed - before_job : 0);
+    return words.buffered_seconds(r.segments, r.moves, handed > before_job ? handed - before_job : 0);
   });
 
   const double planned_cycles = job.planned.stats.duration_s * job.clock_hz();
@@ -365,6 +371,8 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
     if (sent == words.total() && gave_up == GaveUp::no) watchdog_off(client, o.watchdog_s, keep_waiting);
   } catch (const card::CardError& e) {
     run.faults.push_back(host_fault(HostFault::link, e.what()));
+  } catch (const JobFileChanged& e) {
+    run.faults.push_back(host_fault(HostFault::source, changed_file_fault(e, words)));
   }
   run.cycles = rec.end_cycle() ? rec.end_cycle() : dut.cycle();
   if (gave_up == GaveUp::out_of_time) {

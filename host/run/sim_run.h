@@ -35,6 +35,7 @@ enum class HostFault : uint32_t {
   late = 107,        // the card stretched moves: they fired after their planned cycle
   engine = 108,      // --engine lockstep: the fast engine and the Verilated card differed
   torch = 109,       // the torch pin switched other than the plan says (docs/CORE.md "Torch")
+  source = 110,      // the job's G-code file was written over after it was planned: no more was sent
 };
 
 // What simulates the card (docs/SIM.md "Engines"): the fast engine (the golden
@@ -166,6 +167,8 @@ card::CardCaps connect_sim(std::string_view board, Engine engine = Engine::model
 
 // The parts of a run shared by every transport.
 Fault host_fault(HostFault f, std::string message);
+// SOURCE's message: the change (JobFileChanged::what()) and how far the words went.
+std::string changed_file_fault(const JobFileChanged& e, const WordSource& words);
 // Status, counters and positions from the card's reply (positions absolute).
 void take_reply(CardRun& run, const card::Reply& reply);
 // The card's own fault first, then MOVE_COUNT (the card's counter, and the pins

@@ -12,9 +12,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
 #include <map>
 #include <string>
 #include <tuple>
+
+#include <unistd.h>
+
+#include <fmt/format.h>
 
 #include "card/caps.h"
 #include "plan/chunks.h"
@@ -263,9 +270,7 @@ TEST_P(RunMeterJobs, AStreamedJobIsTheWholeJob) {
   EXPECT_EQ(streamed.planned.stats.step_segments, whole.planned.stats.step_segments);
   EXPECT_EQ(streamed.word_count(), whole.words.size());
   EXPECT_EQ(streamed.wire_chunks(), whole.wire_chunks());
-  EXPECT_EQ(streamed.segment_end_word, whole.segment_end_word);
-  EXPECT_EQ(streamed.segment_end_cycle, whole.segment_end_cycle);
-  EXPECT_EQ(streamed.segment_end_moves, whole.segment_end_moves);
+  EXPECT_TRUE(streamed.segment_end_word.empty() && streamed.segment_end_cycle.empty());
   EXPECT_EQ(streamed.wire.start_after, whole.wire.start_after);
   EXPECT_TRUE(streamed.wire.segments.empty());
   EXPECT_EQ(streamed.wire_segments(), whole.wire.segments.size());
@@ -296,6 +301,32 @@ TEST_P(RunMeterJobs, AStreamedJobIsTheWholeJob) {
     ASSERT_EQ(words.size(), whole.words.size() + 2) << "window " << window;
     EXPECT_EQ(words[0], 7u);
     EXPECT_TRUE(std::equal(words.begin() + 2, words.end(), whole.words.begin())) << "window " << window;
+  }
+  // Its buffered time (what the client batches by), from the ends of the
+  // segments its WordSource made and the card still holds: the whole job's
+  // segment ends, the segment the card runs counted as done; a card that has
+  // done half of what it was sent at each step.
+  {
+    run::WordSource src(streamed);
+    const std::vector<uint64_t>& ends = whole.segment_end_word;
+    ASSERT_EQ(ends.size(), whole.wire.segments.size());
+    uint64_t handed = 0, done = 0;
+    size_t checks = 0;
+    while (!src.exhausted()) {
+      const size_t n = std::min<size_t>(src.window(61).size(), 61);
+      src.consume(n);
+      handed += n;
+      const auto sent = uint64_t(std::upper_bound(ends.begin(), ends.end(), handed) - ends.begin());
+      for (const uint64_t d : {done, (done + sent) / 2}) {
+        const double expect = sent > d ? double(whole.segment_end_cycle[sent - 1] - whole.segment_end_cycle[d]) /
+                                             whole.clock_hz()
+                                       : 0.0;
+        ASSERT_DOUBLE_EQ(src.buffered_seconds(d, 0, handed), expect) << "handed " << handed << ", done " << d;
+        checks += expect > 0;
+      }
+      done = (done + sent) / 2;
+    }
+    EXPECT_GT(checks, 0u);
   }
   // On the card: the same run, measured the same.
   run::SimRunOptions o;
@@ -330,7 +361,7 @@ TEST(RunMeter, AStreamedJobWithFittedArcsKeepsItsBlocks) {
   auto whole = run::plan_card_job(*job, *machine, *caps);
   auto streamed = run::plan_card_job(*job, *machine, *caps, {}, true);
   ASSERT_TRUE(whole.ok() && streamed.ok()) << plan::join(whole.errors) << plan::join(streamed.errors);
-  ASSERT_TRUE(streamed->blocks && !streamed->gcode_text);
+  ASSERT_TRUE(streamed->blocks && !streamed->gcode_file);
   EXPECT_GT(streamed->planned.stats.fit.arcs, 0u);
   EXPECT_EQ(streamed->planned.stats.fit.arcs, whole->planned.stats.fit.arcs);
   run::WordSource src(*streamed);
@@ -349,6 +380,124 @@ TEST(RunMeter, AStreamedJobWithFittedArcsKeepsItsBlocks) {
   }
   EXPECT_EQ(k, whole->checkpoints.size());
   EXPECT_EQ(run::ideal_cycles(*streamed), run::ideal_cycles(*whole));
+}
+
+// A streamed job keeps its G-code file's mark, not its text, and reads the file
+// again as it sends the job: a file written over after the job was planned
+// stops the words at the piece that differs (run::JobFileChanged naming the
+// file and the bytes), before any word of a different plan; the file as it was
+// sends the job, and so does a file saved over it by name (the planned one is
+// kept open).
+TEST(RunMeter, AStreamedJobStopsWhenItsFileChanged) {
+  const auto path = std::filesystem::temp_directory_path() / fmt::format("cpstep_changed_{}.ngc", ::getpid());
+  std::ifstream in(kSource + "/examples/jobs/dense.ngc", std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(text.size(), 2 * plan::kGcodePiece);
+  const auto write = [&](const std::string& t) { std::ofstream(path, std::ios::binary | std::ios::trunc) << t; };
+  write(text);
+  const auto caps = card::board_caps("hx8k");
+  auto job = run::prepare_job(path, kSource + "/examples/machines/seed002.toml", *caps, {}, true);
+  ASSERT_TRUE(job.ok()) << plan::join(job.errors);
+  ASSERT_TRUE(job->gcode_file && !job->blocks);
+  EXPECT_EQ(job->gcode_file->size, text.size());
+  const auto send = [&] {
+    run::WordSource src(*job);
+    std::vector<uint32_t> words;
+    while (!src.exhausted()) {
+      const std::span<const uint32_t> w = src.window(4096);
+      words.insert(words.end(), w.begin(), w.end());
+      src.consume(w.size());
+    }
+    return words;
+  };
+  const run::CardJob whole = example("dense.ngc");
+  EXPECT_EQ(send(), whole.words);
+  // A digit of the second piece changed: the same length.
+  std::string changed = text;
+  const size_t digit = changed.find_first_of("123456789", plan::kGcodePiece + 500);
+  changed[digit] = changed[digit] == '9' ? '8' : char(changed[digit] + 1);
+  write(changed);
+  try {
+    send();
+    ADD_FAILURE() << "a changed file sent its words";
+  } catch (const run::JobFileChanged& e) {
+    EXPECT_NE(std::string(e.what()).find(path.string() + ":"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(fmt::format("the file changed after the job was planned from it: bytes {} to",
+                                                     plan::kGcodePiece)),
+              std::string::npos)
+        << e.what();
+  }
+  write(text);
+  EXPECT_EQ(send(), whole.words);
+  // Saved over by another file under its name (as editors save): the file
+  // planned is still the one read, kept open.
+  std::ofstream(path.string() + ".new", std::ios::binary) << changed;
+  std::filesystem::rename(path.string() + ".new", path);
+  EXPECT_EQ(send(), whole.words);
+  std::filesystem::remove(path);
+}
+
+namespace {
+
+// A link that forwards to the card's and calls `act` once, at its n-th transfer.
+class ActingLink : public card::Link {
+ public:
+  ActingLink(card::Link& inner, uint64_t n, std::function<void()> act) : inner_(inner), n_(n), act_(std::move(act)) {}
+  std::vector<uint8_t> transfer(std::span<const uint8_t> mosi) override {
+    if (++count_ == n_) act_();
+    return inner_.transfer(mosi);
+  }
+  void wait(double seconds) override { inner_.wait(seconds); }
+  [[nodiscard]] double now_s() const override { return inner_.now_s(); }
+  [[nodiscard]] std::string name() const override { return inner_.name(); }
+
+ private:
+  card::Link& inner_;
+  uint64_t n_, count_ = 0;
+  std::function<void()> act_;
+};
+
+}  // namespace
+
+// The file written over while the job runs on the card: the run stops sending
+// where the change begins and ends with the host fault SOURCE (110), which says
+// what changed and how far the words went; nothing after it was sent. A job of
+// 12,000 corner moves (three 64 KiB pieces), the third piece changed after the
+// card has started.
+TEST(RunMeter, AFileWrittenOverDuringTheRunStopsItWithSource) {
+  const auto path = std::filesystem::temp_directory_path() / fmt::format("cpstep_running_{}.ngc", ::getpid());
+  std::string text = "G21 G90 F3000 G1 X10 Y10\n";
+  for (int i = 0; i < 12000; ++i) text += i % 2 ? "G1 X10 Y10.1\n" : "G1 X10.1 Y10\n";
+  text += "M2\n";
+  ASSERT_GT(text.size(), 2 * plan::kGcodePiece + 1000);
+  std::ofstream(path, std::ios::binary) << text;
+  const auto caps = card::board_caps("hx8k");
+  auto job = run::prepare_job(path, kSource + "/examples/machines/seed002.toml", *caps, {}, true);
+  ASSERT_TRUE(job.ok()) << plan::join(job.errors);
+  std::string changed = text;
+  const size_t at = changed.find("X10.1", 2 * plan::kGcodePiece + 100);
+  changed.replace(at, 5, "X10.2");
+  run::SimRunOptions o;
+  o.board = "hx8k";
+  o.wrap_link = [&](card::Link& inner) {
+    return std::make_unique<ActingLink>(inner, 40, [&] {
+      std::ofstream(path, std::ios::binary | std::ios::trunc) << changed;
+    });
+  };
+  const run::CardRun r = run::run_on_sim(*job, o);
+  std::filesystem::remove(path);
+  const auto source = std::find_if(r.faults.begin(), r.faults.end(), [](const run::Fault& f) { return f.code == 110; });
+  ASSERT_NE(source, r.faults.end()) << (r.faults.empty() ? "no fault" : r.faults.front().name);
+  EXPECT_EQ(source->name, "SOURCE");
+  EXPECT_NE(source->message.find(fmt::format("{}:{}:1: the file changed after the job was planned from it: bytes {} to",
+                                             path.string(),
+                                             std::count(text.begin(), text.begin() + 2 * plan::kGcodePiece, '\n') + 1,
+                                             2 * plan::kGcodePiece)),
+            std::string::npos)
+      << source->message;
+  EXPECT_NE(source->message.find("the host sent no more (word "), std::string::npos) << source->message;
+  EXPECT_GT(r.move_events, 0u);
+  EXPECT_LT(r.move_events, job->moves());
 }
 
 // A run far longer than its plan (as under a feed hold, or a job of 10^8 moves):

@@ -164,19 +164,33 @@ void expect_stream_is_whole(const std::string& path, const GcodeOptions& o) {
     }
     ASSERT_EQ(got.size(), whole->blocks.size());
     for (std::size_t i = 0; i < got.size(); ++i) expect_same_block(got[i], whole->blocks[i], i);
+    const auto pull_all = [&](GcodeBlockReader& r) {
+        std::size_t k = 0;
+        while (auto b = r.next()) {
+            ASSERT_LT(k, whole->blocks.size());
+            expect_same_block(*b, whole->blocks[k], k);
+            ++k;
+        }
+        EXPECT_EQ(k, whole->blocks.size());
+        EXPECT_TRUE(r.result().ok());
+        EXPECT_EQ(join(r.result().warnings), join(whole.warnings));
+    };
     // And pulled from the file's text, block by block.
     std::ifstream in(path, std::ios::binary);
     auto text = std::make_shared<std::string>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     GcodeBlockReader reader(text, path, o);
-    std::size_t n = 0;
-    while (auto b = reader.next()) {
-        ASSERT_LT(n, whole->blocks.size());
-        expect_same_block(*b, whole->blocks[n], n);
-        ++n;
+    pull_all(reader);
+    // And from the file with its mark taken, then again checked against the mark.
+    GcodeFileMark mark;
+    {
+        GcodeBlockReader first(path, o, &mark);
+        pull_all(first);
     }
-    EXPECT_EQ(n, whole->blocks.size());
-    EXPECT_TRUE(reader.result().ok());
-    EXPECT_EQ(join(reader.result().warnings), join(whole.warnings));
+    const auto size = std::filesystem::file_size(path);
+    EXPECT_EQ(mark.size, size);
+    EXPECT_EQ(mark.pieces.size(), size / kGcodePiece + 1);
+    GcodeBlockReader again(std::make_shared<const GcodeFileMark>(mark), o);
+    pull_all(again);
 }
 
 }  // namespace
@@ -222,6 +236,86 @@ TEST(StreamGcode, PiecesMarksLineEndsAndRefusals) {
     auto missing = stream_gcode(dir / "none.ngc", {}, [](MotionBlock&&, std::size_t) {});
     EXPECT_EQ(join(missing.errors), (dir / "none.ngc").string() + ": cannot open file");
     std::filesystem::remove_all(dir);
+}
+
+// A file read against the mark of an earlier reading: a byte changed in its
+// second piece, bytes added, bytes cut, each written over the file itself. The
+// reading stops at the piece that differs (the blocks before it as they were),
+// with an error at that piece's first line naming the bytes; the same bytes
+// again (rewritten) read through. A file saved over it under its name, or the
+// name removed, leave the file planned to be read (it is kept open).
+TEST(StreamGcode, AFileChangedAfterItsMarkStopsTheReading) {
+    const auto path = std::filesystem::temp_directory_path() / fmt::format("cpstep_mark_{}.ngc", ::getpid());
+    std::string text = "G21 G90 G1 F600\n";
+    for (int i = 0; text.size() < 3 * kGcodePiece; ++i) text += fmt::format("G1 X{} Y{}\n", 10 + i % 2, 10 + i % 3);
+    const auto write = [&](const std::string& t) { std::ofstream(path, std::ios::binary | std::ios::trunc) << t; };
+    write(text);
+    GcodeFileMark mark;
+    std::size_t blocks = 0;
+    {
+        GcodeBlockReader first(path, {}, &mark);
+        while (first.next()) ++blocks;
+        ASSERT_TRUE(first.result().ok());
+    }
+    ASSERT_EQ(mark.pieces.size(), 4u);
+    const auto shared = std::make_shared<const GcodeFileMark>(mark);
+    const auto read = [&](std::size_t& n) {
+        GcodeBlockReader r(shared, {});
+        n = 0;
+        while (r.next()) ++n;
+        return r.result();
+    };
+    // The line that holds the piece's first byte, counted as the reader counts lines.
+    const auto line_at = [&](std::size_t byte) { return int(std::count(text.begin(), text.begin() + long(byte), '\n')) + 1; };
+    std::size_t n = 0;
+    EXPECT_TRUE(read(n).ok());
+    EXPECT_EQ(n, blocks);
+
+    std::string changed = text;
+    const std::size_t at = kGcodePiece + 1000;
+    changed[changed.find("Y1", at) + 1] = '2';  // Y1 -> Y2: the same length
+    write(changed);
+    auto r = read(n);
+    ASSERT_EQ(r.errors.size(), 1u);
+    EXPECT_EQ(r.errors[0].str(), fmt::format("{}:{}:1: the file changed after the job was planned from it: bytes {} to "
+                                             "{} differ ({} bytes then, {} now)",
+                                             path.string(), line_at(kGcodePiece), kGcodePiece, 2 * kGcodePiece - 1,
+                                             text.size(), text.size()));
+    EXPECT_LT(n, blocks);
+    EXPECT_GT(n, blocks / 4);  // the first piece's blocks came out
+
+    write(text + "G1 X5\n");
+    r = read(n);
+    ASSERT_EQ(r.errors.size(), 1u);
+    EXPECT_NE(r.errors[0].message.find(fmt::format("bytes {} to", 3 * kGcodePiece)), std::string::npos)
+        << r.errors[0].str();
+    EXPECT_NE(r.errors[0].message.find(fmt::format("{} now", text.size() + 6)), std::string::npos);
+
+    write(text.substr(0, text.size() - 100));
+    r = read(n);
+    ASSERT_EQ(r.errors.size(), 1u);
+    EXPECT_NE(r.errors[0].message.find("changed after the job was planned"), std::string::npos);
+
+    write(text);
+    EXPECT_TRUE(read(n).ok());
+    EXPECT_EQ(n, blocks);
+    // Another file saved under its name (written aside, renamed over it, as
+    // editors save), or the name removed: the file planned is still read.
+    const auto other = path.string() + ".new";
+    std::ofstream(other, std::ios::binary) << changed;
+    std::filesystem::rename(other, path);
+    EXPECT_TRUE(read(n).ok());
+    EXPECT_EQ(n, blocks);
+    std::filesystem::remove(path);
+    EXPECT_TRUE(read(n).ok());
+    EXPECT_EQ(n, blocks);
+    // A mark without its open file opens the name again: gone.
+    GcodeFileMark bare = mark;
+    bare.descriptor.reset();
+    GcodeBlockReader gone(std::make_shared<const GcodeFileMark>(bare), {});
+    EXPECT_FALSE(gone.next());
+    ASSERT_FALSE(gone.result().ok());
+    EXPECT_EQ(gone.result().errors[0].str(), path.string() + ": cannot open file");
 }
 
 // Blocks come out as their lines are read: a program whose error is on its
