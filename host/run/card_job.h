@@ -199,6 +199,7 @@ class WordSource {
   [[nodiscard]] uint64_t consumed() const { return consumed_; }
   [[nodiscard]] bool exhausted() const { return consumed_ == total_; }
   [[nodiscard]] size_t prefix_words() const { return prefix_; }
+  [[nodiscard]] const CardJob& job() const { return job_; }
   // The seconds of motion the card holds, at least (run::buffered_seconds(),
   // with words_handed counted from the job's first word, after the prefix): a
   // streamed job's from the ends of the wire segments this source made, kept

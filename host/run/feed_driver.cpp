@@ -87,4 +87,24 @@ FeedOutcome send_with_feed(card::CardClient& client, WordSource& words, const Fe
   return out;
 }
 
+std::string stop_short(card::CardClient& client, bool feed, const card::CardClient::KeepWaiting& keep_waiting,
+                       const std::function<std::optional<double>()>& since_start_s,
+                       std::vector<FeedApplied>& applied) {
+  if (!feed) return "the card, which has no feed hold, runs what it holds";
+  if (!client.urgent(card::urgent::hold, keep_waiting)) return "the host gave up before the card took HOLD";
+  const double at = since_start_s().value_or(0.0);
+  applied.push_back({{at, FeedEvent::Kind::hold, 100}, at, "hold (the job stopped short)"});
+  // Until the motion stands (held, its ramp done) or the run is off.
+  for (;;) {
+    const card::Status st = card::decode_status(client.last().status);
+    if (!st.running || (st.held && !st.feed_ramping)) break;
+    if (keep_waiting && !keep_waiting(client.last())) return "the card, held, did not stand before the host gave up";
+    client.link().wait(client.options().poll_interval_s);
+    client.poll();
+  }
+  if (!client.urgent(card::urgent::flush, keep_waiting) || !client.urgent(card::urgent::resume, keep_waiting))
+    return "the card held to a stand; the host gave up before FLUSH and RESUME";
+  return "the card held to a stand on its feed ramp, then FLUSH and RESUME";
+}
+
 }  // namespace cpstep::run

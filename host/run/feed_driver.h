@@ -10,6 +10,7 @@
 #include <functional>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "card/card_client.h"
@@ -44,5 +45,16 @@ card::ClientOptions feed_waits(card::ClientOptions client, bool events, bool tog
 FeedOutcome send_with_feed(card::CardClient& client, WordSource& words, const FeedPlan& plan,
                            const card::CardClient::KeepWaiting& keep_waiting,
                            const std::function<std::optional<double>()>& since_start_s);
+
+// The job's words stop short of its end (its file written over since it was
+// planned: JobFileChanged). A card with FEED is held — its timer's scale ramps
+// to 0, so the motion stops on the card's feed ramp, on the planned path, not
+// at speed — and once it stands is flushed (its queues emptied, the run off,
+// no fault) and resumed (not left held for the next job); a card without FEED
+// runs what it holds and underruns. The HOLD goes into `applied`. Returns how
+// the card was stopped, for the fault's message. Throws what CardClient throws.
+std::string stop_short(card::CardClient& client, bool feed, const card::CardClient::KeepWaiting& keep_waiting,
+                       const std::function<std::optional<double>()>& since_start_s,
+                       std::vector<FeedApplied>& applied);
 
 }  // namespace cpstep::run

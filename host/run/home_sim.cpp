@@ -375,11 +375,7 @@ SimProbeRun probe_job_on_sim(const std::string& gcode_file, const std::string& m
 }
 
 bool job_probes(const std::string& gcode_file) {
-  std::ifstream in(gcode_file, std::ios::binary);
-  if (!in) return false;
-  std::stringstream text;
-  text << in.rdbuf();
-  return plan::has_probe_words(text.str());
+  return plan::file_has_probe_words(gcode_file);  // line by line: the text is not held
 }
 
 }  // namespace cpstep::run

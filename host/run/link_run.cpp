@@ -115,14 +115,15 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
     if (!started_at && card::decode_status(r.status).running) started_at = link.now_s();
     return keep_waiting(r);
   };
+  const auto since_start = [&]() -> std::optional<double> {
+    if (!started_at) return std::nullopt;
+    return link.now_s() - *started_at;
+  };
   try {
     const FeedPlan plan{o.override_pct, o.feed, o.feed_toggle};
     if (plan.any() && !job.caps.feed)
       throw card::CardError(fmt::format("the card, {}, has no feed hold or override", card::card_name(job.caps)));
-    FeedOutcome fed = send_with_feed(client, source, plan, watching, [&]() -> std::optional<double> {
-      if (!started_at) return std::nullopt;
-      return link.now_s() - *started_at;
-    });
+    FeedOutcome fed = send_with_feed(client, source, plan, watching, since_start);
     sent = fed.sent;
     run.feed = std::move(fed.applied);
     run.feed_scaled = !run.feed.empty();
@@ -137,7 +138,7 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   } catch (const card::CardError& e) {
     run.faults.push_back(host_fault(HostFault::link, e.what()));
   } catch (const JobFileChanged& e) {
-    run.faults.push_back(host_fault(HostFault::source, changed_file_fault(e, source)));
+    run.faults.push_back(stop_for_changed_file(e, source, client, keep_waiting, since_start, run));
   }
   if (gave_up == GaveUp::out_of_time)
     run.faults.push_back(host_fault(HostFault::timeout,

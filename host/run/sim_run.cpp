@@ -63,8 +63,22 @@ constexpr uint64_t kStallCycles = 1'000'000;
 }  // namespace
 
 std::string changed_file_fault(const JobFileChanged& e, const WordSource& words) {
-  return fmt::format("{}; the host sent no more (word {} of {}): the card ran what it held", e.what(),
-                     words.consumed(), words.total());
+  return fmt::format("{}; the host sent no more (word {} of {})", e.what(), words.consumed(), words.total());
+}
+
+Fault stop_for_changed_file(const JobFileChanged& e, const WordSource& words, card::CardClient& client,
+                            const card::CardClient::KeepWaiting& keep_waiting,
+                            const std::function<std::optional<double>()>& since_start_s, CardRun& run) {
+  std::string how;
+  try {
+    how = stop_short(client, words.job().caps.feed, keep_waiting, since_start_s, run.feed);
+    run.feed_scaled = true;
+  } catch (const card::CardError& l) {
+    how = fmt::format("stopping the card: {}", l.what());
+  } catch (const JobFileChanged&) {
+    how = "the run's checks, which plan the job again, met the change too";
+  }
+  return host_fault(HostFault::source, changed_file_fault(e, words) + "; " + how);
 }
 
 Fault host_fault(HostFault f, std::string message) {
@@ -345,6 +359,10 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
 
   spi.reset();
   size_t sent = 0;
+  const auto since_start = [&]() -> std::optional<double> {
+    if (!rec.started()) return std::nullopt;
+    return (double(dut.cycle()) - double(run.start_cycle)) / job.clock_hz();
+  };
   try {
     client.poll();
     // The card says what it is; the job must have been planned for exactly that.
@@ -360,10 +378,6 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
     if (plan.any() && !caps.feed)
       throw card::CardError(fmt::format("the card, {}, has no feed hold or override; nothing was sent",
                                         card::card_name(caps)));
-    const auto since_start = [&]() -> std::optional<double> {
-      if (!rec.started()) return std::nullopt;
-      return (double(dut.cycle()) - double(run.start_cycle)) / job.clock_hz();
-    };
     FeedOutcome fed = send_with_feed(client, words, plan, keep_waiting, since_start);
     sent = fed.sent;
     run.feed = std::move(fed.applied);
@@ -372,7 +386,7 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   } catch (const card::CardError& e) {
     run.faults.push_back(host_fault(HostFault::link, e.what()));
   } catch (const JobFileChanged& e) {
-    run.faults.push_back(host_fault(HostFault::source, changed_file_fault(e, words)));
+    run.faults.push_back(stop_for_changed_file(e, words, client, keep_waiting, since_start, run));
   }
   run.cycles = rec.end_cycle() ? rec.end_cycle() : dut.cycle();
   if (gave_up == GaveUp::out_of_time) {
@@ -395,6 +409,11 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
     take_reply(run, client.poll());
   } catch (const card::CardError& e) {
     run.faults.push_back(host_fault(HostFault::link, e.what()));
+  } catch (const JobFileChanged& e) {
+    // The run's checks plan the job again as the card goes (CheckpointCursor, the
+    // meter's MoveClock): one of them met the change.
+    if (std::none_of(run.faults.begin(), run.faults.end(), [](const Fault& f) { return f.code == uint32_t(HostFault::source); }))
+      run.faults.push_back(host_fault(HostFault::source, changed_file_fault(e, words)));
   }
   run.sim_cycles = dut.cycle();
   run.engine = o.engine;

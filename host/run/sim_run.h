@@ -169,6 +169,13 @@ card::CardCaps connect_sim(std::string_view board, Engine engine = Engine::model
 Fault host_fault(HostFault f, std::string message);
 // SOURCE's message: the change (JobFileChanged::what()) and how far the words went.
 std::string changed_file_fault(const JobFileChanged& e, const WordSource& words);
+// SOURCE for a run whose job's file was written over while it ran: the words
+// stopped where the change begins; the card is stopped (run::stop_short: held
+// to a stand and flushed when it has FEED, the HOLD added to run.feed), and the
+// fault says what changed, how far the words went and how the card stopped.
+Fault stop_for_changed_file(const JobFileChanged& e, const WordSource& words, card::CardClient& client,
+                            const card::CardClient::KeepWaiting& keep_waiting,
+                            const std::function<std::optional<double>()>& since_start_s, CardRun& run);
 // Status, counters and positions from the card's reply (positions absolute).
 void take_reply(CardRun& run, const card::Reply& reply);
 // The card's own fault first, then MOVE_COUNT (the card's counter, and the pins

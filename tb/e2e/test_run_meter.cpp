@@ -463,22 +463,28 @@ class ActingLink : public card::Link {
 // where the change begins and ends with the host fault SOURCE (110), which says
 // what changed and how far the words went; nothing after it was sent. A job of
 // 12,000 corner moves (three 64 KiB pieces), the third piece changed after the
-// card has started.
-TEST(RunMeter, AFileWrittenOverDuringTheRunStopsItWithSource) {
-  const auto path = std::filesystem::temp_directory_path() / fmt::format("cpstep_running_{}.ngc", ::getpid());
+// card has started. The HX8K card (FEED) is held to a stand on its feed ramp —
+// its last moves slow down, it latches no fault — then flushed and resumed; the
+// iCEBreaker card (no FEED) runs what it holds.
+class SourceChanged : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(SourceChanged, AFileWrittenOverDuringTheRunStopsIt) {
+  const std::string board = GetParam();
+  const auto path = std::filesystem::temp_directory_path() / fmt::format("cpstep_running_{}_{}.ngc", board, ::getpid());
   std::string text = "G21 G90 F3000 G1 X10 Y10\n";
   for (int i = 0; i < 12000; ++i) text += i % 2 ? "G1 X10 Y10.1\n" : "G1 X10.1 Y10\n";
   text += "M2\n";
   ASSERT_GT(text.size(), 2 * plan::kGcodePiece + 1000);
   std::ofstream(path, std::ios::binary) << text;
-  const auto caps = card::board_caps("hx8k");
+  const auto caps = card::board_caps(board);
   auto job = run::prepare_job(path, kSource + "/examples/machines/seed002.toml", *caps, {}, true);
   ASSERT_TRUE(job.ok()) << plan::join(job.errors);
   std::string changed = text;
   const size_t at = changed.find("X10.1", 2 * plan::kGcodePiece + 100);
   changed.replace(at, 5, "X10.2");
   run::SimRunOptions o;
-  o.board = "hx8k";
+  o.board = board;
+  o.record_pins = true;
   o.wrap_link = [&](card::Link& inner) {
     return std::make_unique<ActingLink>(inner, 40, [&] {
       std::ofstream(path, std::ios::binary | std::ios::trunc) << changed;
@@ -496,9 +502,36 @@ TEST(RunMeter, AFileWrittenOverDuringTheRunStopsItWithSource) {
             std::string::npos)
       << source->message;
   EXPECT_NE(source->message.find("the host sent no more (word "), std::string::npos) << source->message;
-  EXPECT_GT(r.move_events, 0u);
+  EXPECT_GT(r.move_events, 1000u);
   EXPECT_LT(r.move_events, job->moves());
+  if (caps->feed) {
+    EXPECT_NE(source->message.find("the card held to a stand on its feed ramp, then FLUSH and RESUME"),
+              std::string::npos)
+        << source->message;
+    EXPECT_FALSE(r.status.fault) << r.status.err_code;
+    EXPECT_FALSE(r.status.running);
+    EXPECT_FALSE(r.status.held);
+    ASSERT_EQ(r.feed.size(), 1u);
+    EXPECT_EQ(r.feed[0].event.kind, run::FeedEvent::Kind::hold);
+    // The ramp: the last move came at least 4 times later after the one before it
+    // than the moves did before the hold (about 10 times here: the card's s was
+    // near 0.1 when its last move fell due).
+    const std::vector<uint64_t>& m = r.move_cycles;
+    ASSERT_GT(m.size(), 200u);
+    const double start_s = r.feed[0].taken_s;
+    size_t before = 0;
+    while (before + 1 < m.size() && double(m[before + 1] - r.start_cycle) / job->clock_hz() < start_s) ++before;
+    ASSERT_GT(before, 1u);
+    const uint64_t cruising = m[before] - m[before - 1], last = m[m.size() - 1] - m[m.size() - 2];
+    EXPECT_GT(last, 4 * cruising) << last << " against " << cruising << " cycles, moves " << before << " and " << m.size();
+  } else {
+    EXPECT_NE(source->message.find("the card, which has no feed hold, runs what it holds"), std::string::npos)
+        << source->message;
+  }
 }
+
+INSTANTIATE_TEST_SUITE_P(Boards, SourceChanged, ::testing::Values("hx8k", "icebreaker"),
+                         [](const ::testing::TestParamInfo<const char*>& i) { return std::string(i.param); });
 
 // A run far longer than its plan (as under a feed hold, or a job of 10^8 moves):
 // the series' grid and the path plot stay within their bounds, and what they
