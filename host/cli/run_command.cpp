@@ -262,11 +262,14 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
   else
     fmt::print("ran        {:.1f} s\n", wall_s);
   fmt::print("link       {}\n", link_line(r));
-  if (r.pins_observed)
+  if (r.pins_observed && m.klipper)
     fmt::print("wire       {} command bytes; Klipper's queue_step for the job's steps: {} at 25 us, {} at 1 us; "
                "for the card's pin steps: {} at 25 us\n",
                4 * j.word_count(), klipper_text(m.klipper_25us), klipper_text(m.klipper_1us),
                klipper_text(m.klipper_pins_25us));
+  else if (r.pins_observed)
+    fmt::print("wire       {} command bytes (--klipper: Klipper's queue_step bytes for the same steps)\n",
+               4 * j.word_count());
   if (r.pins_observed && r.torch_verdict.planned > 0) {
     const run::TorchVerdict& t = r.torch_verdict;
     fmt::print("torch      {} switches planned, {} on the pin{}; on {:.3f} s{}\n", t.planned, t.edges,
@@ -428,7 +431,7 @@ int run_sim_transport(const RunOptions& o) {
   so.fst = o.fst;
   so.progress = [&progress](uint64_t done, uint64_t total) { progress.update(done, total); };
   // The run measured as it goes: nothing kept per move (docs/SIM.md "Memory").
-  run::RunMeter meter(j);
+  run::RunMeter meter(j, o.klipper);
   so.meter = &meter;
   so.record_pins = false;
   const auto began = std::chrono::steady_clock::now();
@@ -502,7 +505,7 @@ int run_spidev_transport(const RunOptions& o) {
   }
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   progress.clear();
-  run::RunMeter meter(j);  // a real card's pins are not observed: the counts only
+  run::RunMeter meter(j, false);  // a real card's pins are not observed: the counts only
   return contours.finish(r, print_run(o, j, r, meter, wall_s, report_file));
 }
 
@@ -540,6 +543,10 @@ CLI::App* add_run_command(CLI::App& app, RunOptions& o) {
   c->add_option("--spi-hz", o.spi_hz, "spidev: the SCK rate in Hz (default and limit: the card's clock / 8)")
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
   c->add_flag("--no-progress", o.no_progress, "no progress display on stderr");
+  c->add_flag("--klipper", o.klipper,
+              "also count the bytes Klipper's queue_step messages take for the job's steps (the path's, at 25 "
+              "and 1 us, and the card's pin steps, at 25 us): the wire comparison of docs/BENCHMARKS.md; costs "
+              "about as much time as the simulation on jobs of short moves");
   c->add_flag("--ack-estop", o.ack_estop,
               "spidev: acknowledge an E-stop the card latched, its input released (without it such a card is "
               "refused: docs/CORE.md \"Faults\")");

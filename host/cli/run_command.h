@@ -25,6 +25,7 @@ struct RunOptions {
   std::string device;              // spidev: the device ("": /dev/spidev0.0)
   uint64_t spi_hz = 0;             // spidev: SCK rate; 0: the card's clock / 8
   bool no_progress = false;
+  bool klipper = false;  // --klipper: Klipper's queue_step bytes beside the card's (RunMeter)
   bool ack_estop = false;  // spidev: acknowledge an E-stop the card latched (its input released)
   double watchdog_s = 0.1;  // sim, spidev: the card's watchdog while the job runs (0: off)
   // Feed (cards with FEED, docs/CORE.md "Feed hold and override"): the override from

@@ -76,7 +76,7 @@ JobFeedRamp fit_feed_ramp(CardJob& job) {
     for (int x = 0; x < plan::kAxes; ++x) cp.position[x] -= job.start[x];
   for (int x = 0; x < plan::kAxes; ++x) dry_job.final_position[x] -= job.start[x];
   dry_job.start = {};  // a streamed job's checkpoints are made from it
-  RunMeter meter(job);
+  RunMeter meter(job, false);  // the series alone
   o.meter = &meter;
   o.record_pins = false;
   const CardRun dry = run_on_sim(dry_job, o);

@@ -128,7 +128,8 @@ struct RunMeter::AxisState {
   std::vector<double> samples;  // mm
 };
 
-RunMeter::RunMeter(const CardJob& job) : job_(job), clock_(job), pins_(25e-6 * job.clock_hz()) {
+RunMeter::RunMeter(const CardJob& job, bool klipper)
+    : job_(job), clock_(job), pins_(25e-6 * job.clock_hz()), klipper_(klipper) {
   axes_.resize(plan::kAxes);
   size_t k_max = 1;
   dt_ = std::max(job.planned.stats.duration_s / 4000, 2.5e-4);
@@ -281,7 +282,7 @@ void RunMeter::move(uint64_t edge_cycle, uint32_t leading, const plan::PerAxis<i
     st.v->add(t, dirs[a]);
     st.a->add(t, dirs[a]);
     st.j->add(t, dirs[a]);
-    pins_.add(a, edge_cycle - start_cycle_, dirs[a]);
+    if (klipper_) pins_.add(a, edge_cycle - start_cycle_, dirs[a]);
     // The series' samples before this edge: between the last edge and this one.
     for (;; ++st.next) {
       const double g = (double(st.next) - double(pad_)) * dt_;
@@ -332,7 +333,8 @@ RunMeasure RunMeter::finish(const CardRun& run) {
   samples_ = total;
   if (path_.size() < 2 || m_.moves % path_stride_ != 0) position_point();
   if (m_.curve.positions) m_.curve.rms_mm = std::sqrt(curve_sum2_ / double(m_.curve.positions));
-  if (run.pins_observed) {
+  if (run.pins_observed && klipper_) {
+    m_.klipper = true;
     m_.klipper_pins_25us = pins_.finish();
     try {
       std::tie(m_.klipper_25us, m_.klipper_1us) = klipper_path_costs(job_);
@@ -341,9 +343,8 @@ RunMeasure RunMeter::finish(const CardRun& run) {
       m_.klipper_25us = m_.klipper_1us = {};
       m_.klipper_25us.error = m_.klipper_1us.error = e.what();
     }
-  } else {
-    m_.curve = {};
   }
+  if (!run.pins_observed) m_.curve = {};
   return m_;
 }
 

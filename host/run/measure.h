@@ -58,6 +58,7 @@ struct RunMeasure {
   // Klipper places them (plan::path_steps) at its default max_error of 25 us
   // and at 1 us, and where the card's pins put them, at 25 us (run.pins_observed only).
   plan::QueueStepCost klipper_25us, klipper_1us, klipper_pins_25us;
+  bool klipper = false;  // the three above were measured (RunMeter's klipper)
 };
 
 // The windows for an axis: each as short as it can be while one step of
@@ -105,7 +106,11 @@ std::pair<plan::QueueStepCost, plan::QueueStepCost> klipper_path_costs(const Car
 // the path plot at most kMaxPathPoints card positions (every 2^k-th move).
 class RunMeter {
  public:
-  explicit RunMeter(const CardJob& job);
+  // klipper: also put the job's steps on Klipper's wire (RunMeasure::klipper_*):
+  // the card's pin steps as they come (plan::QueueStepCounter, on every step:
+  // on a job of short moves as costly as the simulation itself) and, after the
+  // run, the path's steps (the plan made again). `cpstep run --klipper`.
+  explicit RunMeter(const CardJob& job, bool klipper = true);
   RunMeter(const RunMeter&) = delete;
   RunMeter& operator=(const RunMeter&) = delete;
   ~RunMeter();
@@ -141,6 +146,7 @@ class RunMeter {
   const CardJob& job_;
   MoveClock clock_;
   plan::QueueStepCounter pins_;  // the pins' steps on Klipper's wire, 25 us
+  bool klipper_ = true;
   RunMeasure m_;
   std::unique_ptr<Curves> curves_;
   std::vector<AxisState> axes_;

@@ -145,10 +145,12 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
       if (!cost.error.empty()) o["error"] = cost.error;
       return o;
     };
-    r["wire"] = {{"command_bytes", 4 * job.word_count()},
-                 {"klipper_25us", qs(m.klipper_25us)},
-                 {"klipper_1us", qs(m.klipper_1us)},
-                 {"klipper_pins_25us", qs(m.klipper_pins_25us)}};
+    r["wire"] = {{"command_bytes", 4 * job.word_count()}};
+    if (m.klipper) {  // cpstep run --klipper
+      r["wire"]["klipper_25us"] = qs(m.klipper_25us);
+      r["wire"]["klipper_1us"] = qs(m.klipper_1us);
+      r["wire"]["klipper_pins_25us"] = qs(m.klipper_pins_25us);
+    }
   }
 
   json axes = json::object();

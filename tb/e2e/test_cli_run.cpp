@@ -130,7 +130,7 @@ TEST(CliRun, SmallJobOnTheSimulatedCard) {
   fs::remove(report);
   fs::remove(vcd);
   const Outcome r = cpstep({"run", job.string(), "--machine", kMachine, "--report", report.string(),
-                            "--vcd", vcd.string(), "--plots", plots.string()},
+                            "--vcd", vcd.string(), "--plots", plots.string(), "--klipper"},
                            "small_run");
   ASSERT_EQ(r.rc, 0) << r.out << r.err;
   EXPECT_EQ(r.err, "") << "progress must be off when stderr is not a terminal";
@@ -328,6 +328,12 @@ TEST(CliRun, FeedOverrideAndHoldOrRefusedBeforeAnythingIsSent) {
   ASSERT_EQ(held.rc, 0) << held.err;
   const json p = json::parse(slurp(plain_report)), h = json::parse(slurp(half_report)),
              d = json::parse(slurp(held_report));
+  // Without --klipper: the card's bytes alone, Klipper's not counted.
+  EXPECT_EQ(p["wire"].size(), 1u) << p["wire"].dump();
+  EXPECT_GT(p["wire"]["command_bytes"].get<uint64_t>(), 0u);
+  EXPECT_NE(plain.out.find(" command bytes (--klipper: Klipper's queue_step bytes for the same steps)"),
+            std::string::npos)
+      << plain.out;
   for (const json* r : {&h, &d}) {
     EXPECT_EQ((*r)["faults"], json::array());
     EXPECT_EQ((*r)["moves"], p["moves"]);
