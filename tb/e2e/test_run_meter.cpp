@@ -47,6 +47,18 @@ run::CardJob example(const std::string& name, bool streamed = false) {
   return std::move(*prepared.value);
 }
 
+// A job's command words as its WordSource hands them out, 4,096 or more at a time.
+std::vector<uint32_t> all_words(const run::CardJob& job) {
+  run::WordSource src(job);
+  std::vector<uint32_t> words;
+  while (!src.exhausted()) {
+    const std::span<const uint32_t> w = src.window(4096);
+    words.insert(words.end(), w.begin(), w.end());
+    src.consume(w.size());
+  }
+  return words;
+}
+
 void expect_same_cost(const plan::QueueStepCost& a, const plan::QueueStepCost& b, const char* what) {
   EXPECT_TRUE(a == b) << what << ": " << a.bytes << " bytes, " << a.queue_step << " queue_step, error '" << a.error
                       << "' against " << b.bytes << ", " << b.queue_step << ", '" << b.error << "'";
@@ -364,14 +376,7 @@ TEST(RunMeter, AStreamedJobWithFittedArcsKeepsItsBlocks) {
   ASSERT_TRUE(streamed->blocks && !streamed->gcode_file);
   EXPECT_GT(streamed->planned.stats.fit.arcs, 0u);
   EXPECT_EQ(streamed->planned.stats.fit.arcs, whole->planned.stats.fit.arcs);
-  run::WordSource src(*streamed);
-  std::vector<uint32_t> words;
-  while (!src.exhausted()) {
-    const std::span<const uint32_t> w = src.window(4096);
-    words.insert(words.end(), w.begin(), w.end());
-    src.consume(w.size());
-  }
-  EXPECT_EQ(words, whole->words);
+  EXPECT_EQ(all_words(*streamed), whole->words);
   run::CheckpointCursor cps(*streamed);
   size_t k = 0;
   for (const run::Checkpoint* cp; (cp = cps.next()) != nullptr; ++k) {
@@ -400,16 +405,7 @@ TEST(RunMeter, AStreamedJobStopsWhenItsFileChanged) {
   ASSERT_TRUE(job.ok()) << plan::join(job.errors);
   ASSERT_TRUE(job->gcode_file && !job->blocks);
   EXPECT_EQ(job->gcode_file->size, text.size());
-  const auto send = [&] {
-    run::WordSource src(*job);
-    std::vector<uint32_t> words;
-    while (!src.exhausted()) {
-      const std::span<const uint32_t> w = src.window(4096);
-      words.insert(words.end(), w.begin(), w.end());
-      src.consume(w.size());
-    }
-    return words;
-  };
+  const auto send = [&] { return all_words(*job); };
   const run::CardJob whole = example("dense.ngc");
   EXPECT_EQ(send(), whole.words);
   // A digit of the second piece changed: the same length.
