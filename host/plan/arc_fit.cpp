@@ -3,8 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <numbers>
+#include <optional>
+#include <stdexcept>
 #include <vector>
 
 namespace cpstep::plan {
@@ -127,13 +130,31 @@ ArcFit arc_fit(const std::vector<Pt>& p, std::size_t i, std::size_t j, double to
     return {c.x, c.y, dev, turn > 0};
 }
 
-// The longest run from p[s] (at least `least` lines, at most p.size() - 1 - s)
-// for which fits(s, s + len) holds, by doubling and then bisection: 0 for none.
+// The longest stretch from p[s] (at least `least` lines) for which
+// fits(s, s + len) holds, by doubling and then bisection: 0 for none. `avail`
+// lines from p[s] are held; `known`: they are all the run has. At most
+// kArcFitMaxLines lines are taken. Null when the answer depends on lines not yet
+// held; `need` is then how many it needs.
 template <class Fits>
-std::size_t longest(std::size_t s, std::size_t lines, std::size_t least, Fits fits) {
-    if (lines < least || !fits(s, s + least)) return 0;
+std::optional<std::size_t> longest(std::size_t s, std::size_t avail, bool known, std::size_t least, Fits fits,
+                                   std::size_t& need) {
+    const std::size_t lines = std::min(avail, kArcFitMaxLines);
+    known = known || avail >= kArcFitMaxLines;
+    if (lines < least) {
+        if (known) return 0;
+        need = least;
+        return std::nullopt;
+    }
+    if (!fits(s, s + least)) return 0;
     std::size_t good = least, bad = lines + 1;
-    for (std::size_t len = least * 2; len <= lines; len *= 2) {
+    for (std::size_t len = least * 2;; len *= 2) {
+        if (len > lines) {
+            if (!known) {
+                need = std::min(len, kArcFitMaxLines);
+                return std::nullopt;
+            }
+            break;
+        }
         if (!fits(s, s + len)) {
             bad = len;
             break;
@@ -154,59 +175,143 @@ std::size_t longest(std::size_t s, std::size_t lines, std::size_t least, Fits fi
 
 }  // namespace
 
-Job fit_arcs(const Job& job, double tol_mm, ArcFitStats* stats) {
-    if (!(tol_mm > 0)) return job;
+struct ArcFitter::Impl {
+    double tol = 0;
     ArcFitStats st;
-    Job out;
-    out.file = job.file;
-    out.blocks.reserve(job.blocks.size());
-    const auto& b = job.blocks;
-    for (std::size_t i = 0; i < b.size();) {
-        if (!eligible(b[i])) {
-            out.blocks.push_back(b[i++]);
-            continue;
-        }
-        std::size_t end = i + 1;
-        while (end < b.size() && continues(b[i], b[end - 1], b[end])) ++end;
-        std::vector<Pt> p{{b[i].start[0], b[i].start[1]}};
-        for (std::size_t k = i; k < end; ++k) p.push_back({b[k].end[0], b[k].end[1]});
-        const std::size_t lines = end - i;
-        for (std::size_t s = 0; s < lines;) {
-            const std::size_t left = lines - s;
-            const std::size_t la = longest(s, left, 3, [&](std::size_t x, std::size_t y) {
-                return arc_fit(p, x, y, tol_mm).deviation <= tol_mm;
-            });
-            const std::size_t ll = longest(s, left, 2, [&](std::size_t x, std::size_t y) {
-                return line_fit(p, x, y, tol_mm) <= tol_mm;
-            });
-            if (la == 0 && ll == 0) {
-                out.blocks.push_back(b[i + s]);
+    bool finished = false;
+    bool in_run = false;
+    bool whole_runs = false;
+    MotionBlock first, prev;        // the run's first line and its last so far
+    std::vector<MotionBlock> run;   // the run's lines, run[k] from p[k] to p[k + 1]
+    std::vector<Pt> p;
+    std::size_t s = 0;              // the first line not yet handed out
+    std::size_t need = 0;           // lines from s the next decision needs
+    std::deque<MotionBlock> out;
+
+    // Hands out what the lines held decide (all of them once the run `ended`).
+    void decide(bool ended) {
+        if (whole_runs && !ended) return;
+        while (s < run.size()) {
+            const std::size_t avail = run.size() - s;
+            if (!ended && avail < need) return;
+            need = 0;
+            const auto la = longest(s, avail, ended, 3, [&](std::size_t x, std::size_t y) {
+                return arc_fit(p, x, y, tol).deviation <= tol;
+            }, need);
+            if (!la) return;
+            const auto ll = longest(s, avail, ended, 2, [&](std::size_t x, std::size_t y) {
+                return line_fit(p, x, y, tol) <= tol;
+            }, need);
+            if (!ll) return;
+            if (*la == 0 && *ll == 0) {
+                out.push_back(run[s]);
                 ++s;
                 continue;
             }
-            MotionBlock nb = b[i + s];
-            nb.end = b[i + s + std::max(la, ll) - 1].end;
-            if (ll >= la) {
-                st.max_deviation_mm = std::max(st.max_deviation_mm, line_fit(p, s, s + ll, tol_mm));
+            MotionBlock nb = run[s];
+            nb.end = run[s + std::max(*la, *ll) - 1].end;
+            if (*ll >= *la) {
+                st.max_deviation_mm = std::max(st.max_deviation_mm, line_fit(p, s, s + *ll, tol));
                 ++st.merged;
-                st.lines_in_merged += ll;
-                s += ll;
+                st.lines_in_merged += *ll;
+                s += *ll;
             } else {
-                const ArcFit f = arc_fit(p, s, s + la, tol_mm);
+                const ArcFit f = arc_fit(p, s, s + *la, tol);
                 nb.kind = f.ccw ? MotionKind::arc_ccw : MotionKind::arc_cw;
                 nb.plane = Plane::xy;
                 nb.center_x = f.cx;
                 nb.center_y = f.cy;
                 st.max_deviation_mm = std::max(st.max_deviation_mm, f.deviation);
                 ++st.arcs;
-                st.lines_in_arcs += la;
-                s += la;
+                st.lines_in_arcs += *la;
+                s += *la;
             }
-            out.blocks.push_back(nb);
+            out.push_back(std::move(nb));
         }
-        i = end;
+        if (ended || s == run.size()) {
+            // p keeps where the next line of the run would start.
+            run.clear();
+            if (!p.empty()) p.erase(p.begin(), p.end() - 1);
+            s = 0;
+        } else if (s > run.size() / 2) {  // drop what is handed out (amortized)
+            run.erase(run.begin(), run.begin() + std::ptrdiff_t(s));
+            p.erase(p.begin(), p.begin() + std::ptrdiff_t(s));
+            s = 0;
+        }
     }
-    if (stats) *stats = st;
+};
+
+ArcFitter::ArcFitter(double tol_mm, bool whole_runs) : impl_(std::make_unique<Impl>()) {
+    impl_->tol = tol_mm;
+    impl_->whole_runs = whole_runs;
+}
+ArcFitter::~ArcFitter() = default;
+ArcFitter::ArcFitter(ArcFitter&&) noexcept = default;
+ArcFitter& ArcFitter::operator=(ArcFitter&&) noexcept = default;
+
+void ArcFitter::push(const MotionBlock& b) {
+    Impl& f = *impl_;
+    if (f.finished) throw std::logic_error("ArcFitter::push after finish");
+    if (!(f.tol > 0)) {
+        f.out.push_back(b);
+        return;
+    }
+    if (f.in_run && continues(f.first, f.prev, b)) {
+        f.run.push_back(b);
+        f.p.push_back({b.end[0], b.end[1]});
+        f.prev = b;
+        f.decide(false);
+        return;
+    }
+    if (f.in_run) {
+        f.decide(true);
+        f.in_run = false;
+    }
+    if (!eligible(b)) {
+        f.out.push_back(b);
+        return;
+    }
+    f.in_run = true;
+    f.first = f.prev = b;
+    f.run.assign(1, b);
+    f.p = {{b.start[0], b.start[1]}, {b.end[0], b.end[1]}};
+    f.s = 0;
+    f.need = 0;
+    f.decide(false);
+}
+
+void ArcFitter::finish() {
+    Impl& f = *impl_;
+    if (f.finished) return;
+    f.finished = true;
+    if (f.in_run) f.decide(true);
+    f.in_run = false;
+}
+
+std::optional<MotionBlock> ArcFitter::next() {
+    Impl& f = *impl_;
+    if (f.out.empty()) return std::nullopt;
+    std::optional<MotionBlock> b = std::move(f.out.front());
+    f.out.pop_front();
+    return b;
+}
+
+const ArcFitStats& ArcFitter::stats() const { return impl_->st; }
+std::size_t ArcFitter::held() const { return impl_->run.size() - impl_->s + impl_->out.size(); }
+
+Job fit_arcs(const Job& job, double tol_mm, ArcFitStats* stats) {
+    if (!(tol_mm > 0)) return job;
+    Job out;
+    out.file = job.file;
+    out.blocks.reserve(job.blocks.size());
+    ArcFitter fitter(tol_mm);
+    for (const MotionBlock& b : job.blocks) {
+        fitter.push(b);
+        while (auto nb = fitter.next()) out.blocks.push_back(std::move(*nb));
+    }
+    fitter.finish();
+    while (auto nb = fitter.next()) out.blocks.push_back(std::move(*nb));
+    if (stats) *stats = fitter.stats();
     return out;
 }
 

@@ -7,6 +7,8 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
+#include <optional>
 
 #include "plan/gcode.h"
 
@@ -30,7 +32,40 @@ struct ArcFitStats {
 // whichever replaces more lines. A run's lines share their feed, spindle, tool
 // and every coordinate but X and Y. The first and last points are kept exactly;
 // the new block carries the run's first block's source location.
-// tol_mm <= 0 returns the job unchanged.
+// A fitted block replaces at most kArcFitMaxLines lines (a longer run that fits
+// becomes several blocks), which bounds what ArcFitter holds.
+// tol_mm <= 0 returns the job unchanged. (ArcFitter fed the whole job.)
 Job fit_arcs(const Job& job, double tol_mm, ArcFitStats* stats = nullptr);
+
+inline constexpr std::size_t kArcFitMaxLines = 4096;
+
+// fit_arcs() as the blocks arrive: push() them in order, finish() after the
+// last, next() hands out the fitted job's blocks in order, each as soon as
+// nothing after it can change it (the lines a fit was tried on, doubling from
+// the run's first line, past the first length that failed, or the run's end).
+// It holds the current run's lines from the first not yet handed out, at most
+// kArcFitMaxLines + 1 of them, and what it has made but not handed out.
+// The same blocks as fit_arcs() over the whole job, bit for bit.
+class ArcFitter {
+public:
+    // whole_runs: decide only at each run's end, the whole run held (as fit_arcs
+    // did before it streamed; the reference the tests compare the stream with).
+    explicit ArcFitter(double tol_mm, bool whole_runs = false);
+    ~ArcFitter();
+    ArcFitter(ArcFitter&&) noexcept;
+    ArcFitter& operator=(ArcFitter&&) noexcept;
+    ArcFitter(const ArcFitter&) = delete;
+    ArcFitter& operator=(const ArcFitter&) = delete;
+
+    void push(const MotionBlock& block);
+    void finish();  // no more blocks
+    std::optional<MotionBlock> next();
+    [[nodiscard]] const ArcFitStats& stats() const;  // of what has been fitted so far
+    [[nodiscard]] std::size_t held() const;          // lines of the run and blocks made, held
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace cpstep::plan

@@ -110,13 +110,13 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
     return r;
   }
   plan::Result<CardJob> planned;
-  if (streamed && machine->planner.fit_arcs_mm == 0) {
+  if (streamed) {
     // Streamed: the G-code file read again, a piece at a time, each time the
     // plan is made again (PlanCursor), its blocks planned as they are needed;
     // each piece checked against the reading the job was planned from, so that
     // a file changed under a running job stops it rather than sends another
-    // plan. A program with probe moves, and one whose G1 chains are fitted
-    // with arcs, keep their blocks.
+    // plan. Its G1 chains are fitted with arcs as they are read where the
+    // machine file asks (plan::ArcFitter). A program with probe moves keeps its blocks.
     auto options = card_gcode_options(*machine, start);
     if (!options.ok()) {
       r.errors = options.errors;
@@ -149,7 +149,8 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
   return r;
 }
 
-// A streamed job's blocks in order: its own, or read from its G-code's text.
+// A streamed job's blocks in order: its own, or read from its G-code's text
+// (with its G1 chains fitted as they are read, where the machine file asks).
 class BlockSource {
  public:
   // With `record`: the job's G-code file read for the first time, its mark taken there.
@@ -157,19 +158,36 @@ class BlockSource {
     if (record) reader_.emplace(std::filesystem::path(job.job_file), job.gcode_options, record);
     else if (job.gcode_file) reader_.emplace(job.gcode_file, job.gcode_options);
     else if (!job.blocks) throw std::logic_error("a streamed job with neither blocks nor a G-code file");
+    if (reader_ && job.machine.planner.fit_arcs_mm > 0) fitter_.emplace(job.machine.planner.fit_arcs_mm);
   }
   std::optional<plan::MotionBlock> next() {
-    if (reader_) return reader_->next();
-    if (at_ < job_.blocks->blocks.size()) return job_.blocks->blocks[at_++];
-    return std::nullopt;
+    if (!reader_) {
+      if (at_ < job_.blocks->blocks.size()) return job_.blocks->blocks[at_++];
+      return std::nullopt;
+    }
+    if (!fitter_) return reader_->next();
+    for (;;) {
+      if (auto b = fitter_->next()) return b;
+      if (read_all_) return std::nullopt;
+      if (auto b = reader_->next()) {
+        fitter_->push(*b);
+      } else {
+        fitter_->finish();
+        read_all_ = true;
+      }
+    }
   }
   // The G-code reader's result once next() gave none (null: the blocks were the job's).
   // A file read again that changed since the job was planned holds that error.
   const plan::Result<plan::Job>* read_result() const { return reader_ ? &reader_->result() : nullptr; }
+  // What the fitting of G1 chains made so far (null: the blocks are not fitted here).
+  const plan::ArcFitStats* fit_stats() const { return fitter_ ? &fitter_->stats() : nullptr; }
 
  private:
   const CardJob& job_;
   std::optional<plan::GcodeBlockReader> reader_;
+  std::optional<plan::ArcFitter> fitter_;
+  bool read_all_ = false;
   size_t at_ = 0;
 };
 
@@ -288,7 +306,7 @@ plan::Result<CardJob> plan_streamed_from(CardJob cj, const card::CardCaps& caps,
     return r;
   }
   cj.planned.stats = stream.stats();
-  cj.planned.stats.fit = fit;
+  cj.planned.stats.fit = source.fit_stats() ? *source.fit_stats() : fit;
   cj.planned.chunk_limits = stream.chunk_limits();
   // Where the plan starts (its first step segment's start, else the card's
   // position) and where its last card segment ends.

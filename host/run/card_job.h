@@ -60,8 +60,9 @@ struct CardJob {
   std::shared_ptr<const plan::Job> blocks;
   // Or the G-code file (its mark: size and a hash per piece, taken as it was
   // planned) and how it is read, when the job's blocks are those of the file as
-  // read (no planner.fit_arcs_mm, no probing): read again as it is planned
-  // again, a file written over since stops the cursor (JobFileChanged).
+  // read (their G1 chains fitted as they are read where planner.fit_arcs_mm asks;
+  // no probing): read again as it is planned again, a file written over since
+  // stops the cursor (JobFileChanged).
   std::shared_ptr<const plan::GcodeFileMark> gcode_file;
   plan::GcodeOptions gcode_options;
   plan::PlanOptions plan_options;

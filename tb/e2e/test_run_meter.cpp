@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <string>
 #include <tuple>
@@ -359,23 +360,32 @@ INSTANTIATE_TEST_SUITE_P(Examples, RunMeterJobs,
                            return n.substr(0, n.find('.'));
                          });
 
-// A streamed job whose G1 chains are fitted with arcs (planner.fit_arcs_mm) keeps
-// its fitted blocks, not its text, and plans them again: the whole job's words,
-// checkpoints and measures all the same.
-TEST(RunMeter, AStreamedJobWithFittedArcsKeepsItsBlocks) {
+// A streamed job whose G1 chains are fitted with arcs (planner.fit_arcs_mm) fits
+// them as its G-code file is read (plan::ArcFitter), keeping the file's mark and
+// no blocks, and plans them again so: the whole job's words, checkpoints, fitting
+// and measures all the same. (A job given as blocks keeps its fitted blocks.)
+TEST(RunMeter, AStreamedJobFitsItsArcsAsItsFileIsRead) {
   const auto caps = card::board_caps("hx8k");
-  auto loaded = run::load_card_machine(kSource + "/examples/machines/seed002.toml", *caps);
-  ASSERT_TRUE(loaded.ok()) << plan::join(loaded.errors);
-  std::optional<plan::Machine> machine = *loaded.value;
-  machine->planner.fit_arcs_mm = 0.01;
-  auto job = run::read_card_gcode(kSource + "/examples/jobs/dense.ngc", *machine);
-  ASSERT_TRUE(job.ok()) << plan::join(job.errors);
-  auto whole = run::plan_card_job(*job, *machine, *caps);
-  auto streamed = run::plan_card_job(*job, *machine, *caps, {}, true);
+  std::ifstream in(kSource + "/examples/machines/seed002.toml");
+  std::string toml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = toml.find("[planner]\n");
+  ASSERT_NE(at, std::string::npos);
+  toml.insert(at + 10, "fit_arcs_mm = 0.01\n");
+  const auto machine_file = std::filesystem::temp_directory_path() / fmt::format("cpstep_fit_{}.toml", ::getpid());
+  std::ofstream(machine_file) << toml;
+  const std::string gcode = kSource + "/examples/jobs/dense.ngc";
+  auto whole = run::prepare_job(gcode, machine_file, *caps);
+  auto streamed = run::prepare_job(gcode, machine_file, *caps, {}, true);
+  std::filesystem::remove(machine_file);
   ASSERT_TRUE(whole.ok() && streamed.ok()) << plan::join(whole.errors) << plan::join(streamed.errors);
-  ASSERT_TRUE(streamed->blocks && !streamed->gcode_file);
-  EXPECT_GT(streamed->planned.stats.fit.arcs, 0u);
-  EXPECT_EQ(streamed->planned.stats.fit.arcs, whole->planned.stats.fit.arcs);
+  ASSERT_EQ(streamed->machine.planner.fit_arcs_mm, 0.01);
+  ASSERT_TRUE(streamed->streamed && streamed->gcode_file && !streamed->blocks);
+  const plan::ArcFitStats &fs = streamed->planned.stats.fit, &fw = whole->planned.stats.fit;
+  EXPECT_GT(fs.arcs, 0u);
+  EXPECT_EQ(std::tuple(fs.arcs, fs.lines_in_arcs, fs.merged, fs.lines_in_merged, fs.max_deviation_mm),
+            std::tuple(fw.arcs, fw.lines_in_arcs, fw.merged, fw.lines_in_merged, fw.max_deviation_mm));
+  EXPECT_EQ(streamed->conic_segments(), whole->conic_segments());
+  EXPECT_GT(streamed->conic_segments(), 0u);
   EXPECT_EQ(all_words(*streamed), whole->words);
   run::CheckpointCursor cps(*streamed);
   size_t k = 0;
@@ -385,6 +395,15 @@ TEST(RunMeter, AStreamedJobWithFittedArcsKeepsItsBlocks) {
   }
   EXPECT_EQ(k, whole->checkpoints.size());
   EXPECT_EQ(run::ideal_cycles(*streamed), run::ideal_cycles(*whole));
+
+  // Given as blocks, a streamed job keeps its fitted blocks.
+  auto job = run::read_card_gcode(gcode, streamed->machine);
+  ASSERT_TRUE(job.ok()) << plan::join(job.errors);
+  auto from_blocks = run::plan_card_job(*job, streamed->machine, *caps, {}, true);
+  ASSERT_TRUE(from_blocks.ok()) << plan::join(from_blocks.errors);
+  ASSERT_TRUE(from_blocks->blocks && !from_blocks->gcode_file);
+  EXPECT_EQ(from_blocks->planned.stats.fit.arcs, fw.arcs);
+  EXPECT_EQ(all_words(*from_blocks), whole->words);
 }
 
 // A streamed job keeps its G-code file's mark, not its text, and reads the file

@@ -228,3 +228,134 @@ TEST(ArcFit, MachineFileKey) {
     EXPECT_NE(join(bad.errors).find(fmt::format("m.toml:{}:", line)), std::string::npos) << join(bad.errors);
     EXPECT_NE(join(bad.errors).find("fit_arcs_mm"), std::string::npos) << join(bad.errors);
 }
+
+namespace {
+
+// The fitted blocks of `job`, fed to an ArcFitter one at a time, each block
+// handed out as soon as it is made; the most it held and the blocks pushed when
+// the first arc came out.
+struct Streamed {
+    std::vector<MotionBlock> blocks;
+    ArcFitStats stats;
+    std::size_t max_held = 0, first_arc_after = 0;
+};
+Streamed stream_fit(const Job& job, double tol, bool whole_runs) {
+    Streamed r;
+    ArcFitter f(tol, whole_runs);
+    for (std::size_t i = 0; i < job.blocks.size(); ++i) {
+        f.push(job.blocks[i]);
+        r.max_held = std::max(r.max_held, f.held());
+        while (auto b = f.next()) {
+            if (r.first_arc_after == 0 && b->kind != MotionKind::linear && b->kind != MotionKind::rapid)
+                r.first_arc_after = i + 1;
+            r.blocks.push_back(std::move(*b));
+        }
+    }
+    f.finish();
+    while (auto b = f.next()) r.blocks.push_back(std::move(*b));
+    r.stats = f.stats();
+    return r;
+}
+
+void expect_same_blocks(const std::vector<MotionBlock>& a, const std::vector<MotionBlock>& b, const std::string& what) {
+    ASSERT_EQ(a.size(), b.size()) << what;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        const MotionBlock &x = a[i], &y = b[i];
+        const bool same = x.kind == y.kind && x.start == y.start && x.end == y.end && x.center_x == y.center_x &&
+                          x.center_y == y.center_y && x.plane == y.plane && x.feed == y.feed &&
+                          x.loc.line == y.loc.line && x.loc.col == y.loc.col;
+        ASSERT_TRUE(same) << what << ": block " << i << " (line " << x.loc.line << " against " << y.loc.line << ")";
+    }
+}
+
+}  // namespace
+
+// The fitter decides a stretch of a run once the lines it holds settle it (past
+// the first doubled length that failed), not at the run's end: the blocks are
+// those of deciding with each whole run held, bit for bit, on random programs of
+// arcs, collinear runs, zigzags and breaks, and on the dense spiral (one run of
+// 12,000 lines), holding a few hundred lines, not the run.
+TEST(ArcFit, StreamedAsTheBlocksArriveIsTheWholeRunFit) {
+    std::mt19937 rng(20261129);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int prog = 0; prog < 40; ++prog) {
+        std::vector<std::pair<double, double>> pts{{0, 0}};
+        std::string g = "G21 G90 G17\nG0 X0 Y0\nF600\n";
+        double x = 0, y = 0, heading = 0;
+        const auto line_to = [&](double nx, double ny) {
+            g += fmt::format("G1 X{:.5f} Y{:.5f}\n", nx, ny);
+            x = nx;
+            y = ny;
+        };
+        for (int piece = 0; piece < 12; ++piece) {
+            const int kind = int(u(rng) * 6);
+            const int n = 2 + int(u(rng) * (prog % 4 == 3 ? 900 : 120));
+            const double step = 0.05 + u(rng) * 0.5, noise = u(rng) < 0.5 ? 0 : 0.0008;
+            if (kind <= 1) {  // an arc's chords, either way, maybe noisy
+                const double r = 0.5 + u(rng) * 40, turn = (kind == 0 ? 1 : -1) * step / r;
+                const double cx = x - r * std::cos(heading - (kind == 0 ? -1 : 1) * kPi / 2);
+                const double cy = y - r * std::sin(heading - (kind == 0 ? -1 : 1) * kPi / 2);
+                double a = std::atan2(y - cy, x - cx);
+                for (int i = 0; i < n; ++i) {
+                    a += turn;
+                    line_to(cx + (r + noise * (u(rng) - 0.5)) * std::cos(a), cy + (r + noise * (u(rng) - 0.5)) * std::sin(a));
+                }
+                heading += turn * n;
+            } else if (kind == 2) {  // collinear, maybe jittered
+                for (int i = 0; i < n; ++i)
+                    line_to(x + step * std::cos(heading) + noise * (u(rng) - 0.5), y + step * std::sin(heading));
+            } else if (kind == 3) {  // a zigzag
+                for (int i = 0; i < n; ++i) {
+                    heading += (i % 2 ? 1 : -1) * 1.2;
+                    line_to(x + step * std::cos(heading), y + step * std::sin(heading));
+                }
+            } else if (kind == 4) {  // a break: a feed change, a Z move, a rapid or a dwell
+                const int b = int(u(rng) * 4);
+                g += b == 0 ? "F900\n" : b == 1 ? "G1 Z-0.5\nG1 Z0\n" : b == 2 ? "G4 P0.1\n" : "";
+                if (b == 3) {
+                    x += 1;
+                    g += fmt::format("G0 X{:.5f} Y{:.5f}\n", x, y);
+                }
+            } else {  // a corner
+                heading += 1 + u(rng) * 2;
+            }
+        }
+        const Job job = parse(g);
+        for (double tol : {0.001, 0.01}) {
+            const Streamed s = stream_fit(job, tol, false), w = stream_fit(job, tol, true);
+            const std::string what = fmt::format("program {}, tolerance {}", prog, tol);
+            expect_same_blocks(s.blocks, w.blocks, what);
+            EXPECT_EQ(s.stats.arcs, w.stats.arcs) << what;
+            EXPECT_EQ(s.stats.lines_in_arcs, w.stats.lines_in_arcs) << what;
+            EXPECT_EQ(s.stats.merged, w.stats.merged) << what;
+            EXPECT_EQ(s.stats.max_deviation_mm, w.stats.max_deviation_mm) << what;
+            expect_same_blocks(fit_arcs(job, tol).blocks, s.blocks, what + ", fit_arcs");
+        }
+    }
+    const auto dense = load_gcode(CPSTEP_EXAMPLES_DIR "/jobs/dense.ngc", GcodeOptions{});
+    ASSERT_TRUE(dense.ok()) << join(dense.errors);
+    const Streamed s = stream_fit(*dense.value, 0.002, false), w = stream_fit(*dense.value, 0.002, true);
+    expect_same_blocks(s.blocks, w.blocks, "dense.ngc");
+    EXPECT_GE(w.max_held, 12000u);  // the reference holds the spiral
+    EXPECT_LT(s.max_held, 600u) << "the stream holds the lines its decisions need";
+    EXPECT_GT(s.first_arc_after, 0u);
+    EXPECT_LT(s.first_arc_after, 300u);
+    std::printf("dense.ngc: the stream held at most %zu lines, its first arc out after %zu blocks\n", s.max_held,
+                s.first_arc_after);
+}
+
+// A run is taken at most kArcFitMaxLines lines at a time, which bounds what the
+// fitter holds: 10,000 collinear lines become three lines.
+TEST(ArcFit, ALongCollinearRunIsCutAtTheCap) {
+    std::vector<std::pair<double, double>> pts;
+    for (int i = 0; i <= 10000; ++i) pts.push_back({0.01 * i, 0.005 * i});
+    const Job job = parse(polyline(pts));
+    const Streamed s = stream_fit(job, 0.001, false);
+    std::vector<std::size_t> lines;
+    for (const MotionBlock& b : s.blocks)
+        if (b.kind == MotionKind::linear) lines.push_back(std::size_t(std::llround((b.end[0] - b.start[0]) / 0.01)));
+    EXPECT_EQ(lines, (std::vector<std::size_t>{kArcFitMaxLines, kArcFitMaxLines, 10000 - 2 * kArcFitMaxLines}));
+    EXPECT_EQ(s.stats.merged, 3u);
+    EXPECT_LE(s.max_held, kArcFitMaxLines + 1);
+    expect_same_blocks(s.blocks, stream_fit(job, 0.001, true).blocks, "collinear");
+}
