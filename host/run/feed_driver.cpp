@@ -16,10 +16,10 @@ card::ClientOptions feed_waits(card::ClientOptions client, bool events, bool tog
   return client;
 }
 
-FeedOutcome send_with_feed(card::CardClient& client, WordSource& words, const FeedPlan& plan,
-                           const card::CardClient::KeepWaiting& keep_waiting,
-                           const std::function<std::optional<double>()>& since_start_s) {
-  FeedOutcome out;
+void send_with_feed(card::CardClient& client, WordSource& words, const FeedPlan& plan,
+                    const card::CardClient::KeepWaiting& keep_waiting,
+                    const std::function<std::optional<double>()>& since_start_s, FeedOutcome& out) {
+  out = {};
   bool held = false, gave_up = false;
   size_t next = 0;
   int toggles = 0;
@@ -84,7 +84,6 @@ FeedOutcome send_with_feed(card::CardClient& client, WordSource& words, const Fe
     if (gave_up || !(feeding && due())) break;
     apply();
   }
-  return out;
 }
 
 std::string stop_short(card::CardClient& client, bool feed, const card::CardClient::KeepWaiting& keep_waiting,

@@ -41,10 +41,11 @@ card::ClientOptions feed_waits(card::ClientOptions client, bool events, bool tog
 // wait_until_stopped do with `keep_waiting`, sending the plan's feed frames on the way.
 // since_start_s: the card's seconds since START, nullopt before it started (events wait
 // for it). The override goes before the words; an event due after the end is not sent.
-// Throws what CardClient throws.
-FeedOutcome send_with_feed(card::CardClient& client, WordSource& words, const FeedPlan& plan,
-                           const card::CardClient::KeepWaiting& keep_waiting,
-                           const std::function<std::optional<double>()>& since_start_s);
+// `out` is filled as it goes: when it throws what CardClient or the words throw
+// (JobFileChanged), the words sent and the feed frames applied before are in it.
+void send_with_feed(card::CardClient& client, WordSource& words, const FeedPlan& plan,
+                    const card::CardClient::KeepWaiting& keep_waiting,
+                    const std::function<std::optional<double>()>& since_start_s, FeedOutcome& out);
 
 // The job's words stop short of its end (its file written over since it was
 // planned: JobFileChanged). A card with FEED is held — its timer's scale ramps

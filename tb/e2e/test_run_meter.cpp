@@ -479,8 +479,9 @@ class ActingLink : public card::Link {
 // what changed and how far the words went; nothing after it was sent. A job of
 // 12,000 corner moves (three 64 KiB pieces), the third piece changed after the
 // card has started. The HX8K card (FEED) is held to a stand on its feed ramp —
-// its last moves slow down, it latches no fault — then flushed and resumed; the
-// iCEBreaker card (no FEED) runs what it holds.
+// its last moves slow down, it latches no fault — then flushed and resumed, and
+// the run's feed record keeps the override sent before the change and the HOLD;
+// the iCEBreaker card (no FEED) runs what it holds.
 class SourceChanged : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(SourceChanged, AFileWrittenOverDuringTheRunStopsIt) {
@@ -500,6 +501,7 @@ TEST_P(SourceChanged, AFileWrittenOverDuringTheRunStopsIt) {
   run::SimRunOptions o;
   o.board = board;
   o.record_pins = true;
+  if (caps->feed) o.override_pct = 90;
   o.wrap_link = [&](card::Link& inner) {
     return std::make_unique<ActingLink>(inner, 40, [&] {
       std::ofstream(path, std::ios::binary | std::ios::trunc) << changed;
@@ -526,14 +528,16 @@ TEST_P(SourceChanged, AFileWrittenOverDuringTheRunStopsIt) {
     EXPECT_FALSE(r.status.fault) << r.status.err_code;
     EXPECT_FALSE(r.status.running);
     EXPECT_FALSE(r.status.held);
-    ASSERT_EQ(r.feed.size(), 1u);
-    EXPECT_EQ(r.feed[0].event.kind, run::FeedEvent::Kind::hold);
+    ASSERT_EQ(r.feed.size(), 2u);
+    EXPECT_EQ(r.feed[0].event.kind, run::FeedEvent::Kind::override_pct);
+    EXPECT_EQ(r.feed[0].event.pct, 90);
+    EXPECT_EQ(r.feed[1].event.kind, run::FeedEvent::Kind::hold);
     // The ramp: the last move came at least 4 times later after the one before it
     // than the moves did before the hold (about 10 times here: the card's s was
     // near 0.1 when its last move fell due).
     const std::vector<uint64_t>& m = r.move_cycles;
     ASSERT_GT(m.size(), 200u);
-    const double start_s = r.feed[0].taken_s;
+    const double start_s = r.feed[1].taken_s;
     size_t before = 0;
     while (before + 1 < m.size() && double(m[before + 1] - r.start_cycle) / job->clock_hz() < start_s) ++before;
     ASSERT_GT(before, 1u);
