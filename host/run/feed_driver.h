@@ -30,6 +30,15 @@ struct FeedOutcome {
   size_t sent = 0;       // words handed to frames
   bool stopped = false;  // the wait for the end completed
   std::vector<FeedApplied> applied;
+
+  // The frames applied moved into a run's record (`scaled`: any was sent);
+  // returns the words sent.
+  size_t take(std::vector<FeedApplied>& record, bool& scaled) {
+    record = std::move(applied);
+    applied.clear();
+    scaled = !record.empty();
+    return sent;
+  }
 };
 
 // The client's options with no wait longer than the feed needs: 5 ms while events are

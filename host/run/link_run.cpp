@@ -111,12 +111,6 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   size_t sent = 0;
   // What was sent and the feed frames applied, kept when the sending stops on an error.
   FeedOutcome fed;
-  const auto take_fed = [&] {
-    sent = fed.sent;
-    run.feed = std::move(fed.applied);
-    fed.applied.clear();
-    run.feed_scaled = !run.feed.empty();
-  };
   // START: the first reply that shows the card running (the feed's events are timed from it).
   std::optional<double> started_at;
   const auto watching = [&](const card::Reply& r) {
@@ -132,7 +126,7 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
     if (plan.any() && !job.caps.feed)
       throw card::CardError(fmt::format("the card, {}, has no feed hold or override", card::card_name(job.caps)));
     send_with_feed(client, source, plan, watching, since_start, fed);
-    take_fed();
+    sent = fed.take(run.feed, run.feed_scaled);
     if (sent == source.total() && fed.stopped) watchdog_off(client, o.watchdog_s, keep_waiting);
     if (gave_up == GaveUp::out_of_time) {
       std::vector<uint32_t> abort;
@@ -142,10 +136,10 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
       client.settle([&](const card::Reply&) { return link.now_s() < until; });
     }
   } catch (const card::CardError& e) {
-    take_fed();
+    sent = fed.take(run.feed, run.feed_scaled);
     run.faults.push_back(host_fault(HostFault::link, e.what()));
   } catch (const JobFileChanged& e) {
-    take_fed();
+    sent = fed.take(run.feed, run.feed_scaled);
     run.faults.push_back(stop_for_changed_file(e, source, client, keep_waiting, since_start, run));
   }
   if (gave_up == GaveUp::out_of_time)

@@ -361,12 +361,6 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   size_t sent = 0;
   // What was sent and the feed frames applied, kept when the sending stops on an error.
   FeedOutcome fed;
-  const auto take_fed = [&] {
-    sent = fed.sent;
-    run.feed = std::move(fed.applied);
-    fed.applied.clear();
-    run.feed_scaled = !run.feed.empty();
-  };
   const auto since_start = [&]() -> std::optional<double> {
     if (!rec.started()) return std::nullopt;
     return (double(dut.cycle()) - double(run.start_cycle)) / job.clock_hz();
@@ -387,13 +381,13 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
       throw card::CardError(fmt::format("the card, {}, has no feed hold or override; nothing was sent",
                                         card::card_name(caps)));
     send_with_feed(client, words, plan, keep_waiting, since_start, fed);
-    take_fed();
+    sent = fed.take(run.feed, run.feed_scaled);
     if (sent == words.total() && gave_up == GaveUp::no) watchdog_off(client, o.watchdog_s, keep_waiting);
   } catch (const card::CardError& e) {
-    take_fed();
+    sent = fed.take(run.feed, run.feed_scaled);
     run.faults.push_back(host_fault(HostFault::link, e.what()));
   } catch (const JobFileChanged& e) {
-    take_fed();
+    sent = fed.take(run.feed, run.feed_scaled);
     run.faults.push_back(stop_for_changed_file(e, words, client, keep_waiting, since_start, run));
   }
   run.cycles = rec.end_cycle() ? rec.end_cycle() : dut.cycle();
