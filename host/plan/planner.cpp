@@ -281,7 +281,7 @@ struct FeedPlanner::Impl {
     // A window being grown across pushes.
     bool window_started = false;
     std::size_t window_h = 0;
-    double window_dist = 0, window_vhi = 0, window_amin = kInf, window_jmin = kInf;
+    double window_dist = 0, window_vhi = 0, window_amin = kInf, window_jmin = kInf, window_reach_s = 0;
 
     // Forward pass.
     std::size_t k_fwd = 0;          // the next span to plan
@@ -499,7 +499,9 @@ struct FeedPlanner::Impl {
                 const double nhi = std::max(open_hi, cap);
                 // The time the span loses by running at its lowest cap, against each cap.
                 const double loss = (open_sum_l + g.length) / nlo - (open_sum_t + g.length / cap);
-                if (k > i && (nhi > nlo * (1 + kSpanRatio) || loss > kSpanLossS)) break;
+                if (k > i && (nhi > nlo * (1 + kSpanRatio) || loss > kSpanLossS ||
+                              open_sum_t + g.length / cap > kSpanMaxS))
+                    break;
                 open_lo = nlo;
                 open_hi = nhi;
                 open_sum_l += g.length;
@@ -552,12 +554,17 @@ struct FeedPlanner::Impl {
                 window_vhi = 0;
                 window_amin = kInf;
                 window_jmin = kInf;
+                // Its reach past the span being planned, in time at the caps.
+                window_reach_s = 0;
+                for (std::size_t q = std::min(k_fwd, window_h); q < window_h; ++q)
+                    if (spans[q].length > 0) window_reach_s += spans[q].length / spans[q].vmax;
             }
             for (;;) {
                 if (window_started) {
                     const bool more =
-                        window_h < need + 1 ||
-                        !(window_dist >= options.window_stop_factor * stop_distance(window_vhi, window_amin, window_jmin));
+                        (window_h < need + 1 ||
+                         !(window_dist >= options.window_stop_factor * stop_distance(window_vhi, window_amin, window_jmin))) &&
+                        !(window_h >= need + 1 && window_reach_s >= options.max_lookahead_s);
                     // Whether a window that reaches the last span made ends at
                     // the job's end is known only when the next span is made.
                     if (window_h >= ns && !complete) return false;
@@ -568,6 +575,7 @@ struct FeedPlanner::Impl {
                 const Span& sp = spans[window_h];
                 window_dist += sp.length;
                 if (sp.length > 0) {
+                    if (window_h >= k_fwd) window_reach_s += sp.length / sp.vmax;
                     window_vhi = std::max(window_vhi, sp.vmax);
                     window_amin = std::min(window_amin, sp.a);
                     window_jmin = std::min(window_jmin, sp.j);
@@ -579,16 +587,17 @@ struct FeedPlanner::Impl {
             const std::size_t h = window_h;
             horizon = h;
             ++stats.windows;
+            double reach_s = 0;
             {
-                double mm = 0, sec = 0;
-                for (std::size_t q = need - 1 < h ? need - 1 : h; q < h; ++q) {
+                double mm = 0;
+                for (std::size_t q = std::min(k_fwd, h); q < h; ++q) {
                     mm += spans[q].length;
-                    if (spans[q].length > 0) sec += spans[q].length / spans[q].vmax;
+                    if (spans[q].length > 0) reach_s += spans[q].length / spans[q].vmax;
                 }
-                const std::size_t from = std::min(need - 1, h);
+                const std::size_t from = std::min(k_fwd, h);
                 stats.max_lookahead_spans = std::max(stats.max_lookahead_spans, h - from);
                 stats.max_lookahead_mm = std::max(stats.max_lookahead_mm, mm);
-                stats.max_lookahead_s = std::max(stats.max_lookahead_s, sec);
+                stats.max_lookahead_s = std::max(stats.max_lookahead_s, reach_s);
             }
             entry[horizon] = 0;  // at rest at the window's end (the job's end when horizon = ns)
             std::size_t q = final_upto;
@@ -605,6 +614,14 @@ struct FeedPlanner::Impl {
                 q = std::max(q, k);  // bound by its own cap: final
             }
             final_upto = horizon == ns && complete ? ns : q;
+            // Looked as far as it may: the entries the forward pass needs stand as
+            // they are (each no faster than its whole-job entry; later windows,
+            // reaching farther, give the entries after them no slower, so every
+            // span can still be planned).
+            if (final_upto < need && reach_s >= options.max_lookahead_s) {
+                final_upto = need;
+                ++stats.cut_windows;
+            }
         }
         return true;
     }
@@ -663,10 +680,28 @@ struct FeedPlanner::Impl {
     // it is taken when it stays under every segment's cap and junction cap and
     // beats the spans one by one. Otherwise each span gets its own profile (zero
     // acceleration at its ends).
+    // How far a group from span k may reach: at most kMaxGroupSpans spans, and
+    // the spans after k at most kGroupMaxS at their caps. Null while the spans
+    // that decide it are not made yet.
+    std::optional<std::size_t> group_limit(std::size_t k) {
+        const std::size_t cap = k + kMaxGroupSpans;
+        double sec = 0;
+        for (std::size_t q = k + 1; q <= cap; ++q) {
+            if (q >= spans.end()) {
+                if (!spans_complete()) return std::nullopt;
+                return spans.end();
+            }
+            if (spans[q].length > 0) sec += spans[q].length / spans[q].vmax;
+            if (sec > kGroupMaxS) return q;
+        }
+        return cap;
+    }
+
     void forward() {
         while (errors.empty()) {
             if (k_fwd >= spans.end()) return;
-            if (!make_final(k_fwd + kMaxGroupSpans + 1)) return;
+            const std::optional<std::size_t> limit = group_limit(k_fwd);
+            if (!limit || !make_final(*limit + 1)) return;
             const std::size_t k = k_fwd;
             const Span& sp = spans[k];
             if (sp.length == 0) {
@@ -687,7 +722,7 @@ struct FeedPlanner::Impl {
             Profile cand;
             for (std::size_t g = 2; g <= kMaxGroupSpans; g *= 2) {
                 const std::size_t mg = k + g;
-                if (mg > final_upto || mg > spans.end()) break;
+                if (mg > *limit) break;
                 bool ok = true;
                 for (std::size_t q = k + 1; q < mg && ok; ++q) ok = spans[q].joined;
                 if (!ok || !try_group(k, mg, v0, cand, t_ends)) break;
@@ -799,7 +834,7 @@ void FeedPlanner::finish() {
 std::optional<PlannedSegment> FeedPlanner::next() {
     Impl& p = *impl_;
     if (!p.errors.empty() || p.planned.empty()) return std::nullopt;
-    std::optional<PlannedSegment> out = p.planned.front();
+    std::optional<PlannedSegment> out = std::move(p.planned.front());
     p.planned.pop_front();
     ++p.handed;
     return out;

@@ -73,6 +73,7 @@ inline constexpr double kCurvatureShare = 0.4;     // of a_normal, j_normal
 inline constexpr double kTangentJerkShare = 0.1;   // of the jerk, always left to the tangent
 inline constexpr double kSpanRatio = 0.02;         // caps within 2 % share one profile...
 inline constexpr double kSpanLossS = 0.002;        // ...while it costs at most 2 ms against them
+inline constexpr double kSpanMaxS = 2.0;           // ...and lasts at most 2 s at its caps
 CurvatureBudget curvature_budget(double r, double v, const SegmentLimits& tangent, double a_normal,
                                  double j_normal);
 
@@ -101,16 +102,29 @@ struct PlannedSegment {
     Profile profile;       // empty for dwells
 };
 
-// A group covers at most this many spans (2, 4, ... are tried).
+// A group covers at most this many spans (2, 4, ... are tried), and the spans
+// after its first at most kGroupMaxS at their caps.
 inline constexpr std::size_t kMaxGroupSpans = 64;
+inline constexpr double kGroupMaxS = 2.0;
 
 struct FeedOptions {
     // The lookahead window grows by spans covering this many times the stopping
-    // distance from the window's highest cap at a time; infinity plans the
-    // whole job in one window. The result does not depend on it (only entries
-    // that no later span can change are used), only the work and the lookahead do.
+    // distance from the window's highest cap at a time; infinity (with
+    // max_lookahead_s infinite) plans the whole job in one window. The result
+    // does not depend on it (only entries that no later span can change are
+    // used, unless max_lookahead_s cuts the window), only the work and the
+    // lookahead do.
     double window_stop_factor = 1.0;
+    // The farthest the backward pass looks past the span being planned, in time
+    // at the caps: a window that reaches this far without making the entries the
+    // forward pass needs final makes them final as they stand (from rest at the
+    // window's end: slower than the whole job's where that was faster, never
+    // infeasible). Infinity: only entries that no later span can change are used.
+    double max_lookahead_s = kDefaultMaxLookaheadS;
+    static constexpr double kDefaultMaxLookaheadS = 10.0;
 };
+// A group's spans (and the last one's) lie within the default bound.
+static_assert(kGroupMaxS + kSpanMaxS < FeedOptions::kDefaultMaxLookaheadS);
 
 struct FeedStats {
     std::size_t spans = 0, groups = 0;
@@ -118,6 +132,7 @@ struct FeedStats {
     std::size_t backward_steps = 0;  // span entries computed over all windows
     std::size_t max_lookahead_spans = 0;  // the farthest the backward pass looked past the span being planned
     double max_lookahead_mm = 0, max_lookahead_s = 0;  // the same in path length and in time at the caps
+    std::size_t cut_windows = 0;     // windows that reached FeedOptions::max_lookahead_s
 };
 
 // Profiles for every step segment (dwells become pauses of their length).

@@ -24,7 +24,8 @@ public:
     T& back() { return blocks_.back().back(); }
     void push_back(const T& x) {
         if (blocks_.empty() || blocks_.back().size() == kBlock) {
-            blocks_.emplace_back();
+            blocks_.emplace_back(std::move(spare_));
+            spare_ = {};
             blocks_.back().reserve(kBlock);
         }
         blocks_.back().push_back(x);
@@ -40,6 +41,13 @@ public:
     void drop_before(std::size_t i) {
         dropped_ = std::max(dropped_, std::min(i, end_));
         while (!blocks_.empty() && base_ + kBlock <= dropped_) {
+            // One block passed is kept for the next one: a window sliding along
+            // the job allocates nothing once it holds what it needs, rather than
+            // freeing a block and allocating another every kBlock entries.
+            if (spare_.capacity() == 0) {
+                spare_ = std::move(blocks_.front());
+                spare_.clear();
+            }
             blocks_.pop_front();
             base_ += kBlock;
         }
@@ -48,6 +56,7 @@ public:
 private:
     static constexpr std::size_t kBlock = 256;
     std::deque<std::vector<T>> blocks_;  // each of kBlock entries but the last
+    std::vector<T> spare_;               // a block passed, empty, kept for the next
     std::size_t base_ = 0, end_ = 0, dropped_ = 0;
 };
 

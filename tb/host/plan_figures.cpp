@@ -21,6 +21,8 @@
 #include <map>
 #include <fstream>
 
+#include <malloc.h>
+
 #include "cpstep/builds.h"
 #include "plan/pipeline.h"
 #include "plan/steptime.h"
@@ -188,6 +190,7 @@ int bounds(const char* mpath, const char* jpath) {
     // The same job planned in one window (the whole job at once).
     FeedOptions whole;
     whole.window_stop_factor = std::numeric_limits<double>::infinity();
+    whole.max_lookahead_s = std::numeric_limits<double>::infinity();
     auto wf = plan_feeds(*segs.value, *m, jpath, whole);
     const double wplanned = wf->back().t_start + wf->back().duration;
     fmt::print("| {} | {} | {} | {:.3f} s | {:.3f} s | {:.3f} | {:.3f} s | {:.3f} s | {:.3f} | {} | {:.1f} mm, {:.2f} s | {:+.1e} s |\n",
@@ -303,6 +306,13 @@ int fingerprint(const char* mpath, const char* jpath) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    // The speed figures are planning's: memory freed between repetitions stays
+    // in the process (glibc's defaults hand a freed top of the heap and large
+    // blocks back to the system, and the next repetition faults them in again:
+    // some 13 us a page on the machine docs/BENCHMARKS.md names, more than the
+    // streaming feed planner's own time on dense.ngc).
+    mallopt(M_MMAP_THRESHOLD, 64 << 20);
+    mallopt(M_TRIM_THRESHOLD, 256 << 20);
     const std::string cmd = argc > 1 ? argv[1] : "";
     if (cmd == "chunks" && argc == 4) return chunks(argv[2], argv[3]);
     if (cmd == "chunks" && argc == 6) return chunks(argv[2], argv[3], argv[4], unsigned(std::atoi(argv[5])));

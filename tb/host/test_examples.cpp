@@ -196,10 +196,16 @@ TEST_P(ExampleFeeds, PlannedTimeIsAtLeastTheLowerBound) {
     EXPECT_GE(planned, time_lower_bound(segs, m));
 }
 
-// The lookahead window changes nothing: the same job planned in one window.
+// The lookahead window changes nothing: the same job planned in one window. No
+// example job's lookahead reaches its time bound (FeedOptions::max_lookahead_s).
 TEST_P(ExampleFeeds, StreamingWindowGivesTheWholeJobPlan) {
+    FeedStats st;
+    ASSERT_TRUE(plan_feeds(segs, m, "job", {}, &st).ok());
+    EXPECT_EQ(st.cut_windows, 0u);
+    EXPECT_LT(st.max_lookahead_s, FeedOptions::kDefaultMaxLookaheadS);
     FeedOptions whole;
     whole.window_stop_factor = std::numeric_limits<double>::infinity();
+    whole.max_lookahead_s = std::numeric_limits<double>::infinity();
     auto w = plan_feeds(segs, m, "job", whole);
     ASSERT_TRUE(w.ok());
     ASSERT_EQ(w->size(), feeds.size());
@@ -406,4 +412,25 @@ TEST(DenseJob, SpiralWithinFivePercentOfItsBound) {
     std::printf("spiral planned %.3f s, bound %.3f s, ratio %.4f\n", spiral, bound, spiral / bound);
     EXPECT_GE(spiral, bound);
     EXPECT_LE(spiral, 1.05 * bound);
+
+    // Planned as the segments arrive, the planner holds seconds of the spiral,
+    // not the spiral (its outer turns, all at the feed, were one span and so one
+    // window of 8,647 segments before spans were cut at kSpanMaxS): the spans a
+    // group may cover (kGroupMaxS), the lookahead past them, and the span being
+    // made (2,534 segments, about 8 s of motion).
+    FeedPlanner planner(m, "dense.ngc");
+    for (const StepSegment& s : *segs.value) {
+        planner.push(s);
+        while (planner.next()) {
+        }
+    }
+    planner.finish();
+    while (planner.next()) {
+    }
+    ASSERT_TRUE(planner.done());
+    std::printf("dense.ngc: at most %zu of %zu segments held, lookahead %.1f mm / %.2f s\n", planner.max_held(),
+                segs->size(), planner.stats().max_lookahead_mm, planner.stats().max_lookahead_s);
+    EXPECT_LT(planner.max_held(), 3000u);
+    EXPECT_LT(planner.stats().max_lookahead_s, FeedOptions::kDefaultMaxLookaheadS);
+    EXPECT_EQ(planner.stats().cut_windows, 0u);
 }

@@ -571,6 +571,7 @@ TEST(FeedPlanner, PlansAsTheSegmentsArriveHoldingTheLookaheadNotTheJob) {
 
     FeedOptions whole;
     whole.window_stop_factor = std::numeric_limits<double>::infinity();
+    whole.max_lookahead_s = std::numeric_limits<double>::infinity();
     auto reference = plan_feeds(*segs.value, m, "zigzag.ngc", whole);
     ASSERT_TRUE(reference.ok()) << join(reference.errors);
 
@@ -601,6 +602,69 @@ TEST(FeedPlanner, PlansAsTheSegmentsArriveHoldingTheLookaheadNotTheJob) {
     EXPECT_LT(first_out_at, 400u);
     std::printf("first out after %zu of %zu segments, at most %zu held\n", first_out_at, n, planner.max_held());
     EXPECT_LT(planner.max_held(), 1500u) << "of " << n << " segments";
+}
+
+// The lookahead is bounded by time (FeedOptions::max_lookahead_s): a window that
+// reaches that far past the spans the forward pass needs without making their
+// entries final makes them final as they stand, from rest at its end. A
+// straight run of 0.025 mm moves whose feeds alternate 10 % apart (each its own
+// span, all joined smoothly) from rest to rest: the backward pass climbs from
+// rest span by span, so no entry is its own cap until far ahead. Bounded at
+// 0.25 s the plan is cut, looks no farther than the bound and a span, stays
+// feasible (speeds continuous across every junction, under every cap, every
+// segment timed) and is no faster than the whole-job plan; with the default
+// bound the same job is the whole-job plan bit for bit.
+TEST(FeedPlanner, ALookaheadPastItsTimeBoundIsCutNoFasterThanTheWholeJob) {
+    const Machine m = machine();
+    std::string g = "G21 G90\nG0 X10\nG4 P0.01\n";  // at rest at X10
+    for (int i = 1; i <= 3000; ++i) g += fmt::format("G1 X{:.3f} F{}\n", 10 + 0.025 * i, i % 2 ? 600 : 660);
+    auto job = parse_gcode(g, "creep.ngc");
+    ASSERT_TRUE(job.ok()) << join(job.errors);
+    auto segs = make_step_segments(*job, m);
+    ASSERT_TRUE(segs.ok()) << join(segs.errors);
+
+    FeedOptions whole_window;
+    whole_window.window_stop_factor = std::numeric_limits<double>::infinity();
+    whole_window.max_lookahead_s = std::numeric_limits<double>::infinity();
+    FeedStats ws, ds, cs;
+    auto whole = plan_feeds(*segs.value, m, "creep.ngc", whole_window, &ws);
+    auto by_default = plan_feeds(*segs.value, m, "creep.ngc", {}, &ds);
+    FeedOptions bounded;
+    bounded.max_lookahead_s = 0.25;
+    auto cut = plan_feeds(*segs.value, m, "creep.ngc", bounded, &cs);
+    ASSERT_TRUE(whole.ok() && by_default.ok() && cut.ok()) << join(cut.errors);
+    const std::size_t n = segs->size();
+    ASSERT_EQ(whole->size(), n);
+    ASSERT_EQ(cut->size(), n);
+
+    // The default bound (10 s) is not reached here: the whole-job plan.
+    EXPECT_EQ(ds.cut_windows, 0u);
+    EXPECT_GT(ds.max_lookahead_s, 0.5) << "the job must need a long lookahead to test the bound";
+    for (std::size_t i = 0; i < n; ++i) expect_same_plan((*by_default)[i], (*whole)[i], i);
+
+    // Cut: it looks past the span being planned no farther than the bound (or
+    // the spans a group may cover: 64 here, 0.16 s) and one growth step of the
+    // window (which covers at least the stopping distance from its highest cap:
+    // 0.8 mm from 11 mm/s here, 0.07 s at the caps).
+    EXPECT_GT(cs.cut_windows, 0u);
+    EXPECT_LE(cs.max_lookahead_s, 0.25 + 0.1);
+    double t = 0, v = 0, cut_end = 0, whole_end = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const PlannedSegment& p = (*cut)[i];
+        ASSERT_GT(p.duration, 0) << "segment " << i;
+        EXPECT_NEAR(p.t_start, t, 1e-9) << "segment " << i;
+        EXPECT_NEAR(p.profile.v_entry, v, 1e-9) << "segment " << i;
+        EXPECT_LE(p.profile.v_exit, p.cruise * (1 + 1e-9)) << "segment " << i;
+        EXPECT_LE(p.profile.v_exit, (*whole)[i].profile.v_exit * (1 + 1e-9) + 1e-9) << "segment " << i;
+        t = p.t_start + p.duration;
+        v = p.profile.v_exit;
+        cut_end = t;
+        whole_end = (*whole)[i].t_start + (*whole)[i].duration;
+    }
+    EXPECT_NEAR(v, 0, 1e-9);
+    EXPECT_GE(cut_end, whole_end * (1 - 1e-12));
+    std::printf("lookahead %.2f s whole, %.2f s bounded at 0.25 s (%zu windows cut); planned %.3f s against %.3f s\n",
+                ws.max_lookahead_s, cs.max_lookahead_s, cs.cut_windows, cut_end, whole_end);
 }
 
 TEST(FeedPlanner, ARefusedMoveStopsItsOutputAndEveryRefusedBlockIsNamed) {
