@@ -55,6 +55,13 @@ double insunits_mm(int code) {
 
 namespace {
 
+// An angle past two turns (`turn`: 360 degrees or 2 pi) brought within one
+// (exactly: fmod), so that turns added until the end passes the start are at
+// most a few (an ARC starting at 4.4e84 degrees looped for ever). One within
+// two turns is kept as written: a drawing's 2 pi end, written as 6.28318530718,
+// stays a whole turn.
+double within_turns(double a, double turn) { return std::abs(a) > 2 * turn ? std::fmod(a, turn) : a; }
+
 std::string trim(std::string s) {
   const auto b = s.find_first_not_of(" \t\r\n");
   if (b == std::string::npos) return {};
@@ -233,8 +240,8 @@ class Reader : public DL_CreationAdapter {
     Affine ocs;
     if (!finite({d.cx, d.cy, d.radius, d.angle1, d.angle2}, src) || !plane(src, ocs)) return;
     if (d.radius <= 0) { error(src, "radius " + fmt_num(d.radius) + " is not positive"); return; }
-    const double t0 = d.angle1 * kPi / 180;
-    double t1 = d.angle2 * kPi / 180;
+    const double t0 = within_turns(d.angle1, 360.0) * kPi / 180;
+    double t1 = within_turns(d.angle2, 360.0) * kPi / 180;
     while (t1 <= t0) t1 += 2 * kPi;
     if (t1 - t0 > 2 * kPi) t1 -= 2 * kPi;
     emit(Seg::circle_arc({d.cx, d.cy}, d.radius, t0, t1, src).transformed(ocs));
@@ -263,7 +270,7 @@ class Reader : public DL_CreationAdapter {
       return;
     }
     const Vec2 minor = n[2] >= 0 ? perp_left(m) * d.ratio : perp_left(m) * -d.ratio;
-    double t0 = d.angle1, t1 = d.angle2;
+    double t0 = within_turns(d.angle1, 2 * kPi), t1 = within_turns(d.angle2, 2 * kPi);
     while (t1 <= t0) t1 += 2 * kPi;
     if (t1 - t0 > 2 * kPi + 1e-12) t1 -= 2 * kPi;
     emit(Seg::conic_arc({d.cx, d.cy}, m, minor, t0, t1, src));

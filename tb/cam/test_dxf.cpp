@@ -57,6 +57,31 @@ TEST(Dxf, ArcAcrossZeroDegrees) {
   EXPECT_TRUE(near(r.drawing.segs[0].at(0.5 * (r.drawing.segs[0].t0 + r.drawing.segs[0].t1)), {2, 0}, 1e-12));
 }
 
+// Angles of any size are taken within a turn: 750 and -240 degrees are 30 and
+// 120, an ELLIPSE's parameters 4 pi + 0.5 and 2 pi + 2 are 0.5 and 2, and an ARC
+// starting at 4.4e84 degrees (a fuzzed drawing: adding turns to the end angle
+// until it passed the start looped for ever) is read at once.
+TEST(Dxf, AnglesOfAnySizeAreTakenWithinATurn) {
+  DxfText d;
+  d.arc(0, 0, 2, 750, -240);
+  d.ellipse(10, 0, 3, 0, 0.5, 4 * M_PI + 0.5, 2 * M_PI + 2);
+  d.arc(20, 0, 1, 4.4e84, 90);
+  const DxfResult r = load(d, "turns.dxf");
+  ASSERT_TRUE(r.ok()) << r.errors.front();
+  ASSERT_EQ(r.drawing.segs.size(), 3u);
+  const Seg& a = r.drawing.segs[0];
+  EXPECT_NEAR(a.sweep(), M_PI / 2, 1e-12);
+  EXPECT_TRUE(near(a.a, {2 * std::cos(M_PI / 6), 2 * std::sin(M_PI / 6)}, 1e-12));
+  EXPECT_TRUE(near(a.b, {2 * std::cos(2 * M_PI / 3), 2 * std::sin(2 * M_PI / 3)}, 1e-12));
+  const Seg& e = r.drawing.segs[1];
+  EXPECT_TRUE(near(e.a, {10 + 3 * std::cos(0.5), 1.5 * std::sin(0.5)}, 1e-9));
+  EXPECT_TRUE(near(e.b, {10 + 3 * std::cos(2.0), 1.5 * std::sin(2.0)}, 1e-9));
+  const Seg& h = r.drawing.segs[2];
+  EXPECT_GT(h.sweep(), 0);
+  EXPECT_LE(h.sweep(), 2 * M_PI);
+  EXPECT_TRUE(near(h.b, {20, 1}, 1e-12));
+}
+
 TEST(Dxf, ArcWithDownwardExtrusionIsMirrored) {
   DxfText d;
   d.arc(5, 0, 1, 0, 90, false, -1);  // OCS x is -X: centre (-5, 0), from (-6, 0) to (-5, 1), clockwise in WCS
