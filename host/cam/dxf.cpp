@@ -103,20 +103,21 @@ std::vector<std::string> declared_count_errors(const std::string& text, const st
     std::string type, handle;
     int line = 0;
     std::map<std::string, std::size_t> groups;
-    std::map<std::string, std::string> declared;
+    std::map<std::string, std::vector<std::string>> declared;  // every value given (libdxflib allocates at each)
   };
   std::vector<std::string> errors;
   auto check = [&](const Entity& e) {
     for (const DeclaredCount& c : kDeclaredCounts) {
       if (e.type != c.type || !e.declared.count(c.count_code)) continue;
-      const std::string& v = e.declared.at(c.count_code);
       const auto it = e.groups.find(c.item_code);
       const std::size_t present = it == e.groups.end() ? 0 : it->second;
-      long long n = -1;
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-      if (ec != std::errc{} || end != v.data() + v.size() || n < 0 || std::size_t(n) > present)
-        errors.push_back(Source{e.type, e.handle, e.line}.where(path) + ": group " + c.count_code + " declares " + v +
-                         " " + c.what + ", the entity has " + std::to_string(present));
+      for (const std::string& v : e.declared.at(c.count_code)) {
+        long long n = -1;
+        const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+        if (ec != std::errc{} || end != v.data() + v.size() || n < 0 || std::size_t(n) > present)
+          errors.push_back(Source{e.type, e.handle, e.line}.where(path) + ": group " + c.count_code + " declares " +
+                           v + " " + c.what + ", the entity has " + std::to_string(present));
+      }
     }
   };
   std::istringstream in(text);
@@ -137,7 +138,7 @@ std::vector<std::string> declared_count_errors(const std::string& text, const st
     if (!cur) continue;
     if (code == "5" && cur->handle.empty()) cur->handle = value;
     ++cur->groups[code];
-    if (code == "72" || code == "73" || code == "74" || code == "90") cur->declared[code] = value;
+    if (code == "72" || code == "73" || code == "74" || code == "90") cur->declared[code].push_back(value);
   }
   if (cur) check(*cur);
   return errors;

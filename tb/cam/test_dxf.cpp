@@ -399,6 +399,17 @@ TEST(Dxf, DeclaredCountsPastTheEntityAreRefused) {
   ASSERT_EQ(nul.errors.size(), 1u);
   EXPECT_NE(nul.errors[0].find("group 73 declares 53095030 control points, the entity has 0"), std::string::npos)
       << nul.errors[0];
+  // A count given twice: libdxflib allocates at each, so each is checked, not the
+  // last alone (fuzz finding 18: 8777771421 vertices and then 2, an out-of-memory of
+  // 6 GB in libdxflib before the fix).
+  const std::string twice = camtest::write(dir / "twice.dxf", "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n5\nD4\n90\n"
+                                                              "8777771421\n90\n2\n70\n0\n10\n0\n20\n0\n10\n1\n20\n1\n"
+                                                              "0\nENDSEC\n0\nEOF\n");
+  const DxfResult two = load_dxf(twice);
+  ASSERT_EQ(two.errors.size(), 1u);
+  EXPECT_NE(two.errors[0].find("LWPOLYLINE handle D4: group 90 declares 8777771421 vertices, the entity has 2"),
+            std::string::npos)
+      << two.errors[0];
 }
 
 TEST(Dxf, NestedBlocksAndUnevenScaleMakeAnEllipse) {
