@@ -378,38 +378,33 @@ TEST(Dxf, DeclaredCountsPastTheEntityAreRefused) {
   // The same entities with their true counts are read.
   const DxfResult good = load(drawing("2", "2"), "counts_ok.dxf");
   EXPECT_TRUE(good.ok()) << good.errors.front();
+  // Each text below is refused with one error that says `message`.
+  const auto dir = camtest::temp_dir("dxf");
+  const auto refused_once = [&](const std::string& name, const std::string& text, const std::string& message) {
+    const DxfResult r = load_dxf(camtest::write(dir / name, text));
+    ASSERT_EQ(r.errors.size(), 1u) << name;
+    EXPECT_NE(r.errors[0].find(message), std::string::npos) << r.errors[0];
+  };
   // Wherever the entity sits: behind a damaged section header ("'" for the 0
   // before SECTION, which libdxflib reads as 0 all the same) it is refused too.
-  const auto dir = camtest::temp_dir("dxf");
-  const std::string path = camtest::write(dir / "hidden.dxf",
-                                          "0\nSECTION\n2\nHEADER\n0\nENDSEC\n'\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n5\nB7\n"
-                                          "100\nAcDbPolyline\n90\n8777777777\n0\nENDSEC\n0\nEOF\n");
-  const DxfResult hidden = load_dxf(path);
-  ASSERT_EQ(hidden.errors.size(), 1u);
-  EXPECT_NE(hidden.errors[0].find("LWPOLYLINE handle B7: group 90 declares 8777777777 vertices, the entity has 0"),
-            std::string::npos)
-      << hidden.errors[0];
+  refused_once("hidden.dxf",
+               "0\nSECTION\n2\nHEADER\n0\nENDSEC\n'\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n5\nB7\n"
+               "100\nAcDbPolyline\n90\n8777777777\n0\nENDSEC\n0\nEOF\n",
+               "LWPOLYLINE handle B7: group 90 declares 8777777777 vertices, the entity has 0");
   // An entity name with a NUL byte after it is that entity to libdxflib (it reads C
   // strings): "SPLINE\0..." declaring 53095030 control points is refused too
   // (fuzz finding 14: an out-of-memory in libdxflib's allocation before the fix).
-  const std::string named = camtest::write(dir / "nul.dxf", std::string("0\nSECTION\n2\nENTITIES\n0\nSPLINE") +
-                                                                std::string(3, '\0') + "\xff\xff\n5\nC3\n73\n53095030\n"
-                                                                "0\nENDSEC\n0\nEOF\n");
-  const DxfResult nul = load_dxf(named);
-  ASSERT_EQ(nul.errors.size(), 1u);
-  EXPECT_NE(nul.errors[0].find("group 73 declares 53095030 control points, the entity has 0"), std::string::npos)
-      << nul.errors[0];
+  refused_once("nul.dxf",
+               std::string("0\nSECTION\n2\nENTITIES\n0\nSPLINE") + std::string(3, '\0') +
+                   "\xff\xff\n5\nC3\n73\n53095030\n0\nENDSEC\n0\nEOF\n",
+               "group 73 declares 53095030 control points, the entity has 0");
   // A count given twice: libdxflib allocates at each, so each is checked, not the
   // last alone (fuzz finding 18: 8777771421 vertices and then 2, an out-of-memory of
   // 6 GB in libdxflib before the fix).
-  const std::string twice = camtest::write(dir / "twice.dxf", "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n5\nD4\n90\n"
-                                                              "8777771421\n90\n2\n70\n0\n10\n0\n20\n0\n10\n1\n20\n1\n"
-                                                              "0\nENDSEC\n0\nEOF\n");
-  const DxfResult two = load_dxf(twice);
-  ASSERT_EQ(two.errors.size(), 1u);
-  EXPECT_NE(two.errors[0].find("LWPOLYLINE handle D4: group 90 declares 8777771421 vertices, the entity has 2"),
-            std::string::npos)
-      << two.errors[0];
+  refused_once("twice.dxf",
+               "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n5\nD4\n90\n8777771421\n90\n2\n70\n0\n10\n0\n20\n0\n10\n1\n"
+               "20\n1\n0\nENDSEC\n0\nEOF\n",
+               "LWPOLYLINE handle D4: group 90 declares 8777771421 vertices, the entity has 2");
 }
 
 TEST(Dxf, NestedBlocksAndUnevenScaleMakeAnEllipse) {
