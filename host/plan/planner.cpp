@@ -587,13 +587,10 @@ struct FeedPlanner::Impl {
             const std::size_t h = window_h;
             horizon = h;
             ++stats.windows;
-            double reach_s = 0;
+            const double reach_s = window_reach_s;  // from the span being planned to h
             {
                 double mm = 0;
-                for (std::size_t q = std::min(k_fwd, h); q < h; ++q) {
-                    mm += spans[q].length;
-                    if (spans[q].length > 0) reach_s += spans[q].length / spans[q].vmax;
-                }
+                for (std::size_t q = std::min(k_fwd, h); q < h; ++q) mm += spans[q].length;
                 const std::size_t from = std::min(k_fwd, h);
                 stats.max_lookahead_spans = std::max(stats.max_lookahead_spans, h - from);
                 stats.max_lookahead_mm = std::max(stats.max_lookahead_mm, mm);
@@ -676,10 +673,6 @@ struct FeedPlanner::Impl {
         return p ? p->duration : kInf;
     }
 
-    // Forward pass. Where spans join smoothly a group may cover them (try_group);
-    // it is taken when it stays under every segment's cap and junction cap and
-    // beats the spans one by one. Otherwise each span gets its own profile (zero
-    // acceleration at its ends).
     // How far a group from span k may reach: at most kMaxGroupSpans spans, and
     // the spans after k at most kGroupMaxS at their caps. Null while the spans
     // that decide it are not made yet.
@@ -697,6 +690,10 @@ struct FeedPlanner::Impl {
         return cap;
     }
 
+    // Forward pass. Where spans join smoothly a group may cover them (try_group);
+    // it is taken when it stays under every segment's cap and junction cap and
+    // beats the spans one by one. Otherwise each span gets its own profile (zero
+    // acceleration at its ends).
     void forward() {
         while (errors.empty()) {
             if (k_fwd >= spans.end()) return;
