@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "plan/pipeline.h"
 
+#include <algorithm>
+
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -68,6 +70,8 @@ struct PlanStream::Impl {
     std::string file;
     ChunkLimits lim;
     double tol;
+    std::function<void(std::span<const double>, std::span<const double>, double)> on_move_times;
+    double arc_path_done = 0;   // on_move_times: the path length of the arc's pieces so far
     StepSegmenter segmenter;
     FeedPlanner feeds;
     std::vector<Diagnostic> loop_warnings, loop_errors, time_errors;
@@ -109,6 +113,7 @@ struct PlanStream::Impl {
           file(std::move(job_file)),
           lim(job_chunk_limits(machine, options)),
           tol(machine.chunk_tolerance_cycles()),
+          on_move_times(options.on_move_times),
           segmenter(machine, file),
           feeds(machine, file) {
         conics = m.planner.arcs == ArcMode::conic && m.card.conic_width > 0;
@@ -280,6 +285,32 @@ struct PlanStream::Impl {
             for (std::size_t p = 0; p < list->size(); ++p) {
                 ConicPiece& piece = (*list)[p];
                 const std::int64_t before = prev;
+                if (on_move_times) {
+                    // Each move's length along the arc: the path's position at its
+                    // ideal time by the chords' feeds.
+                    auto path_at = [&](double cycles) {
+                        const double t = cycles / m.card.clock_hz;
+                        double done_mm = 0;
+                        for (const PlannedSegment& f : in.feeds) {
+                            if (t <= f.t_start + f.duration || &f == &in.feeds.back())
+                                return done_mm + f.profile.at(std::clamp(t - f.t_start, 0.0, f.duration)).s;
+                            done_mm += f.length;
+                        }
+                        return done_mm;
+                    };
+                    std::vector<double> lengths;
+                    double last = p == 0 ? 0.0 : arc_path_done;
+                    for (double c : piece.walk->ideal) {
+                        const double here = path_at(c);
+                        lengths.push_back(here - last);
+                        last = here;
+                    }
+                    arc_path_done = last;
+                    on_move_times(piece.walk->ideal, lengths,
+                                  p == 0 && in.feeds.front().profile.v_entry == 0
+                                      ? in.feeds.front().t_start * m.card.clock_hz
+                                      : -1.0);
+                }
                 auto chunks = compress(piece.walk->ideal, prev, tol, lim);
                 if (!chunks.ok()) {
                     loop_errors.push_back({file, s.loc, fmt::format("timing: {}", chunks.error)});
@@ -332,6 +363,12 @@ struct PlanStream::Impl {
             const auto ideal = ideal_move_times(plan[i], total, part.first_move, part.moves, m.card.clock_hz);
             if (!ideal.empty() && !pause_before(ideal.front())) return false;
             const std::int64_t before = prev;
+            if (on_move_times) {
+                const std::vector<double> lengths(ideal.size(), plan[i].length / double(total));
+                on_move_times(ideal, lengths,
+                              part.first_move == 0 && plan[i].profile.v_entry == 0 ? plan[i].t_start * m.card.clock_hz
+                                                                                 : -1.0);
+            }
             auto chunks = compress(ideal, prev, tol, lim);
             if (!chunks.ok()) {
                 loop_errors.push_back({file, s.loc, fmt::format("timing: {}", chunks.error)});

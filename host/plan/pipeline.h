@@ -6,6 +6,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,12 @@ struct PlannedJob {
 struct PlanOptions {
     ChunkLimits chunk_limits;                // enable_add2 defaults from the machine
     bool add2_from_machine = true;
+    // A measurement hook (plan_figures phases): each card segment's ideal move
+    // times (absolute clocks) as the card loop times them, each move's length
+    // along the path (mm), and the clock at which its motion starts from rest
+    // (-1: it continues). Pause moves are not shown.
+    std::function<void(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at)>
+        on_move_times;
 };
 
 // The whole job planned: its blocks pushed through a PlanStream (after G1 chains

@@ -24,6 +24,7 @@
 #include <malloc.h>
 
 #include "cpstep/builds.h"
+#include "plan/phases.h"
 #include "plan/pipeline.h"
 #include "plan/steptime.h"
 
@@ -114,6 +115,38 @@ int chunks(const char* mpath, const char* jpath, const char* board = nullptr, un
                    mpath, jpath, add2 ? "on" : "off", s.step_segments, s.card_segments, s.moves,
                    s.chunks, s.moves_per_chunk(), s.duration_s, s.worst_split_error);
     }
+    return 0;
+}
+
+// Moves timed by phases of constant jerk (plan/phases.h): phases, rests and the
+// registers' ranges for the job on BOARD, ticks of 2^S clocks, F fractional bits.
+int phases(const char* mpath, const char* jpath, const char* board, unsigned s, unsigned f, double unit_mm) {
+    auto m = load_bound(mpath, board);
+    if (!m.ok()) { fmt::print(stderr, "{}\n", join(m.errors)); return 1; }
+    auto job = load_gcode(jpath, gcode_options(*m));
+    if (!job.ok()) { fmt::print(stderr, "{}\n", join(job.errors)); return 1; }
+    PhaseFormat format;
+    format.tick_log2 = s;
+    format.frac_bits = f;
+    format.path_unit_mm = unit_mm;
+    PhaseFitter fitter(format, m->chunk_tolerance_cycles());
+    std::uint64_t batches = 0;
+    PlanOptions o;
+    o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths, double rest_at) {
+        ++batches;
+        fitter.push(ideal, lengths, rest_at);
+    };
+    auto p = plan_job(*job, *m, o);
+    if (!p.ok()) { fmt::print(stderr, "{}\n", join(p.errors)); return 1; }
+    if (!fitter.finish()) { fmt::print(stderr, "{}: {}\n", jpath, fitter.error()); return 1; }
+    const PhaseStats& st = fitter.stats();
+    fmt::print("{} {} s={} F={} unit={}: card_segments={} moves={} chunks={} phases={} rests={} reloads={} timed={} moves/phase={:.1f} "
+               "max_ticks={} max|j|={} (2^{:.1f}) max|a|=2^{:.1f} max_v=2^{:.1f} max_phase_moves={}\n",
+               jpath, board, s, f, unit_mm, p->stats.card_segments, st.moves, p->stats.chunks, st.phases, st.rests, st.reloads, st.timed,
+               double(st.moves) / double(std::max<std::uint64_t>(1, st.phases)), st.max_ticks, st.max_abs_jerk,
+               std::log2(double(std::max<std::int64_t>(1, st.max_abs_jerk))),
+               std::log2(double(std::max<std::int64_t>(1, st.max_abs_accel))),
+               std::log2(double(std::max<std::int64_t>(1, st.max_velocity))), st.max_phase_moves);
     return 0;
 }
 
@@ -317,6 +350,9 @@ int main(int argc, char** argv) {
     if (cmd == "chunks" && argc == 4) return chunks(argv[2], argv[3]);
     if (cmd == "chunks" && argc == 6) return chunks(argv[2], argv[3], argv[4], unsigned(std::atoi(argv[5])));
     if (cmd == "split") return split();
+    if (cmd == "phases" && (argc == 7 || argc == 8))
+        return phases(argv[2], argv[3], argv[4], unsigned(std::atoi(argv[5])), unsigned(std::atoi(argv[6])),
+                      argc == 8 ? std::atof(argv[7]) : 0.0);
     if (cmd == "bounds" && argc == 4) return bounds(argv[2], argv[3]);
     if (cmd == "fingerprint" && argc == 4) return fingerprint(argv[2], argv[3]);
     if (cmd == "speed" && argc >= 4) return speed(argv[2], argv[3], argc > 4 ? std::atoi(argv[4]) : 5);

@@ -1,0 +1,406 @@
+// SPDX-License-Identifier: MIT
+#include "plan/phases.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace cpstep::plan {
+
+namespace {
+
+
+i128 floor_div(i128 a, i128 b) {  // b > 0
+    i128 q = a / b;
+    if ((a % b != 0) && (a < 0)) --q;
+    return q;
+}
+i128 ceil_div(i128 a, i128 b) { return -floor_div(-a, b); }  // b > 0
+
+// A phase is at most this many ticks (keeps every product within 128 bits).
+constexpr std::uint64_t kMaxPhaseTicks = std::uint64_t{1} << 24;
+// How many moves past a phase its j is steered by.
+constexpr std::size_t kSteerMoves = 8;
+// A phase that reloads v and a costs this many words against one.
+constexpr std::size_t kReloadWords = 4;
+// Moves before and after a reload that the plan's state there is fitted to.
+constexpr std::size_t kPlanFit = 4;
+
+// P(k) = V k + H A(k) + u G(k): the position k clocks into a phase (units of
+// 2^-F / 2^s), each tick m adding x(m+1) - x(m) every clock, x(m) = V m + H m^2 + u m^3.
+struct Terms {
+    i128 k, A, G;
+};
+
+Terms terms(std::int64_t k, unsigned s) {
+    const i128 T = i128{1} << s;
+    const i128 M = k >> s, r = k & ((std::int64_t{1} << s) - 1);
+    return {k, T * M * M + r * (2 * M + 1), T * M * M * M + r * (3 * M * M + 3 * M + 1)};
+}
+
+std::int64_t to_i64(i128 x) {
+    if (x > std::numeric_limits<std::int64_t>::max()) return std::numeric_limits<std::int64_t>::max();
+    if (x < std::numeric_limits<std::int64_t>::min()) return std::numeric_limits<std::int64_t>::min();
+    return static_cast<std::int64_t>(x);
+}
+
+i128 abs128(i128 x) { return x < 0 ? -x : x; }
+
+}  // namespace
+
+i128 move_length(double length_mm, const PhaseFormat& format) {
+    if (format.path_unit_mm <= 0) return i128{1} << format.frac_bits;
+    // To 2^-40 of the unit (a card segment's length per move, as the card would hold it).
+    return i128(std::llround(std::ldexp(length_mm / format.path_unit_mm, 40))) << (format.frac_bits - 40);
+}
+
+PhaseFitter::PhaseFitter(PhaseFormat format, double tolerance_cycles) : fmt_(format), tol_(tolerance_cycles) {
+    if (fmt_.frac_bits < 40 || fmt_.frac_bits > 70 || fmt_.tick_log2 > 16) throw std::invalid_argument("PhaseFitter: format out of range");
+}
+
+bool PhaseFitter::push(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at) {
+    if (!error_.empty()) return false;
+    if (rest_at >= 0) {
+        if (!fit(true)) return false;
+        // The motion before has ended with its last move (the open phase
+        // closed there); a rest phase holds still until the tick at rest_at.
+        const std::int64_t T = std::int64_t{1} << fmt_.tick_log2;
+        const double gap = rest_at - double(c0_);
+        const std::uint64_t R = gap > 0 ? std::uint64_t(std::floor(gap / double(T))) : 0;
+        p0_ = v0_ = a0_ = 0;
+        if (R > 0) {
+            for (std::uint64_t left = R; left > 0;) {
+                const std::uint64_t t = std::min(left, kMaxPhaseTicks);
+                phases_.push_back({t, 0, true});
+                ++stats_.rests;
+                ++stats_.phases;
+                left -= t;
+            }
+            c0_ += std::int64_t(R) * T;
+            pending_rest_ = false;
+        } else {
+            pending_rest_ = true;
+        }
+    }
+    queue_.insert(queue_.end(), ideal.begin(), ideal.end());
+    i128 at = cum_.size() > head_ ? cum_.back() : cum_head_;
+    for (std::size_t n = 0; n < ideal.size(); ++n) {
+        at += move_length(fmt_.path_unit_mm > 0 ? lengths_mm[n] : 0.0, fmt_);
+        cum_.push_back(at);
+    }
+    return fit(false);
+}
+
+bool PhaseFitter::finish() { return error_.empty() && fit(true); }
+
+// One phase tried from the open phase's start with velocity v0 and
+// acceleration a0: the longest run of queued moves one j times within their
+// windows, ending at the tick after its last move with the next move still to
+// come in its own window and v >= 0 throughout.
+PhaseFitter::Trial PhaseFitter::evaluate(i128 v0, i128 a0, bool all) const {
+    const unsigned s = fmt_.tick_log2;
+    const std::int64_t T = std::int64_t{1} << s;
+    const i128 kInf = i128{1} << 120;
+    Trial tr;
+    tr.v0 = v0;
+    tr.a0 = a0;
+    std::vector<i128> lo_run, hi_run;
+    i128 jlo = -kInf, jhi = kInf;
+    std::size_t n = head_;
+    for (; n < queue_.size(); ++n) {
+        const double tau = queue_[n];
+        const std::int64_t hi = static_cast<std::int64_t>(std::floor(tau));
+        const std::int64_t lo = static_cast<std::int64_t>(std::ceil(tau - tol_));
+        const std::int64_t khi = hi - c0_, klo = lo - 1 - c0_;
+        if (khi < 1 || (khi >> s) >= std::int64_t(kMaxPhaseTicks) - 1) break;
+        const i128 target = ((cum_[n] - cum_head_) << s) - p0_;
+        i128 l = jlo, h = jhi;
+        const Terms th = terms(khi, s);
+        const i128 need_hi = target - v0 * th.k - a0 * th.A;   // j G >= need_hi
+        if (th.G == 0) {
+            if (need_hi > 0) break;
+        } else {
+            l = std::max(l, ceil_div(need_hi, th.G));
+        }
+        if (klo >= 1) {
+            const Terms tl = terms(klo, s);
+            const i128 need_lo = target - v0 * tl.k - a0 * tl.A;   // j G < need_lo
+            if (tl.G == 0) {
+                if (need_lo <= 0) break;
+            } else {
+                h = std::min(h, floor_div(need_lo - 1, tl.G));
+            }
+        }
+        if (l > h) break;
+        jlo = l;
+        jhi = h;
+        lo_run.push_back(jlo);
+        hi_run.push_back(jhi);
+    }
+    if (n == queue_.size() && !all) {
+        tr.wait = true;
+        return tr;
+    }
+    auto more_target = [&](std::size_t covered) {
+        return head_ + covered < cum_.size() ? ((cum_[head_ + covered] - cum_head_) << s) - p0_ : i128{0};
+    };
+    auto reached = [&](std::int64_t k, i128 tgt, i128 j) {
+        const Terms t = terms(k, s);
+        return v0 * t.k + a0 * t.A + j * t.G >= tgt;
+    };
+    for (std::size_t covered = n - head_; covered > 0; --covered) {
+        const i128 l = lo_run[covered - 1], h = hi_run[covered - 1];
+        i128 j = (l == -kInf && h == kInf) ? 0 : l == -kInf ? h : h == kInf ? l : floor_div(l + h, 2);
+        // Steer toward the moves after the phase: the j that puts the next
+        // few nearest the middle of their windows (least squares in p),
+        // within the interval.
+        double sgg = 0, sgt = 0;
+        const std::size_t ahead = std::min(queue_.size(), head_ + covered + kSteerMoves);
+        for (std::size_t q = head_ + covered; q < ahead; ++q) {
+            const std::int64_t kn = static_cast<std::int64_t>(std::llround(queue_[q] - tol_ / 2)) - c0_;
+            if (kn < 1) continue;
+            const Terms t = terms(kn, s);
+            const double g = double(t.G);
+            const double want = double(((cum_[q] - cum_head_) << s) - p0_ - v0 * t.k - a0 * t.A);
+            sgg += g * g;
+            sgt += g * want;
+        }
+        if (sgg > 0) {
+            const double js = std::floor(sgt / sgg);
+            const i128 jj = js > 1e30 ? kInf : js < -1e30 ? -kInf : i128(js);
+            j = std::clamp(jj, l, h);
+        }
+        // The last covered move's fire clock: the first k in its window reaching its count.
+        const double tau = queue_[head_ + covered - 1];
+        std::int64_t khi = static_cast<std::int64_t>(std::floor(tau)) - c0_;
+        std::int64_t klo = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(tau - tol_)) - 1 - c0_);
+        const i128 target = ((cum_[head_ + covered - 1] - cum_head_) << s) - p0_;
+        const i128 next_target = more_target(covered);
+        while (khi - klo > 1) {
+            const std::int64_t mid = klo + (khi - klo) / 2;
+            if (reached(mid, target, j)) khi = mid; else klo = mid;
+        }
+        const std::int64_t E = (khi + T - 1) >> s;   // ticks
+        const bool more = head_ + covered < queue_.size();
+        if (more && reached(E * T, next_target, j)) continue;
+        // The next phase starts before the next move's window closes.
+        if (more && c0_ + E * T >= static_cast<std::int64_t>(std::floor(queue_[head_ + covered]))) continue;
+        // Every tick's step x(m+1) - x(m) = V + H (2m+1) + u (3m^2+3m+1) >= 0, m in [0, E-1].
+        auto step_at = [&](i128 m) { return v0 + a0 * (2 * m + 1) + j * (3 * m * m + 3 * m + 1); };
+        bool ok = step_at(0) >= 0 && step_at(E - 1) >= 0;
+        if (ok && j > 0) {
+            const i128 mstar = floor_div(-(2 * a0 + 3 * j), 6 * j);
+            for (i128 m = mstar - 1; m <= mstar + 2; ++m)
+                if (m >= 0 && m <= E - 1 && step_at(m) < 0) ok = false;
+        }
+        if (!ok) continue;
+        tr.covered = covered;
+        tr.j = j;
+        tr.E = E;
+        return tr;
+    }
+    return tr;
+}
+
+// The plan's position, velocity and half acceleration at the open phase's
+// start, in the timer's units: a cubic through the ideal times of the moves
+// around it (least squares, up to kPlanFit before and after).
+bool PhaseFitter::plan_state(i128& p, i128& v, i128& h) const {
+    const std::size_t from = head_ >= kPlanFit ? head_ - kPlanFit : 0;
+    const std::size_t to = std::min(queue_.size(), head_ + kPlanFit);
+    const std::size_t m = to - from;
+    if (to <= head_ || m < 2) return false;
+    const double ONE = std::ldexp(1.0, int(fmt_.frac_bits));
+    const double TT = double(std::int64_t{1} << fmt_.tick_log2);
+    const int deg = m >= 6 ? 3 : m >= 4 ? 2 : 1;
+    // Normal equations in t scaled to the window (conditioning).
+    double scale = 1;
+    for (std::size_t q = from; q < to; ++q) scale = std::max(scale, std::fabs(queue_[q] - double(c0_)));
+    double A[4][5] = {};
+    for (std::size_t q = from; q < to; ++q) {
+        const double t = (queue_[q] - tol_ / 2 - double(c0_)) / scale;
+        const double n = double(cum_[q] - cum_head_) / ONE;
+        double pw[4] = {1, t, t * t, t * t * t};
+        for (int r = 0; r <= deg; ++r) {
+            for (int c = 0; c <= deg; ++c) A[r][c] += pw[r] * pw[c];
+            A[r][4] += pw[r] * n;
+        }
+    }
+    const int N = deg + 1;
+    for (int c = 0; c < N; ++c) {   // Gauss-Jordan with partial pivoting
+        int piv = c;
+        for (int r = c + 1; r < N; ++r)
+            if (std::fabs(A[r][c]) > std::fabs(A[piv][c])) piv = r;
+        if (!(std::fabs(A[piv][c]) > 0)) return false;
+        for (int k = 0; k < 5; ++k) std::swap(A[c][k], A[piv][k]);
+        for (int r = 0; r < N; ++r) {
+            if (r == c) continue;
+            const double f = A[r][c] / A[c][c];
+            for (int k = c; k < 5; ++k) A[r][k] -= f * A[c][k];
+        }
+    }
+    const double n0 = A[0][4] / A[0][0];
+    const double b = A[1][4] / A[1][1] / scale;
+    const double c2 = deg >= 2 ? A[2][4] / A[2][2] / (scale * scale) : 0.0;
+    if (!(b > 0)) return false;
+    // Between the move before (fired) and the next.
+    const double next = double(cum_[head_] - cum_head_) / ONE;
+    const double pos = std::clamp(n0, 0.0, next * (1 - 1e-9));
+    p = i128(pos * ONE * TT);
+    v = i128(b * TT * ONE);
+    h = i128(c2 * TT * TT * ONE);
+    return true;
+}
+
+// Greedy: phase after phase from the open phase's state (or, where that
+// times fewer moves per word, with v and a reloaded from the plan); `all`:
+// the queue has no more to come.
+bool PhaseFitter::fit(bool all) {
+    const unsigned s = fmt_.tick_log2;
+    const std::int64_t T = std::int64_t{1} << s;
+    const i128 ONE = i128{1} << fmt_.frac_bits;
+    while (head_ < queue_.size()) {
+        Trial tr = evaluate(v0_, a0_, all);
+        if (tr.wait) return true;   // the phase may go on with later moves
+        bool reload = false;
+        i128 pp = 0, pv = 0, pa = 0;
+        if (fmt_.reload && !pending_rest_ && plan_state(pp, pv, pa)) {
+            const i128 keep = p0_;
+            p0_ = pp;
+            Trial rt = evaluate(pv, pa, all);
+            p0_ = keep;
+            rt.p0 = pp;
+            if (rt.wait) return true;   // reloaded, the phase may go on with later moves
+            rt.reload = true;
+            if (tr.covered == 0 ? rt.covered > 0 : rt.covered > kReloadWords * tr.covered) {
+                tr = rt;
+                reload = true;
+                p0_ = pp;
+            }
+        }
+        if (tr.covered == 0) {
+            // No phase times the move (the end of a stop: the position must reach
+            // it within 1e-14 moves): one timed move, like a chunk's interval,
+            // fires it in the middle of its window; p starts again from zero.
+            const double tau = queue_[head_];
+            const std::int64_t at = static_cast<std::int64_t>(std::floor(tau - tol_ / 2));
+            if (at <= c0_ || at < static_cast<std::int64_t>(std::ceil(tau - tol_))) {
+                error_ = fmt::format("no phase times move {} (ideal clock {:.1f}) from the state at clock {} "
+                                     "(p {:.4f} v {:.4g} a {:.4g} moves/clock)",
+                                     stats_.moves + 1, tau, c0_, double(p0_) / double(ONE),
+                                     double(v0_) / double(ONE), double(a0_) / double(ONE));
+                return false;
+            }
+            phases_.push_back({std::uint64_t(at - c0_), 0, pending_rest_, false, 0, 0, 0, true});
+            pending_rest_ = false;
+            fires_.push_back(at);
+            c0_ = at;
+            p0_ = 0;
+            cum_head_ = cum_[head_];
+            ++head_;
+            ++stats_.phases;
+            ++stats_.timed;
+            ++stats_.moves;
+            continue;
+        }
+        const i128 v0 = tr.v0, a0 = tr.a0, j = tr.j;
+        const std::int64_t E = tr.E;
+        const std::size_t covered = tr.covered;
+        auto reached = [&](std::int64_t k, i128 tgt) {
+            const Terms t = terms(k, s);
+            return v0 * t.k + a0 * t.A + j * t.G >= tgt;
+        };
+        for (std::size_t m = 0; m < covered; ++m) {   // each covered move's fire clock
+            const double t = queue_[head_ + m];
+            std::int64_t kh = static_cast<std::int64_t>(std::floor(t)) - c0_;
+            std::int64_t kl = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(t - tol_)) - 1 - c0_);
+            const i128 tg = ((cum_[head_ + m] - cum_head_) << s) - p0_;
+            while (kh - kl > 1) {
+                const std::int64_t mid = kl + (kh - kl) / 2;
+                if (reached(mid, tg)) kh = mid; else kl = mid;
+            }
+            fires_.push_back(c0_ + kh);
+        }
+        const Terms te = terms(E * T, s);
+        const i128 P = v0 * te.k + a0 * te.A + j * te.G;
+        const i128 vE = v0 + 2 * a0 * i128(E) + 3 * j * i128(E) * i128(E), aE = a0 + 3 * j * i128(E);
+        p0_ = p0_ + P - ((cum_[head_ + covered - 1] - cum_head_) << s);
+        cum_head_ = cum_[head_ + covered - 1];
+        v0_ = vE;
+        a0_ = aE;
+        c0_ += E * T;
+        stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(aE)));
+        stats_.max_velocity = std::max(stats_.max_velocity, to_i64(vE));
+        if (reload) {
+            ++stats_.reloads;
+            stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(a0)));
+            stats_.max_velocity = std::max(stats_.max_velocity, to_i64(v0));
+        }
+        phases_.push_back({std::uint64_t(E), to_i64(j), pending_rest_, reload, to_i64(v0), to_i64(a0), to_i64(tr.p0)});
+        stats_.rests += pending_rest_ ? 1 : 0;
+        pending_rest_ = false;
+        ++stats_.phases;
+        stats_.moves += covered;
+        stats_.max_ticks = std::max<std::uint64_t>(stats_.max_ticks, std::uint64_t(E));
+        stats_.max_abs_jerk = std::max(stats_.max_abs_jerk, to_i64(abs128(j)));
+        stats_.max_phase_moves = std::max<std::uint64_t>(stats_.max_phase_moves, covered);
+        head_ += covered;
+        if (head_ > 4096) {   // keep the moves the plan's state is fitted to
+            const std::size_t drop = head_ - kPlanFit;
+            queue_.erase(queue_.begin(), queue_.begin() + std::ptrdiff_t(drop));
+            cum_.erase(cum_.begin(), cum_.begin() + std::ptrdiff_t(drop));
+            head_ -= drop;
+        }
+    }
+    return true;
+}
+
+std::vector<std::int64_t> simulate_phases(std::span<const TimerPhase> phases, PhaseFormat format,
+                                          std::span<const i128> lengths) {
+    const std::int64_t T = std::int64_t{1} << format.tick_log2;
+    // The next move's length in p's units (2^-F / 2^s).
+    std::size_t next = 0;
+    auto threshold = [&] {
+        const i128 len = next < lengths.size() ? lengths[next] : i128{1} << format.frac_bits;
+        return len << format.tick_log2;
+    };
+    i128 p = 0, v = 0, h = 0;
+    std::int64_t clock = 0;
+    std::vector<std::int64_t> fires;
+    for (const TimerPhase& ph : phases) {
+        if (ph.rest) p = v = h = 0;
+        if (ph.reload) {
+            p = ph.p;
+            v = ph.v;
+            h = ph.a;
+        }
+        if (ph.timed) {   // a move after `ticks` clocks
+            clock += std::int64_t(ph.ticks);
+            fires.push_back(clock);
+            ++next;
+            p = 0;
+            continue;
+        }
+        const i128 u = ph.jerk;
+        for (std::uint64_t t = 0; t < ph.ticks; ++t) {
+            const i128 step = v + h + u;
+            for (std::int64_t c = 0; c < T; ++c) {
+                ++clock;
+                p += step;
+                if (const i128 th = threshold(); p >= th) {
+                    fires.push_back(clock);
+                    ++next;
+                    p -= th;
+                }
+            }
+            v += 2 * h + 3 * u;
+            h += 3 * u;
+        }
+    }
+    return fires;
+}
+
+}  // namespace cpstep::plan

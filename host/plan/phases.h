@@ -1,0 +1,131 @@
+// SPDX-License-Identifier: MIT
+// Move events timed by phases of constant jerk (issue 13, toward a compact
+// wire; a host-side measurement: the card does not take this form yet,
+// docs/PROTOCOL.md "Toward a compact wire"). The card would keep the path
+// position as a sum, exactly, in integers, with the state at tick boundaries
+// being the cubic's own derivatives (so that a phase's jerk can change
+// without the position, velocity or acceleration jumping):
+//
+//   every tick m (2^s clocks, counted from the phase's start): step = V + H + u,
+//       then V += 2H + 3u, H += 3u     (x(m) = V m + H m^2 + u m^3 over ticks)
+//   every clock of the tick:  p += step; when p >= the next move's length
+//       (times 2^s): the move fires, p -= that length
+//
+// V, H and u in units of 2^-F moves (path_unit_mm = 0) or of 2^-F
+// path_unit_mm of path (path_unit_mm > 0; each card segment would carry its
+// length per move), per tick, per tick^2 (half the acceleration) and per
+// tick^3 (a sixth of the jerk). Phases are (ticks, u), maybe from rest (p, V,
+// H = 0), maybe reloading p, V and H from the plan, or a timed move (fired a
+// given number of clocks after the phase's start; the last move of a stop,
+// which the position reaches too flatly for any phase to time within 1 us).
+//
+// Move n (1, 2, ...) of a phase that starts at clock c0 with p0, V, H fires
+// at the first clock c0 + k where p0 + P(k) reaches the moves' lengths up to n,
+//   P(k) = V k + H A(k) + u G(k),  k = M 2^s + r (0 <= r < 2^s),
+//   A(k) = 2^s M^2 + r (2M + 1),   G(k) = 2^s M^3 + r (3M^2 + 3M + 1),
+// linear in u: each move's window (never late, at most `tolerance` early, as
+// the chunks) gives u an interval, and a phase lasts while the intervals of
+// its moves meet (PhaseFitter, greedily).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace cpstep::plan {
+
+__extension__ typedef __int128 i128;   // the timer's sums, exactly
+
+struct PhaseFormat {
+    unsigned tick_log2 = 6;    // a tick is 2^s clocks
+    unsigned frac_bits = 60;   // F: the unit of p, v, a and j is 2^-F moves
+    bool reload = true;        // a phase may set v and a (from the plan) where that saves words
+    // 0: p counts moves (a move fires at each whole move). > 0: p is the path
+    // length in units of path_unit_mm * 2^-F, a move fires when p reaches
+    // its own length (each card segment's length per move).
+    double path_unit_mm = 0;
+};
+
+struct TimerPhase {
+    std::uint64_t ticks = 0;
+    std::int64_t jerk = 0;
+    bool rest = false;
+    bool reload = false;       // p, v and a set to these at the phase's start (after rest)
+    std::int64_t v = 0, a = 0, p = 0;
+    bool timed = false;        // no jerk phase: one move `ticks` clocks after the phase's start, then p = 0
+    friend bool operator==(const TimerPhase&, const TimerPhase&) = default;
+};
+
+// What the phases needed: ranges of the registers, for choosing field widths.
+struct PhaseStats {
+    std::uint64_t moves = 0;
+    std::uint64_t phases = 0;
+    std::uint64_t rests = 0;
+    std::uint64_t reloads = 0;
+    std::uint64_t timed = 0;
+    std::uint64_t max_ticks = 0;
+    std::int64_t max_abs_jerk = 0;
+    std::int64_t max_abs_accel = 0;   // at phase ends
+    std::int64_t max_velocity = 0;    // at phase ends
+    std::uint64_t max_phase_moves = 0;
+};
+
+// Fits phases to move times given in order, batch by batch (each card
+// segment's moves as it is timed), the state carried from one batch to the
+// next. Deterministic.
+class PhaseFitter {
+public:
+    PhaseFitter(PhaseFormat format, double tolerance_cycles);
+
+    // The next moves' ideal times (absolute clocks, increasing, after every
+    // earlier move's); rest_at >= 0: the motion starts from rest at that clock
+    // (before the first of them), else it continues from the moves before.
+    // False with error() when no phase can time a move within its window.
+    bool push(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at = -1);
+    // Every move pushed is fitted (the last phase closed).
+    bool finish();
+
+    [[nodiscard]] const std::vector<TimerPhase>& phases() const { return phases_; }
+    [[nodiscard]] const std::vector<std::int64_t>& fire_clocks() const { return fires_; }
+    [[nodiscard]] const PhaseStats& stats() const { return stats_; }
+    [[nodiscard]] const std::string& error() const { return error_; }
+
+private:
+    struct Trial {
+        bool wait = false;          // the queue may bring moves the phase would take
+        std::size_t covered = 0;
+        i128 v0 = 0, a0 = 0, j = 0, p0 = 0;
+        std::int64_t E = 0;         // ticks
+        bool reload = false;
+    };
+    bool fit(bool all);
+    [[nodiscard]] Trial evaluate(i128 v0, i128 a0, bool all) const;
+    bool plan_state(i128& p, i128& v, i128& h) const;
+
+    PhaseFormat fmt_;
+    double tol_;
+    // The state at the start of the open phase (clock c0_, exact).
+    std::int64_t c0_ = 0;
+    i128 p0_ = 0, v0_ = 0, a0_ = 0;
+    bool pending_rest_ = false;   // the open phase starts from rest
+    std::vector<double> queue_;   // ideal times not yet in a closed phase
+    std::vector<i128> cum_;       // each queued move's end on the path (units), from the job's start
+    i128 cum_head_ = 0;           // the end of the move before queue_[head_]
+    std::size_t head_ = 0;
+    std::vector<TimerPhase> phases_;
+    std::vector<std::int64_t> fires_;
+    PhaseStats stats_;
+    std::string error_;
+};
+
+// A move's length in the timer's units (2^-F of a move, or of path_unit_mm).
+i128 move_length(double length_mm, const PhaseFormat& format);
+
+// The card's arithmetic clock by clock (the form's reference): the clocks at
+// which the phases fire moves, from rest at clock 0, each move's length given
+// (move_length(); none given: a move each).
+std::vector<std::int64_t> simulate_phases(std::span<const TimerPhase> phases, PhaseFormat format,
+                                          std::span<const i128> lengths = {});
+
+}  // namespace cpstep::plan

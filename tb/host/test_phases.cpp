@@ -1,0 +1,153 @@
+// SPDX-License-Identifier: MIT
+// Moves timed by phases of constant jerk (plan/phases.h, a measurement toward
+// the compact wire): the fitter's claimed fire clocks are the card
+// arithmetic's, simulated clock by clock, and every move fires within its
+// window (never late, at most the tolerance early).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include "cpstep/builds.h"
+#include "plan/phases.h"
+#include "plan/pipeline.h"
+#include "plan/profile.h"
+
+using namespace cpstep::plan;
+
+namespace {
+
+const std::string kDir = CPSTEP_EXAMPLES_DIR;
+
+void check_fires(const std::vector<double>& ideal, const std::vector<i128>& lengths, const PhaseFitter& f,
+                 const PhaseFormat& fmt, double tol) {
+    ASSERT_TRUE(f.error().empty()) << f.error();
+    const auto sim = simulate_phases(f.phases(), fmt, lengths);
+    ASSERT_EQ(sim.size(), ideal.size());
+    ASSERT_EQ(f.fire_clocks().size(), ideal.size());
+    for (std::size_t n = 0; n < ideal.size(); ++n) {
+        ASSERT_EQ(sim[n], f.fire_clocks()[n]) << "move " << n;
+        ASSERT_LE(double(sim[n]), ideal[n]) << "move " << n << " late";
+        ASSERT_GE(double(sim[n]), ideal[n] - tol) << "move " << n << " early";
+    }
+}
+
+// An S-curve from rest to rest over L moves, by the profile's own inverse.
+std::vector<double> s_curve_times(double L, double vmax, double A, double J, double clock_hz, double start_s) {
+    const auto p = make_profile(L, 0, 0, vmax, A, J);
+    EXPECT_TRUE(p.has_value());
+    std::vector<double> t;
+    for (int n = 1; n <= int(L); ++n)
+        t.push_back((start_s + (n == int(L) ? p->duration : p->time_at(double(n)))) * clock_hz);
+    return t;
+}
+
+TEST(Phases, AnSCurveInMovesFiresEveryMoveInItsWindow) {
+    const PhaseFormat fmt{6, 60, true, 0.0};
+    const double tol = 40, hz = 40e6;
+    PhaseFitter f(fmt, tol);
+    // Two motions with a stop between (moves/s, /s^2, /s^3 of a 80 steps/mm axis).
+    auto a = s_curve_times(2000, 8000, 40000, 160000, hz, 0.0);
+    auto b = s_curve_times(700, 3000, 40000, 160000, hz, 1.0);
+    const double b_start = 1.0 * hz;
+    ASSERT_TRUE(f.push(a, {}, 0.0));
+    ASSERT_TRUE(f.push(b, {}, b_start));
+    ASSERT_TRUE(f.finish());
+    std::vector<double> all = a;
+    all.insert(all.end(), b.begin(), b.end());
+    check_fires(all, {}, f, fmt, tol);
+    EXPECT_EQ(f.stats().moves, all.size());
+    // The phases are the profiles' (7 each, a few more where a phase boundary
+    // falls between ticks), far fewer than the moves.
+    EXPECT_LT(f.phases().size(), 40u);
+}
+
+TEST(Phases, PathLengthsPerMoveChangeBetweenBatches) {
+    // Path domain: batches of moves of different lengths along one S-curve.
+    const PhaseFormat fmt{5, 60, true, 0.0125};
+    const double tol = 40, hz = 40e6;
+    const auto p = make_profile(50.0, 0, 0, 60.0, 500.0, 2000.0);   // mm, mm/s, mm/s^2, mm/s^3
+    ASSERT_TRUE(p.has_value());
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> len(0.0125, 0.0125 * std::sqrt(2.0));
+    PhaseFitter f(fmt, tol);
+    std::vector<double> ideal;
+    std::vector<i128> lengths;
+    double s = 0;
+    bool first = true;
+    while (true) {
+        const double l = len(rng);   // one batch's move length (a card segment)
+        std::vector<double> t, lm;
+        for (int n = 0; n < 37 && s + l < 50.0; ++n) {
+            s += l;
+            t.push_back(p->time_at(s) * hz);
+            lm.push_back(l);
+            lengths.push_back(move_length(l, fmt));
+        }
+        if (t.empty()) break;
+        ideal.insert(ideal.end(), t.begin(), t.end());
+        ASSERT_TRUE(f.push(t, lm, first ? 0.0 : -1.0)) << f.error();
+        first = false;
+    }
+    ASSERT_TRUE(f.finish());
+    check_fires(ideal, lengths, f, fmt, tol);
+    EXPECT_LT(f.phases().size(), 60u) << "moves " << ideal.size();
+}
+
+// Every move of a job, as the card loop times it, through the fitter (path
+// domain, the default board).
+struct JobPhases {
+    std::vector<double> ideal;
+    std::vector<i128> lengths;
+    std::uint64_t chunks = 0;
+    double tol = 0;   // cycles, the bound machine's
+};
+
+void fit_job(const char* machine, const char* job_file, const PhaseFormat& fmt, JobPhases& out, PhaseFitter*& fitter) {
+    auto loaded = load_machine(kDir + "/machines/" + machine);
+    ASSERT_TRUE(loaded.ok()) << join(loaded.errors);
+    const cpstep::builds::Build& b = *cpstep::builds::find(cpstep::builds::kDefaultBoard);
+    Machine m = *loaded;
+    ASSERT_TRUE(bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw}).empty());
+    auto job = load_gcode(kDir + "/jobs/" + job_file);
+    ASSERT_TRUE(job.ok()) << join(job.errors);
+    out.tol = m.chunk_tolerance_cycles();
+    fitter = new PhaseFitter(fmt, out.tol);
+    PlanOptions o;
+    o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at) {
+        out.ideal.insert(out.ideal.end(), ideal.begin(), ideal.end());
+        for (double l : lengths_mm) out.lengths.push_back(move_length(l, fmt));
+        ASSERT_TRUE(fitter->push(ideal, lengths_mm, rest_at)) << fitter->error();
+    };
+    auto plan = plan_job(*job, m, o);
+    ASSERT_TRUE(plan.ok()) << join(plan.errors);
+    ASSERT_TRUE(fitter->finish()) << fitter->error();
+    out.chunks = plan->stats.chunks;
+}
+
+class ExamplePhases : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ExamplePhases, EveryMoveFiresInItsWindow) {
+    const PhaseFormat fmt{6, 60, true, 0.0125};
+    JobPhases jp;
+    PhaseFitter* f = nullptr;
+    fit_job("seed002.toml", GetParam(), fmt, jp, f);
+    std::unique_ptr<PhaseFitter> owned(f);
+    ASSERT_TRUE(f);
+    check_fires(jp.ideal, jp.lengths, *f, fmt, jp.tol);
+    std::printf("%s: %zu moves, %llu chunks, %zu phases (%llu reloads, %llu timed)\n", GetParam(), jp.ideal.size(),
+                static_cast<unsigned long long>(jp.chunks), f->phases().size(),
+                static_cast<unsigned long long>(f->stats().reloads), static_cast<unsigned long long>(f->stats().timed));
+    // What the measurement in docs/BENCHMARKS.md rests on: fewer phases than chunks.
+    EXPECT_LT(f->phases().size(), jp.chunks);
+}
+
+INSTANTIATE_TEST_SUITE_P(Jobs, ExamplePhases, ::testing::Values("tab.ngc", "tight_arcs.ngc", "naca0025.ngc"),
+                         [](const auto& p) {
+                             std::string n = p.param;
+                             for (auto& ch : n) if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+                             return n;
+                         });
+
+}  // namespace
