@@ -17,7 +17,8 @@
 // tick^3 (a sixth of the jerk). Phases are (ticks, u), maybe from rest (p, V,
 // H = 0), maybe reloading p, V and H from the plan, or a timed move (fired a
 // given number of clocks after the phase's start; the last move of a stop,
-// which the position reaches too flatly for any phase to time within 1 us).
+// which the position reaches too flatly for any phase to time within 1 us:
+// 3e-14 moves 41 clocks before the end).
 //
 // Move n (1, 2, ...) of a phase that starts at clock c0 with p0, V, H fires
 // at the first clock c0 + k where p0 + P(k) reaches the moves' lengths up to n,
