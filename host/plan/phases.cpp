@@ -22,6 +22,8 @@ i128 ceil_div(i128 a, i128 b) { return -floor_div(-a, b); }  // b > 0
 
 // A phase is at most this many ticks (keeps every product within 128 bits).
 constexpr std::uint64_t kMaxPhaseTicks = std::uint64_t{1} << 24;
+// A timed move's clocks fit the phase word's 24-bit field.
+constexpr std::int64_t kMaxTimedClocks = std::int64_t{1} << 24;
 // How many moves past a phase its j is steered by.
 constexpr std::size_t kSteerMoves = 8;
 // A phase that reloads v and a costs this many words against one.
@@ -58,7 +60,8 @@ i128 move_length(double length_mm, const PhaseFormat& format) {
 }
 
 PhaseFitter::PhaseFitter(PhaseFormat format, double tolerance_cycles) : fmt_(format), tol_(tolerance_cycles) {
-    if (fmt_.frac_bits < 40 || fmt_.frac_bits > 70 || fmt_.tick_log2 > 16) throw std::invalid_argument("PhaseFitter: format out of range");
+    if (fmt_.frac_bits < 40 || fmt_.frac_bits > 70 || fmt_.tick_log2 > 16 || fmt_.frac_bits + fmt_.tick_log2 + 2 < 64)
+        throw std::invalid_argument("PhaseFitter: format out of range");
 }
 
 bool PhaseFitter::push(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at) {
@@ -96,27 +99,26 @@ bool PhaseFitter::push(std::span<const double> ideal, std::span<const double> le
 
 bool PhaseFitter::finish() { return error_.empty() && fit(true); }
 
-// One phase tried from the open phase's start with velocity v0 and
-// acceleration a0: the longest run of queued moves one j times within their
-// windows, ending at the tick after its last move with the next move still to
-// come in its own window and v >= 0 throughout.
-PhaseFitter::Trial PhaseFitter::evaluate(i128 v0, i128 a0, bool all) const {
+// One phase tried from the state `st`: the longest run of queued moves (at
+// most `cap`) one u times within their windows, ending at the tick after its
+// last move with the next move still to come in its own window and the
+// position never going back.
+PhaseFitter::Trial PhaseFitter::evaluate(const State& st, bool all, std::size_t cap) const {
+    const i128 v0 = st.v0, a0 = st.a0;
     const unsigned s = fmt_.tick_log2;
     const std::int64_t T = std::int64_t{1} << s;
     const i128 kInf = i128{1} << 120;
     Trial tr;
-    tr.v0 = v0;
-    tr.a0 = a0;
     std::vector<i128> lo_run, hi_run;
     i128 jlo = -kInf, jhi = kInf;
-    std::size_t n = head_;
-    for (; n < queue_.size(); ++n) {
+    std::size_t n = st.head;
+    for (; n < queue_.size() && n - st.head < cap; ++n) {
         const double tau = queue_[n];
         const std::int64_t hi = static_cast<std::int64_t>(std::floor(tau));
         const std::int64_t lo = static_cast<std::int64_t>(std::ceil(tau - tol_));
-        const std::int64_t khi = hi - c0_, klo = lo - 1 - c0_;
+        const std::int64_t khi = hi - st.c0, klo = lo - 1 - st.c0;
         if (khi < 1 || (khi >> s) >= std::int64_t(kMaxPhaseTicks) - 1) break;
-        const i128 target = ((cum_[n] - cum_head_) << s) - p0_;
+        const i128 target = ((cum_[n] - st.cum_head) << s) - st.p0;
         i128 l = jlo, h = jhi;
         const Terms th = terms(khi, s);
         const i128 need_hi = target - v0 * th.k - a0 * th.A;   // j G >= need_hi
@@ -140,31 +142,31 @@ PhaseFitter::Trial PhaseFitter::evaluate(i128 v0, i128 a0, bool all) const {
         lo_run.push_back(jlo);
         hi_run.push_back(jhi);
     }
-    if (n == queue_.size() && !all) {
+    if (n == queue_.size() && !all && cap == kNoCap) {
         tr.wait = true;
         return tr;
     }
     auto more_target = [&](std::size_t covered) {
-        return head_ + covered < cum_.size() ? ((cum_[head_ + covered] - cum_head_) << s) - p0_ : i128{0};
+        return st.head + covered < cum_.size() ? ((cum_[st.head + covered] - st.cum_head) << s) - st.p0 : i128{0};
     };
     auto reached = [&](std::int64_t k, i128 tgt, i128 j) {
         const Terms t = terms(k, s);
         return v0 * t.k + a0 * t.A + j * t.G >= tgt;
     };
-    for (std::size_t covered = n - head_; covered > 0; --covered) {
+    for (std::size_t covered = n - st.head; covered > 0; --covered) {
         const i128 l = lo_run[covered - 1], h = hi_run[covered - 1];
         i128 j = (l == -kInf && h == kInf) ? 0 : l == -kInf ? h : h == kInf ? l : floor_div(l + h, 2);
         // Steer toward the moves after the phase: the j that puts the next
         // few nearest the middle of their windows (least squares in p),
         // within the interval.
         double sgg = 0, sgt = 0;
-        const std::size_t ahead = std::min(queue_.size(), head_ + covered + kSteerMoves);
-        for (std::size_t q = head_ + covered; q < ahead; ++q) {
-            const std::int64_t kn = static_cast<std::int64_t>(std::llround(queue_[q] - tol_ / 2)) - c0_;
+        const std::size_t ahead = std::min(queue_.size(), st.head + covered + kSteerMoves);
+        for (std::size_t q = st.head + covered; q < ahead; ++q) {
+            const std::int64_t kn = static_cast<std::int64_t>(std::llround(queue_[q] - tol_ / 2)) - st.c0;
             if (kn < 1) continue;
             const Terms t = terms(kn, s);
             const double g = double(t.G);
-            const double want = double(((cum_[q] - cum_head_) << s) - p0_ - v0 * t.k - a0 * t.A);
+            const double want = double(((cum_[q] - st.cum_head) << s) - st.p0 - v0 * t.k - a0 * t.A);
             sgg += g * g;
             sgt += g * want;
         }
@@ -174,20 +176,20 @@ PhaseFitter::Trial PhaseFitter::evaluate(i128 v0, i128 a0, bool all) const {
             j = std::clamp(jj, l, h);
         }
         // The last covered move's fire clock: the first k in its window reaching its count.
-        const double tau = queue_[head_ + covered - 1];
-        std::int64_t khi = static_cast<std::int64_t>(std::floor(tau)) - c0_;
-        std::int64_t klo = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(tau - tol_)) - 1 - c0_);
-        const i128 target = ((cum_[head_ + covered - 1] - cum_head_) << s) - p0_;
+        const double tau = queue_[st.head + covered - 1];
+        std::int64_t khi = static_cast<std::int64_t>(std::floor(tau)) - st.c0;
+        std::int64_t klo = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(tau - tol_)) - 1 - st.c0);
+        const i128 target = ((cum_[st.head + covered - 1] - st.cum_head) << s) - st.p0;
         const i128 next_target = more_target(covered);
         while (khi - klo > 1) {
             const std::int64_t mid = klo + (khi - klo) / 2;
             if (reached(mid, target, j)) khi = mid; else klo = mid;
         }
         const std::int64_t E = (khi + T - 1) >> s;   // ticks
-        const bool more = head_ + covered < queue_.size();
+        const bool more = st.head + covered < queue_.size();
         if (more && reached(E * T, next_target, j)) continue;
         // The next phase starts before the next move's window closes.
-        if (more && c0_ + E * T >= static_cast<std::int64_t>(std::floor(queue_[head_ + covered]))) continue;
+        if (more && st.c0 + E * T >= static_cast<std::int64_t>(std::floor(queue_[st.head + covered]))) continue;
         // Every tick's step x(m+1) - x(m) = V + H (2m+1) + u (3m^2+3m+1) >= 0, m in [0, E-1].
         auto step_at = [&](i128 m) { return v0 + a0 * (2 * m + 1) + j * (3 * m * m + 3 * m + 1); };
         bool ok = step_at(0) >= 0 && step_at(E - 1) >= 0;
@@ -260,34 +262,34 @@ bool PhaseFitter::plan_state(i128& p, i128& v, i128& h) const {
 // the queue has no more to come.
 bool PhaseFitter::fit(bool all) {
     const unsigned s = fmt_.tick_log2;
-    const std::int64_t T = std::int64_t{1} << s;
     const i128 ONE = i128{1} << fmt_.frac_bits;
     while (head_ < queue_.size()) {
-        Trial tr = evaluate(v0_, a0_, all);
+        const State now{c0_, p0_, v0_, a0_, head_, cum_head_};
+        State from = now;
+        Trial tr = evaluate(now, all);
         if (tr.wait) return true;   // the phase may go on with later moves
         bool reload = false;
         i128 pp = 0, pv = 0, pa = 0;
         if (fmt_.reload && !pending_rest_ && plan_state(pp, pv, pa)) {
-            const i128 keep = p0_;
-            p0_ = pp;
-            Trial rt = evaluate(pv, pa, all);
-            p0_ = keep;
-            rt.p0 = pp;
+            // p as the card takes it: its top 64 of F + s + 2 bits.
+            const unsigned drop = fmt_.frac_bits + fmt_.tick_log2 + 2 - 64;
+            pp = (pp >> drop) << drop;
+            const State re{c0_, pp, pv, pa, head_, cum_head_};
+            Trial rt = evaluate(re, all);
             if (rt.wait) return true;   // reloaded, the phase may go on with later moves
-            rt.reload = true;
             if (tr.covered == 0 ? rt.covered > 0 : rt.covered > kReloadWords * tr.covered) {
                 tr = rt;
                 reload = true;
-                p0_ = pp;
+                from = re;
             }
         }
         if (tr.covered == 0) {
             // No phase times the move (the end of a stop: the position must reach
-            // it within 1e-14 moves): one timed move, like a chunk's interval,
+            // it within 3e-14 moves): one timed move, like a chunk's interval,
             // fires it in the middle of its window; p starts again from zero.
             const double tau = queue_[head_];
             const std::int64_t at = static_cast<std::int64_t>(std::floor(tau - tol_ / 2));
-            if (at <= c0_ || at < static_cast<std::int64_t>(std::ceil(tau - tol_))) {
+            if (at <= c0_ || at < static_cast<std::int64_t>(std::ceil(tau - tol_)) || at - c0_ >= kMaxTimedClocks) {
                 error_ = fmt::format("no phase times move {} (ideal clock {:.1f}) from the state at clock {} "
                                      "(p {:.4f} v {:.4g} a {:.4g} moves/clock)",
                                      stats_.moves + 1, tau, c0_, double(p0_) / double(ONE),
@@ -306,48 +308,54 @@ bool PhaseFitter::fit(bool all) {
             ++stats_.moves;
             continue;
         }
-        const i128 v0 = tr.v0, a0 = tr.a0, j = tr.j;
-        const std::int64_t E = tr.E;
-        const std::size_t covered = tr.covered;
-        auto reached = [&](std::int64_t k, i128 tgt) {
-            const Terms t = terms(k, s);
-            return v0 * t.k + a0 * t.A + j * t.G >= tgt;
-        };
-        for (std::size_t m = 0; m < covered; ++m) {   // each covered move's fire clock
-            const double t = queue_[head_ + m];
-            std::int64_t kh = static_cast<std::int64_t>(std::floor(t)) - c0_;
-            std::int64_t kl = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(t - tol_)) - 1 - c0_);
-            const i128 tg = ((cum_[head_ + m] - cum_head_) << s) - p0_;
-            while (kh - kl > 1) {
-                const std::int64_t mid = kl + (kh - kl) / 2;
-                if (reached(mid, tg)) kh = mid; else kl = mid;
+        // A phase that runs to the edge of its moves' windows leaves a state the
+        // next phase cannot carry on from: end it earlier where the next phase
+        // then times more moves without a reload.
+        if (fmt_.lookahead && tr.covered > 1) {
+            State next = from;
+            advance(next, tr, nullptr);
+            const Trial nt = evaluate(next, all);
+            std::size_t best = tr.covered + (nt.wait ? queue_.size() : nt.covered);
+            if (!nt.wait && nt.covered * kReloadWords < tr.covered) {
+                for (std::size_t d = 1; d < tr.covered; d *= 2) {
+                    const Trial t2 = evaluate(from, all, tr.covered - d);
+                    if (t2.covered == 0) break;
+                    State n2 = from;
+                    advance(n2, t2, nullptr);
+                    const Trial nt2 = evaluate(n2, all);
+                    const std::size_t score = t2.covered + (nt2.wait ? queue_.size() : nt2.covered);
+                    if (score > best) {
+                        best = score;
+                        tr = t2;
+                    }
+                }
             }
-            fires_.push_back(c0_ + kh);
         }
-        const Terms te = terms(E * T, s);
-        const i128 P = v0 * te.k + a0 * te.A + j * te.G;
-        const i128 vE = v0 + 2 * a0 * i128(E) + 3 * j * i128(E) * i128(E), aE = a0 + 3 * j * i128(E);
-        p0_ = p0_ + P - ((cum_[head_ + covered - 1] - cum_head_) << s);
-        cum_head_ = cum_[head_ + covered - 1];
-        v0_ = vE;
-        a0_ = aE;
-        c0_ += E * T;
-        stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(aE)));
-        stats_.max_velocity = std::max(stats_.max_velocity, to_i64(vE));
+        State after = from;
+        advance(after, tr, &fires_);
+        c0_ = after.c0;
+        p0_ = after.p0;
+        v0_ = after.v0;
+        a0_ = after.a0;
+        cum_head_ = after.cum_head;
+        stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(a0_)));
+        stats_.max_velocity = std::max(stats_.max_velocity, to_i64(v0_));
         if (reload) {
             ++stats_.reloads;
-            stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(a0)));
-            stats_.max_velocity = std::max(stats_.max_velocity, to_i64(v0));
+            stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(from.a0)));
+            stats_.max_velocity = std::max(stats_.max_velocity, to_i64(from.v0));
         }
-        phases_.push_back({std::uint64_t(E), to_i64(j), pending_rest_, reload, to_i64(v0), to_i64(a0), to_i64(tr.p0)});
+        const unsigned p_drop = fmt_.frac_bits + fmt_.tick_log2 + 2 - 64;
+        phases_.push_back({std::uint64_t(tr.E), to_i64(tr.j), pending_rest_, reload, to_i64(from.v0),
+                           to_i64(from.a0), reload ? static_cast<std::uint64_t>(from.p0 >> p_drop) : 0});
         stats_.rests += pending_rest_ ? 1 : 0;
         pending_rest_ = false;
         ++stats_.phases;
-        stats_.moves += covered;
-        stats_.max_ticks = std::max<std::uint64_t>(stats_.max_ticks, std::uint64_t(E));
-        stats_.max_abs_jerk = std::max(stats_.max_abs_jerk, to_i64(abs128(j)));
-        stats_.max_phase_moves = std::max<std::uint64_t>(stats_.max_phase_moves, covered);
-        head_ += covered;
+        stats_.moves += tr.covered;
+        stats_.max_ticks = std::max<std::uint64_t>(stats_.max_ticks, std::uint64_t(tr.E));
+        stats_.max_abs_jerk = std::max(stats_.max_abs_jerk, to_i64(abs128(tr.j)));
+        stats_.max_phase_moves = std::max<std::uint64_t>(stats_.max_phase_moves, tr.covered);
+        head_ = after.head;
         if (head_ > 4096) {   // keep the moves the plan's state is fitted to
             const std::size_t drop = head_ - kPlanFit;
             queue_.erase(queue_.begin(), queue_.begin() + std::ptrdiff_t(drop));
@@ -355,7 +363,42 @@ bool PhaseFitter::fit(bool all) {
             head_ -= drop;
         }
     }
+    (void)s;
     return true;
+}
+
+// The state after phase `tr` from `st` (and each of its moves' fire clocks).
+void PhaseFitter::advance(State& st, const Trial& tr, std::vector<std::int64_t>* fires) const {
+    const unsigned s = fmt_.tick_log2;
+    const std::int64_t T = std::int64_t{1} << s;
+    const i128 v0 = st.v0, a0 = st.a0, j = tr.j;
+    const std::int64_t E = tr.E;
+    auto reached = [&](std::int64_t k, i128 tgt) {
+        const Terms t = terms(k, s);
+        return v0 * t.k + a0 * t.A + j * t.G >= tgt;
+    };
+    if (fires) {
+        for (std::size_t m = 0; m < tr.covered; ++m) {
+            const double t = queue_[st.head + m];
+            std::int64_t kh = static_cast<std::int64_t>(std::floor(t)) - st.c0;
+            std::int64_t kl = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(t - tol_)) - 1 - st.c0);
+            const i128 tg = ((cum_[st.head + m] - st.cum_head) << s) - st.p0;
+            while (kh - kl > 1) {
+                const std::int64_t mid = kl + (kh - kl) / 2;
+                if (reached(mid, tg)) kh = mid; else kl = mid;
+            }
+            fires->push_back(st.c0 + kh);
+        }
+    }
+    const Terms te = terms(E * T, s);
+    const i128 P = v0 * te.k + a0 * te.A + j * te.G;
+    const i128 end = cum_[st.head + tr.covered - 1];
+    st.p0 = st.p0 + P - ((end - st.cum_head) << s);
+    st.cum_head = end;
+    st.v0 = v0 + 2 * a0 * i128(E) + 3 * j * i128(E) * i128(E);
+    st.a0 = a0 + 3 * j * i128(E);
+    st.c0 += E * T;
+    st.head += tr.covered;
 }
 
 std::vector<std::int64_t> simulate_phases(std::span<const TimerPhase> phases, PhaseFormat format,
@@ -373,7 +416,7 @@ std::vector<std::int64_t> simulate_phases(std::span<const TimerPhase> phases, Ph
     for (const TimerPhase& ph : phases) {
         if (ph.rest) p = v = h = 0;
         if (ph.reload) {
-            p = ph.p;
+            p = i128(ph.p_top) << (format.frac_bits + format.tick_log2 + 2 - 64);
             v = ph.v;
             h = ph.a;
         }

@@ -41,7 +41,8 @@ __extension__ typedef __int128 i128;   // the timer's sums, exactly
 struct PhaseFormat {
     unsigned tick_log2 = 6;    // a tick is 2^s clocks
     unsigned frac_bits = 60;   // F: the unit of p, v, a and j is 2^-F moves
-    bool reload = true;        // a phase may set v and a (from the plan) where that saves words
+    bool reload = true;        // a phase may set p, V and H (from the plan) where that saves words
+    bool lookahead = false;    // a phase may end early where the next then carries on further
     // 0: p counts moves (a move fires at each whole move). > 0: p is the path
     // length in units of path_unit_mm * 2^-F, a move fires when p reaches
     // its own length (each card segment's length per move).
@@ -52,8 +53,9 @@ struct TimerPhase {
     std::uint64_t ticks = 0;
     std::int64_t jerk = 0;
     bool rest = false;
-    bool reload = false;       // p, v and a set to these at the phase's start (after rest)
-    std::int64_t v = 0, a = 0, p = 0;
+    bool reload = false;       // p, V and H set at the phase's start (after rest)
+    std::int64_t v = 0, a = 0; // V and H (a: half the acceleration)
+    std::uint64_t p_top = 0;   // p = p_top * 2^(F + s + 2 - 64): p's top 64 of F + s + 2 bits
     bool timed = false;        // no jerk phase: one move `ticks` clocks after the phase's start, then p = 0
     friend bool operator==(const TimerPhase&, const TimerPhase&) = default;
 };
@@ -93,15 +95,24 @@ public:
     [[nodiscard]] const std::string& error() const { return error_; }
 
 private:
+    // Where a phase starts: clock, p, V, H, the next queued move and the end
+    // of the move before it on the path.
+    struct State {
+        std::int64_t c0 = 0;
+        i128 p0 = 0, v0 = 0, a0 = 0;
+        std::size_t head = 0;
+        i128 cum_head = 0;
+    };
     struct Trial {
         bool wait = false;          // the queue may bring moves the phase would take
         std::size_t covered = 0;
-        i128 v0 = 0, a0 = 0, j = 0, p0 = 0;
+        i128 j = 0;
         std::int64_t E = 0;         // ticks
-        bool reload = false;
     };
+    static constexpr std::size_t kNoCap = static_cast<std::size_t>(-1);
     bool fit(bool all);
-    [[nodiscard]] Trial evaluate(i128 v0, i128 a0, bool all) const;
+    [[nodiscard]] Trial evaluate(const State& st, bool all, std::size_t cap = kNoCap) const;
+    void advance(State& st, const Trial& tr, std::vector<std::int64_t>* fires) const;
     bool plan_state(i128& p, i128& v, i128& h) const;
 
     PhaseFormat fmt_;

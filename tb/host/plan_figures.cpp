@@ -140,9 +140,10 @@ int phases(const char* mpath, const char* jpath, const char* board, unsigned s, 
     if (!p.ok()) { fmt::print(stderr, "{}\n", join(p.errors)); return 1; }
     if (!fitter.finish()) { fmt::print(stderr, "{}: {}\n", jpath, fitter.error()); return 1; }
     const PhaseStats& st = fitter.stats();
-    fmt::print("{} {} s={} F={} unit={}: card_segments={} moves={} chunks={} phases={} rests={} reloads={} timed={} moves/phase={:.1f} "
+    const std::uint64_t bytes = 8 * (st.phases - st.reloads - st.timed) + 28 * st.reloads + 4 * st.timed;
+    fmt::print("{} {} s={} F={} unit={}: bytes={} card_segments={} moves={} chunks={} phases={} rests={} reloads={} timed={} moves/phase={:.1f} "
                "max_ticks={} max|j|={} (2^{:.1f}) max|a|=2^{:.1f} max_v=2^{:.1f} max_phase_moves={}\n",
-               jpath, board, s, f, unit_mm, p->stats.card_segments, st.moves, p->stats.chunks, st.phases, st.rests, st.reloads, st.timed,
+               jpath, board, s, f, unit_mm, bytes, p->stats.card_segments, st.moves, p->stats.chunks, st.phases, st.rests, st.reloads, st.timed,
                double(st.moves) / double(std::max<std::uint64_t>(1, st.phases)), st.max_ticks, st.max_abs_jerk,
                std::log2(double(std::max<std::int64_t>(1, st.max_abs_jerk))),
                std::log2(double(std::max<std::int64_t>(1, st.max_abs_accel))),

@@ -44,7 +44,7 @@ std::vector<double> s_curve_times(double L, double vmax, double A, double J, dou
 }
 
 TEST(Phases, AnSCurveInMovesFiresEveryMoveInItsWindow) {
-    const PhaseFormat fmt{6, 60, true, 0.0};
+    const PhaseFormat fmt{6, 60, true, true, 0.0};
     const double tol = 40, hz = 40e6;
     PhaseFitter f(fmt, tol);
     // Two motions with a stop between (moves/s, /s^2, /s^3 of a 80 steps/mm axis).
@@ -65,7 +65,7 @@ TEST(Phases, AnSCurveInMovesFiresEveryMoveInItsWindow) {
 
 TEST(Phases, PathLengthsPerMoveChangeBetweenBatches) {
     // Path domain: batches of moves of different lengths along one S-curve.
-    const PhaseFormat fmt{5, 60, true, 0.0125};
+    const PhaseFormat fmt{5, 60, true, true, 0.0125};
     const double tol = 40, hz = 40e6;
     const auto p = make_profile(50.0, 0, 0, 60.0, 500.0, 2000.0);   // mm, mm/s, mm/s^2, mm/s^3
     ASSERT_TRUE(p.has_value());
@@ -129,7 +129,7 @@ void fit_job(const char* machine, const char* job_file, const PhaseFormat& fmt, 
 class ExamplePhases : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(ExamplePhases, EveryMoveFiresInItsWindow) {
-    const PhaseFormat fmt{6, 60, true, 0.0125};
+    const PhaseFormat fmt{6, 60, true, true, 0.0125};
     JobPhases jp;
     PhaseFitter* f = nullptr;
     fit_job("seed002.toml", GetParam(), fmt, jp, f);

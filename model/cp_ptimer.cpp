@@ -1,0 +1,121 @@
+// SPDX-License-Identifier: MIT
+#include "model/cp_ptimer.h"
+
+namespace cpstep::model {
+
+namespace {
+
+// The low `w` bits of x as a signed value.
+int64_t sx(int64_t x, unsigned w) {
+  const uint64_t m = w >= 64 ? ~uint64_t{0} : (uint64_t{1} << w) - 1;
+  uint64_t v = uint64_t(x) & m;
+  if (w < 64 && (v >> (w - 1) & 1)) v |= ~m;
+  return int64_t(v);
+}
+
+cp_i128 mask(cp_i128 x, unsigned w) { return x & ((cp_i128{1} << w) - 1); }
+
+}  // namespace
+
+cp_i128 CpPtimer::threshold() const {
+  const uint64_t len = p_.lw >= 64 ? in.len : in.len & ((uint64_t{1} << p_.lw) - 1);
+  return mask(cp_i128(len) << p_.s, pw());
+}
+
+CpPtimerOut CpPtimer::outputs() const {
+  Out o;
+  o.due = r_.tdue || (!r_.timed && r_.p >= threshold());
+  o.active = r_.active;
+  o.ready = !r_.nvalid;
+  o.starved = r_.starved;
+  o.kind = r_.kind;
+  return o;
+}
+
+void CpPtimer::tick() {
+  if (in.rst || in.clear) {
+    r_ = Regs{};
+    return;
+  }
+  const Regs o = r_;
+  Regs n = r_;
+  const bool due = o.tdue || (!o.timed && o.p >= threshold());
+  // The next phase's buffer: written while free, W0 last.
+  if (in.wr && !o.nvalid) {
+    switch (in.sel & 7) {
+      case 0:
+        n.nkind = in.data >> 29;
+        n.nticks = in.data & ((uint32_t{1} << p_.tw) - 1);
+        n.nvalid = true;
+        break;
+      case 1: n.nu = int64_t(int32_t(in.data)); break;
+      case 2: n.np = (o.np & ~uint64_t{0xFFFFFFFF}) | in.data; break;
+      case 3: n.np = (o.np & 0xFFFFFFFF) | uint64_t{in.data} << 32; break;
+      case 4: n.nv = (o.nv & ~uint64_t{0xFFFFFFFF}) | in.data; break;
+      case 5: n.nv = (o.nv & 0xFFFFFFFF) | uint64_t{in.data} << 32; break;
+      case 6: n.nh = (o.nh & ~uint64_t{0xFFFFFFFF}) | in.data; break;
+      default: n.nh = (o.nh & 0xFFFFFFFF) | uint64_t{in.data} << 32; break;
+    }
+  }
+  // The due move fires: a timed one clears its flag, else p gives up its length.
+  cp_i128 p = o.p;
+  if (in.fire && due) {
+    if (o.tdue) n.tdue = false;
+    else p -= threshold();
+  }
+  bool phase_end = false;
+  int64_t v = o.v, h = o.h;   // after this clock's tick end, if any
+  if (o.active && in.adv) {
+    if (o.timed) {
+      if (o.tleft == 1) {
+        n.tdue = true;
+        p = 0;
+        phase_end = true;
+      } else {
+        n.tleft = o.tleft - 1;
+      }
+    } else {
+      p += o.step;
+      n.tcnt = (o.tcnt + 1) & ((uint32_t{1} << p_.s) - 1);
+      if (o.tcnt == (uint32_t{1} << p_.s) - 1) {
+        v = sx(o.v + 2 * o.h + 3 * o.u, p_.vw);
+        h = sx(o.h + 3 * o.u, p_.hw);
+        n.step = sx(v + h + o.u, p_.vw);
+        if (o.tleft == 1) phase_end = true;
+        else n.tleft = o.tleft - 1;
+      }
+    }
+  }
+  n.v = v;
+  n.h = h;
+  if (phase_end || (!o.active && o.nvalid)) {
+    if (o.nvalid) {
+      const int64_t u = sx(o.nu, p_.uw);
+      n.nvalid = false;
+      n.active = true;
+      n.starved = false;
+      n.kind = o.nkind;
+      n.timed = (o.nkind & 1) != 0;
+      n.u = u;
+      n.tleft = o.nticks == 0 ? 1 : o.nticks;
+      n.tcnt = 0;
+      if (o.nkind & 2) {   // from rest
+        n.v = n.h = 0;
+        p = 0;
+      }
+      if (o.nkind & 4) {   // reload
+        n.v = sx(int64_t(o.nv), p_.vw);
+        n.h = sx(int64_t(o.nh), p_.hw);
+        p = cp_i128(o.np) << (pw() - 64);
+      }
+      if (!(o.nkind & 1)) n.step = sx(n.v + n.h + u, p_.vw);
+    } else {
+      n.active = false;
+      n.starved = true;
+    }
+  }
+  n.p = mask(p, pw());
+  r_ = n;
+}
+
+}  // namespace cpstep::model

@@ -1,0 +1,89 @@
+// SPDX-License-Identifier: MIT
+// cp_ptimer — cycle-accurate, bit-exact model of rtl/cp_ptimer.v: the phase
+// timer, moves timed by phases of constant jerk (issue 13, toward the compact
+// wire; the unit on its own, not yet part of cp_core). The host's side is
+// plan/phases.h, whose arithmetic this is, clock by clock:
+//
+//   every clock of a jerk phase (adv):  p += step; when p >= len * 2^S the move
+//       is due (fire_i takes it: p -= len * 2^S in the same clock's sum)
+//   at the end of each tick (2^S clocks from the phase's start):
+//       V += 2H + 3u, H += 3u, step = V + H + u (with the new V and H)
+//   a phase (W0 = {reload, rest, timed, 5'b0, ticks[23:0]}) holds u for `ticks`
+//   ticks (0: 1), then the next phase loads at once (none: the timer stops,
+//   `starved`). It carries p, V and H on, or starts from rest (p, V, H = 0), or
+//   reloads them from the buffer; a timed phase is one move, due `ticks` clocks
+//   after the phase's start, with p, V and H frozen until then and p = 0 after.
+//
+// The next phase is written word by word into a buffer (sel 1: u; 2, 3: p's top
+// 64 bits, low word first; 4, 5: V; 6, 7: H) and committed by W0 (sel 0) while
+// `ready`; a write while not ready changes nothing. outputs() before the edge,
+// tick() the edge.
+#pragma once
+
+#include <cstdint>
+
+namespace cpstep::model {
+
+__extension__ typedef __int128 cp_i128;   // p: F + S + 2 bits
+
+struct CpPtimerIn {
+  bool rst = false;
+  bool clear = false;      // stop and empty (FLUSH, E-stop)
+  bool adv = true;         // this clock counts (the feed's scaled time)
+  bool wr = false;
+  uint32_t sel = 0;
+  uint32_t data = 0;
+  bool fire = false;       // the due move fires now
+  uint64_t len = 0;        // the next move's length, 2^-F units (LW bits)
+};
+
+struct CpPtimerOut {
+  bool due = false;
+  bool active = false;
+  bool ready = false;      // the buffer takes the next phase
+  bool starved = false;    // a phase ended with none after it (until one loads)
+  uint32_t kind = 0;       // the running phase's {reload, rest, timed}
+  bool operator==(const CpPtimerOut&) const = default;
+};
+
+struct CpPtimerParams {
+  unsigned s = 6;    // a tick is 2^S clocks
+  unsigned f = 60;   // fractional bits of p, V, H, u
+  unsigned vw = 56, hw = 40, uw = 24, tw = 24, lw = 62;   // register widths (signed V, H, u)
+};
+
+class CpPtimer {
+ public:
+  using In = CpPtimerIn;
+  using Out = CpPtimerOut;
+  using Params = CpPtimerParams;
+
+  explicit CpPtimer(Params p = {}) : p_(p) {}
+  In in;
+  Out outputs() const;
+  void tick();
+
+  // For the benches.
+  cp_i128 p() const { return r_.p; }
+  int64_t v() const { return r_.v; }
+  int64_t h() const { return r_.h; }
+  unsigned pw() const { return p_.f + p_.s + 2; }
+
+ private:
+  struct Regs {
+    bool active = false, timed = false, tdue = false, starved = false;
+    uint32_t kind = 0;
+    uint32_t tleft = 0, tcnt = 0;
+    int64_t u = 0, v = 0, h = 0, step = 0;
+    cp_i128 p = 0;
+    bool nvalid = false;
+    uint32_t nkind = 0, nticks = 0;
+    int64_t nu = 0;
+    uint64_t np = 0, nv = 0, nh = 0;   // as written (64 bits each)
+  };
+  cp_i128 threshold() const;
+  Params p_;
+  Regs r_;
+};
+
+}  // namespace cpstep::model

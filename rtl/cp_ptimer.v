@@ -1,0 +1,184 @@
+// SPDX-License-Identifier: MIT
+// cp_ptimer — the phase timer: moves timed by phases of constant jerk (issue 13,
+// toward the compact wire; the unit on its own, not yet part of cp_core). The
+// host's side is host/plan/phases.h, whose arithmetic this is, clock by clock:
+//
+//   every clock of a jerk phase (adv_i):  p += step; when p >= len_i * 2^S the
+//       move is due (fire_i takes it: p -= len_i * 2^S in the same clock's sum)
+//   at the end of each tick (2^S clocks from the phase's start):
+//       V += 2H + 3u, H += 3u, step = V + H + u (with the new V and H)
+//
+// V, H and u are the cubic's own derivatives at the tick (velocity per tick, half
+// the acceleration, a sixth of the jerk), so a phase changes u without p, V or H
+// jumping. A phase (W0 = {reload, rest, timed, 5'b0, ticks[23:0]}) holds u for
+// `ticks` ticks (0: 1), then the next phase loads at once (none: the timer stops
+// and says `starved`). It carries p, V and H on, or starts from rest (p, V, H =
+// 0), or reloads them from the buffer; a timed phase is one move, due `ticks`
+// clocks after the phase's start, p, V and H frozen until then and p = 0 after
+// (the last move of a stop, which no phase times within 1 us).
+//
+// The next phase is written word by word into a buffer (sel 1: u; 2, 3: p's top
+// 64 bits, low word first; 4, 5: V; 6, 7: H) and committed by W0 (sel 0) while
+// ready_o; a write while not ready changes nothing.
+//
+// Model twin model/cp_ptimer.*, bench tb/core/test_ptimer.cpp.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module cp_ptimer #(
+    parameter integer S  = 6,     // a tick is 2^S clocks
+    parameter integer F  = 60,    // fractional bits of p, V, H and u
+    parameter integer VW = 56,    // V and step (signed)
+    parameter integer HW = 40,    // H (signed)
+    parameter integer UW = 24,    // u (signed)
+    parameter integer LW = 62     // a move's length (unsigned, 2^-F units)
+    // (32 < HW <= VW <= 64, UW <= 32, UW <= HW, LW + S <= F + S + 2, F + S + 2 >= 64)
+) (
+    input  wire          clk,
+    input  wire          rst,
+    input  wire          clear_i,       // stop and empty (FLUSH, E-stop)
+    input  wire          adv_i,         // this clock counts
+    input  wire          wr_i,
+    input  wire [2:0]    sel_i,
+    input  wire [31:0]   data_i,
+    input  wire          fire_i,        // the due move fires now
+    input  wire [LW-1:0] len_i,         // the next move's length
+    output wire          due_o,
+    output wire          active_o,
+    output wire          ready_o,
+    output wire          starved_o,
+    output wire [2:0]    kind_o         // the running phase's {reload, rest, timed}
+);
+
+localparam integer PW = F + S + 2;      // p
+localparam integer TW = 24;             // ticks
+
+reg           active_q, timed_q, tdue_q, starved_q, nvalid_q;
+reg  [2:0]    kind_q, nkind_q;
+reg  [TW-1:0] tleft_q, nticks_q;
+reg  [S-1:0]  tcnt_q;
+reg  signed [UW-1:0] u_q;
+reg  signed [VW-1:0] v_q, step_q;
+reg  signed [HW-1:0] h_q;
+reg  [PW-1:0] p_q;
+reg  [UW-1:0] nu_q;
+reg  [63:0]   np_q;
+reg  [VW-1:0] nv_q;
+reg  [HW-1:0] nh_q;
+
+wire [PW-1:0] thresh = {{(PW-LW-S){1'b0}}, len_i, {S{1'b0}}};
+wire          due = tdue_q || (!timed_q && p_q >= thresh);
+assign due_o     = due;
+assign active_o  = active_q;
+assign ready_o   = !nvalid_q;
+assign starved_o = starved_q;
+assign kind_o    = kind_q;
+
+// The tick's end: the next V, H and step.
+wire signed [VW-1:0] u_v  = {{(VW-UW){u_q[UW-1]}}, u_q};
+wire signed [VW-1:0] h_v  = {{(VW-HW){h_q[HW-1]}}, h_q};
+wire signed [VW-1:0] v_up = v_q + (h_v <<< 1) + u_v + (u_v <<< 1);
+wire signed [HW-1:0] u_h  = {{(HW-UW){u_q[UW-1]}}, u_q};
+wire signed [HW-1:0] h_up = h_q + u_h + (u_h <<< 1);
+wire signed [VW-1:0] h_upv = {{(VW-HW){h_up[HW-1]}}, h_up};
+wire signed [VW-1:0] step_up = v_up + h_upv + u_v;
+
+wire          tick_end  = tcnt_q == {S{1'b1}};
+wire          running   = active_q && adv_i;
+wire          phase_end = running && (timed_q ? (tleft_q == {{(TW-1){1'b0}}, 1'b1})
+                                               : (tick_end && tleft_q == {{(TW-1){1'b0}}, 1'b1}));
+wire          load      = phase_end || (!active_q && nvalid_q);
+
+// The loaded phase's V, H, p and step.
+wire signed [UW-1:0] nu = nu_q;
+wire signed [VW-1:0] nu_v = {{(VW-UW){nu[UW-1]}}, nu};
+wire signed [VW-1:0] v_cur = (running && !timed_q && tick_end) ? v_up : v_q;
+wire signed [HW-1:0] h_cur = (running && !timed_q && tick_end) ? h_up : h_q;
+wire signed [VW-1:0] v_ld = nkind_q[2] ? nv_q : nkind_q[1] ? {VW{1'b0}} : v_cur;
+wire signed [HW-1:0] h_ld = nkind_q[2] ? nh_q : nkind_q[1] ? {HW{1'b0}} : h_cur;
+wire signed [VW-1:0] h_ldv = {{(VW-HW){h_ld[HW-1]}}, h_ld};
+wire signed [VW-1:0] step_ld = v_ld + h_ldv + nu_v;
+
+// p: this clock's fire and step.
+wire [PW-1:0] step_p = {{(PW-VW){step_q[VW-1]}}, step_q};
+wire [PW-1:0] p_fired = (fire_i && due && !tdue_q) ? p_q - thresh : p_q;
+wire [PW-1:0] p_run = (running && !timed_q) ? p_fired + step_p
+                    : (running && timed_q && phase_end) ? {PW{1'b0}} : p_fired;
+
+always @(posedge clk) begin
+    if (rst || clear_i) begin
+        active_q  <= 1'b0;
+        timed_q   <= 1'b0;
+        tdue_q    <= 1'b0;
+        starved_q <= 1'b0;
+        nvalid_q  <= 1'b0;
+        kind_q    <= 3'd0;
+        nkind_q   <= 3'd0;
+        tleft_q   <= {TW{1'b0}};
+        nticks_q  <= {TW{1'b0}};
+        tcnt_q    <= {S{1'b0}};
+        u_q       <= {UW{1'b0}};
+        v_q       <= {VW{1'b0}};
+        h_q       <= {HW{1'b0}};
+        step_q    <= {VW{1'b0}};
+        p_q       <= {PW{1'b0}};
+        nu_q      <= {UW{1'b0}};
+        np_q      <= 64'd0;
+        nv_q      <= {VW{1'b0}};
+        nh_q      <= {HW{1'b0}};
+    end else begin
+        if (wr_i && !nvalid_q) begin
+            case (sel_i)
+                3'd0: begin
+                    nkind_q  <= data_i[31:29];
+                    nticks_q <= data_i[TW-1:0];
+                    nvalid_q <= 1'b1;
+                end
+                3'd1: nu_q <= data_i[UW-1:0];
+                3'd2: np_q[31:0]  <= data_i;
+                3'd3: np_q[63:32] <= data_i;
+                3'd4: nv_q[31:0]  <= data_i;
+                3'd5: nv_q[VW-1:32] <= data_i[VW-33:0];
+                3'd6: nh_q[31:0]  <= data_i;
+                default: nh_q[HW-1:32] <= data_i[HW-33:0];
+            endcase
+        end
+        if (fire_i && tdue_q) tdue_q <= 1'b0;
+        if (running && timed_q && phase_end) tdue_q <= 1'b1;
+        if (running && timed_q && !phase_end) tleft_q <= tleft_q - 1'b1;
+        if (running && !timed_q) begin
+            tcnt_q <= tcnt_q + 1'b1;
+            if (tick_end) begin
+                v_q    <= v_up;
+                h_q    <= h_up;
+                step_q <= step_up;
+                if (!phase_end) tleft_q <= tleft_q - 1'b1;
+            end
+        end
+        p_q <= p_run;
+        if (load) begin
+            if (nvalid_q) begin
+                nvalid_q  <= 1'b0;
+                active_q  <= 1'b1;
+                starved_q <= 1'b0;
+                kind_q    <= nkind_q;
+                timed_q   <= nkind_q[0];
+                u_q       <= nu;
+                tleft_q   <= (nticks_q == {TW{1'b0}}) ? {{(TW-1){1'b0}}, 1'b1} : nticks_q;
+                tcnt_q    <= {S{1'b0}};
+                v_q       <= v_ld;
+                h_q       <= h_ld;
+                if (!nkind_q[0]) step_q <= step_ld;
+                if (nkind_q[1]) p_q <= {PW{1'b0}};
+                if (nkind_q[2]) p_q <= {np_q, {(PW-64){1'b0}}};
+            end else begin
+                active_q  <= 1'b0;
+                starved_q <= 1'b1;
+            end
+        end
+    end
+end
+
+endmodule
+`resetall
