@@ -12,7 +12,6 @@ namespace cpstep::plan {
 
 namespace {
 
-
 i128 floor_div(i128 a, i128 b) {  // b > 0
     i128 q = a / b;
     if ((a % b != 0) && (a < 0)) --q;
@@ -24,9 +23,9 @@ i128 ceil_div(i128 a, i128 b) { return -floor_div(-a, b); }  // b > 0
 constexpr std::uint64_t kMaxPhaseTicks = std::uint64_t{1} << 24;
 // A timed move's clocks fit the phase word's 24-bit field.
 constexpr std::int64_t kMaxTimedClocks = std::int64_t{1} << 24;
-// How many moves past a phase its j is steered by.
+// How many moves past a phase its u is steered by.
 constexpr std::size_t kSteerMoves = 8;
-// A phase that reloads v and a costs this many words against one.
+// A phase that reloads p, V and H costs this many words against one that carries them.
 constexpr std::size_t kReloadWords = 4;
 // Moves before and after a reload that the plan's state there is fitted to.
 constexpr std::size_t kPlanFit = 4;

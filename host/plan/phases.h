@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Move events timed by phases of constant jerk (issue 13, toward a compact
-// wire; a host-side measurement: the card does not take this form yet,
-// docs/PROTOCOL.md "Toward a compact wire"). The card would keep the path
+// wire; the card's unit is rtl/cp_ptimer.v, its twin model/cp_ptimer.h, not yet
+// part of the core: docs/PROTOCOL.md "Toward a compact wire"). The card would keep the path
 // position as a sum, exactly, in integers, with the state at tick boundaries
 // being the cubic's own derivatives (so that a phase's jerk can change
 // without the position, velocity or acceleration jumping):
@@ -40,7 +40,7 @@ __extension__ typedef __int128 i128;   // the timer's sums, exactly
 
 struct PhaseFormat {
     unsigned tick_log2 = 6;    // a tick is 2^s clocks
-    unsigned frac_bits = 60;   // F: the unit of p, v, a and j is 2^-F moves
+    unsigned frac_bits = 60;   // F: V, H and u in 2^-F moves (or path units), p in 2^-F-s
     bool reload = true;        // a phase may set p, V and H (from the plan) where that saves words
     bool lookahead = false;    // a phase may end early where the next then carries on further
     // 0: p counts moves (a move fires at each whole move). > 0: p is the path
@@ -50,9 +50,9 @@ struct PhaseFormat {
 };
 
 struct TimerPhase {
-    std::uint64_t ticks = 0;
-    std::int64_t jerk = 0;
-    bool rest = false;
+    std::uint64_t ticks = 0;   // ticks (a timed move: clocks)
+    std::int64_t jerk = 0;     // u: a sixth of the jerk, per tick^3
+    bool rest = false;         // p, V and H set to zero at the phase's start
     bool reload = false;       // p, V and H set at the phase's start (after rest)
     std::int64_t v = 0, a = 0; // V and H (a: half the acceleration)
     std::uint64_t p_top = 0;   // p = p_top * 2^(F + s + 2 - 64): p's top 64 of F + s + 2 bits
