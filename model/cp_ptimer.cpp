@@ -44,7 +44,7 @@ void CpPtimer::tick() {
   if (in.wr && !o.nvalid) {
     switch (in.sel & 7) {
       case 0:
-        n.nkind = in.data >> 29;
+        n.nkind = in.data >> 28;   // {load V and H, rest, timed, load p}
         n.nticks = in.data & ((uint32_t{1} << p_.tw) - 1);
         n.nvalid = true;
         break;
@@ -95,20 +95,20 @@ void CpPtimer::tick() {
       n.active = true;
       n.starved = false;
       n.kind = o.nkind;
-      n.timed = (o.nkind & 1) != 0;
+      n.timed = (o.nkind & 2) != 0;
       n.u = u;
       n.tleft = o.nticks == 0 ? 1 : o.nticks;
       n.tcnt = 0;
-      if (o.nkind & 2) {   // from rest
+      if (o.nkind & 4) {   // from rest
         n.v = n.h = 0;
         p = 0;
       }
-      if (o.nkind & 4) {   // reload
+      if (o.nkind & 8) {   // load V and H
         n.v = sx(int64_t(o.nv), p_.vw);
         n.h = sx(int64_t(o.nh), p_.hw);
-        p = cp_i128(o.np) << (pw() - 64);
       }
-      if (!(o.nkind & 1)) n.step = sx(n.v + n.h + u, p_.vw);
+      if (o.nkind & 1) p = cp_i128(o.np) << (pw() - 64);   // load p
+      if (!(o.nkind & 2)) n.step = sx(n.v + n.h + u, p_.vw);
     } else {
       n.active = false;
       n.starved = true;

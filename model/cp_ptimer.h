@@ -8,11 +8,12 @@
 //       is due (fire_i takes it: p -= len * 2^S in the same clock's sum)
 //   at the end of each tick (2^S clocks from the phase's start):
 //       V += 2H + 3u, H += 3u, step = V + H + u (with the new V and H)
-//   a phase (W0 = {reload, rest, timed, 5'b0, ticks[23:0]}) holds u for `ticks`
-//   ticks (0: 1), then the next phase loads at once (none: the timer stops,
-//   `starved`). It carries p, V and H on, or starts from rest (p, V, H = 0), or
-//   reloads them from the buffer; a timed phase is one move, due `ticks` clocks
-//   after the phase's start, with p, V and H frozen until then and p = 0 after.
+//   a phase (W0 = {load V and H, rest, timed, load p, 4'b0, ticks[23:0]}) holds u
+//   for `ticks` ticks (0: 1), then the next phase loads at once (none: the timer
+//   stops, `starved`). It carries p, V and H on, or starts from rest (p, V, H =
+//   0), and/or loads V and H, and/or p, from the buffer (in that order); a timed
+//   phase is one move, due `ticks` clocks after the phase's start, with p, V and H
+//   frozen until then and p = 0 after.
 //
 // The next phase is written word by word into a buffer (sel 1: u; 2, 3: p's top
 // 64 bits, low word first; 4, 5: V; 6, 7: H) and committed by W0 (sel 0) while
@@ -42,7 +43,7 @@ struct CpPtimerOut {
   bool active = false;
   bool ready = false;      // the buffer takes the next phase
   bool starved = false;    // a phase ended with none after it (until one loads)
-  uint32_t kind = 0;       // the running phase's {reload, rest, timed}
+  uint32_t kind = 0;       // the running phase's {load V and H, rest, timed, load p}
   bool operator==(const CpPtimerOut&) const = default;
 };
 

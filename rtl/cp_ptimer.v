@@ -10,12 +10,13 @@
 //
 // V, H and u are the cubic's own derivatives at the tick (velocity per tick, half
 // the acceleration, a sixth of the jerk), so a phase changes u without p, V or H
-// jumping. A phase (W0 = {reload, rest, timed, 5'b0, ticks[23:0]}) holds u for
-// `ticks` ticks (0: 1), then the next phase loads at once (none: the timer stops
-// and says `starved`). It carries p, V and H on, or starts from rest (p, V, H =
-// 0), or reloads them from the buffer; a timed phase is one move, due `ticks`
-// clocks after the phase's start, p, V and H frozen until then and p = 0 after
-// (the last move of a stop, which no phase times within 1 us).
+// jumping. A phase (W0 = {load V and H, rest, timed, load p, 4'b0, ticks[23:0]})
+// holds u for `ticks` ticks (0: 1), then the next phase loads at once (none: the
+// timer stops and says `starved`). It carries p, V and H on, or starts from rest
+// (p, V, H = 0), and/or loads V and H (the host's correction back to its plan),
+// and/or p, from the buffer, in that order; a timed phase is one move, due
+// `ticks` clocks after the phase's start, p, V and H frozen until then and p = 0
+// after (the last move of a stop, which no phase times within 1 us).
 //
 // The next phase is written word by word into a buffer (sel 1: u; 2, 3: p's top
 // 64 bits, low word first; 4, 5: V; 6, 7: H) and committed by W0 (sel 0) while
@@ -48,14 +49,14 @@ module cp_ptimer #(
     output wire          active_o,
     output wire          ready_o,
     output wire          starved_o,
-    output wire [2:0]    kind_o         // the running phase's {reload, rest, timed}
+    output wire [3:0]    kind_o         // the running phase's {load V and H, rest, timed, load p}
 );
 
 localparam integer PW = F + S + 2;      // p
 localparam integer TW = 24;             // ticks
 
 reg           active_q, timed_q, tdue_q, starved_q, nvalid_q;
-reg  [2:0]    kind_q, nkind_q;
+reg  [3:0]    kind_q, nkind_q;
 reg  [TW-1:0] tleft_q, nticks_q;
 reg  [S-1:0]  tcnt_q;
 reg  signed [UW-1:0] u_q;
@@ -95,8 +96,8 @@ wire signed [UW-1:0] nu = nu_q;
 wire signed [VW-1:0] nu_v = {{(VW-UW){nu[UW-1]}}, nu};
 wire signed [VW-1:0] v_cur = (running && !timed_q && tick_end) ? v_up : v_q;
 wire signed [HW-1:0] h_cur = (running && !timed_q && tick_end) ? h_up : h_q;
-wire signed [VW-1:0] v_ld = nkind_q[2] ? nv_q : nkind_q[1] ? {VW{1'b0}} : v_cur;
-wire signed [HW-1:0] h_ld = nkind_q[2] ? nh_q : nkind_q[1] ? {HW{1'b0}} : h_cur;
+wire signed [VW-1:0] v_ld = nkind_q[3] ? nv_q : nkind_q[2] ? {VW{1'b0}} : v_cur;
+wire signed [HW-1:0] h_ld = nkind_q[3] ? nh_q : nkind_q[2] ? {HW{1'b0}} : h_cur;
 wire signed [VW-1:0] h_ldv = {{(VW-HW){h_ld[HW-1]}}, h_ld};
 wire signed [VW-1:0] step_ld = v_ld + h_ldv + nu_v;
 
@@ -113,8 +114,8 @@ always @(posedge clk) begin
         tdue_q    <= 1'b0;
         starved_q <= 1'b0;
         nvalid_q  <= 1'b0;
-        kind_q    <= 3'd0;
-        nkind_q   <= 3'd0;
+        kind_q    <= 4'd0;
+        nkind_q   <= 4'd0;
         tleft_q   <= {TW{1'b0}};
         nticks_q  <= {TW{1'b0}};
         tcnt_q    <= {S{1'b0}};
@@ -131,7 +132,7 @@ always @(posedge clk) begin
         if (wr_i && !nvalid_q) begin
             case (sel_i)
                 3'd0: begin
-                    nkind_q  <= data_i[31:29];
+                    nkind_q  <= data_i[31:28];
                     nticks_q <= data_i[TW-1:0];
                     nvalid_q <= 1'b1;
                 end
@@ -163,15 +164,15 @@ always @(posedge clk) begin
                 active_q  <= 1'b1;
                 starved_q <= 1'b0;
                 kind_q    <= nkind_q;
-                timed_q   <= nkind_q[0];
+                timed_q   <= nkind_q[1];
                 u_q       <= nu;
                 tleft_q   <= (nticks_q == {TW{1'b0}}) ? {{(TW-1){1'b0}}, 1'b1} : nticks_q;
                 tcnt_q    <= {S{1'b0}};
                 v_q       <= v_ld;
                 h_q       <= h_ld;
-                if (!nkind_q[0]) step_q <= step_ld;
-                if (nkind_q[1]) p_q <= {PW{1'b0}};
-                if (nkind_q[2]) p_q <= {np_q, {(PW-64){1'b0}}};
+                if (!nkind_q[1]) step_q <= step_ld;
+                if (nkind_q[2]) p_q <= {PW{1'b0}};
+                if (nkind_q[0]) p_q <= {np_q, {(PW-64){1'b0}}};
             end else begin
                 active_q  <= 1'b0;
                 starved_q <= 1'b1;

@@ -50,6 +50,9 @@ std::int64_t to_i64(i128 x) {
 
 i128 abs128(i128 x) { return x < 0 ? -x : x; }
 
+// Whether x fits a signed register of `bits` bits.
+bool fits(i128 x, unsigned bits) { return x >= -(i128{1} << (bits - 1)) && x < (i128{1} << (bits - 1)); }
+
 }  // namespace
 
 i128 move_length(double length_mm, const PhaseFormat& format) {
@@ -63,8 +66,22 @@ PhaseFitter::PhaseFitter(PhaseFormat format, double tolerance_cycles) : fmt_(for
         throw std::invalid_argument("PhaseFitter: format out of range");
 }
 
-bool PhaseFitter::push(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at) {
+bool PhaseFitter::push(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at,
+                       std::span<const PlanJerk> plan) {
     if (!error_.empty()) return false;
+    for (const PlanJerk& c : plan) {
+        // A segment's profile going on with the jerk, speed and acceleration the
+        // one before left (a phase cut at a segment's end) changes nothing.
+        if (!changes_.empty()) {
+            const PlanJerk& b = changes_.back();
+            const double dt = (c.at - b.at) / fmt_.clock_hz;
+            const double v = b.v + b.a * dt + b.jerk * dt * dt / 2, a = b.a + b.jerk * dt;
+            if (c.jerk == b.jerk && std::fabs(c.v - v) <= 1e-9 * std::max(1.0, std::fabs(v)) &&
+                std::fabs(c.a - a) <= 1e-9 * std::max(1.0, std::fabs(a)))
+                continue;
+        }
+        changes_.push_back(c);
+    }
     if (rest_at >= 0) {
         if (!fit(true)) return false;
         // The motion before has ended with its last move (the open phase
@@ -109,7 +126,8 @@ PhaseFitter::Trial PhaseFitter::evaluate(const State& st, bool all, std::size_t 
     const i128 kInf = i128{1} << 120;
     Trial tr;
     std::vector<i128> lo_run, hi_run;
-    i128 jlo = -kInf, jhi = kInf;
+    if (!fits(v0, fmt_.v_bits) || !fits(a0, fmt_.h_bits)) return tr;
+    i128 jlo = -(i128{1} << (fmt_.u_bits - 1)), jhi = (i128{1} << (fmt_.u_bits - 1)) - 1;
     std::size_t n = st.head;
     for (; n < queue_.size() && n - st.head < cap; ++n) {
         const double tau = queue_[n];
@@ -197,6 +215,10 @@ PhaseFitter::Trial PhaseFitter::evaluate(const State& st, bool all, std::size_t 
             for (i128 m = mstar - 1; m <= mstar + 2; ++m)
                 if (m >= 0 && m <= E - 1 && step_at(m) < 0) ok = false;
         }
+        // The state after it fits the card's registers.
+        if (ok && (!fits(v0 + 2 * a0 * i128(E) + 3 * j * i128(E) * i128(E), fmt_.v_bits) ||
+                   !fits(a0 + 3 * j * i128(E), fmt_.h_bits)))
+            ok = false;
         if (!ok) continue;
         tr.covered = covered;
         tr.j = j;
@@ -256,6 +278,122 @@ bool PhaseFitter::plan_state(i128& p, i128& v, i128& h) const {
     return true;
 }
 
+// Close phase `tr` from `from`: the state after it, its record, the figures.
+void PhaseFitter::commit(const State& from, const Trial& tr, bool reload, bool adjust, i128 dv, i128 dh) {
+    State after = from;
+    advance(after, tr, &fires_);
+    c0_ = after.c0;
+    p0_ = after.p0;
+    v0_ = after.v0;
+    a0_ = after.a0;
+    cum_head_ = after.cum_head;
+    head_ = after.head;
+    stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(a0_)));
+    stats_.max_velocity = std::max(stats_.max_velocity, to_i64(v0_));
+    if (reload) {
+        ++stats_.reloads;
+        stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(from.a0)));
+        stats_.max_velocity = std::max(stats_.max_velocity, to_i64(from.v0));
+    }
+    const unsigned p_drop = fmt_.frac_bits + fmt_.tick_log2 + 2 - 64;
+    phases_.push_back({std::uint64_t(tr.E), to_i64(tr.j), pending_rest_, reload, to_i64(from.v0),
+                       to_i64(from.a0), reload ? static_cast<std::uint64_t>(from.p0 >> p_drop) : 0, false, adjust});
+    if (adjust) {
+        ++stats_.adjusts;
+        stats_.max_abs_adjust = std::max({stats_.max_abs_adjust, to_i64(abs128(dv)), to_i64(abs128(dh))});
+    }
+    stats_.rests += pending_rest_ ? 1 : 0;
+    pending_rest_ = false;
+    ++stats_.phases;
+    stats_.moves += tr.covered;
+    stats_.max_ticks = std::max<std::uint64_t>(stats_.max_ticks, std::uint64_t(tr.E));
+    stats_.max_abs_jerk = std::max(stats_.max_abs_jerk, to_i64(abs128(tr.j)));
+    stats_.max_phase_moves = std::max<std::uint64_t>(stats_.max_phase_moves, tr.covered);
+}
+
+// The plan's own phase from the open phase's start: the jerk in effect there,
+// up to the tick nearest the plan's next change, if every move it fires lands
+// in its window and the next move's window is still open at its end.
+int PhaseFitter::plan_phase(bool all) {
+    if (!fmt_.plan_jerk || fmt_.path_unit_mm <= 0 || fmt_.clock_hz <= 0) return 0;
+    const double T = double(std::int64_t{1} << fmt_.tick_log2);
+    while (changes_.size() >= 2 && changes_[1].at <= double(c0_) + T / 2) changes_.pop_front();
+    if (changes_.empty() || changes_.front().at > double(c0_) + T / 2) return 0;
+    if (changes_.size() < 2) return all ? 0 : -1;
+    const int r = plan_phase_try(all, false);
+    return r != 0 ? r : plan_phase_try(all, true);
+}
+
+// The plan's phase as it stands (adjust: V and H first set to the plan's).
+int PhaseFitter::plan_phase_try(bool all, bool adjust) {
+    const unsigned s = fmt_.tick_log2;
+    const std::int64_t T = std::int64_t{1} << s;
+    const std::int64_t E = std::max<std::int64_t>(1, std::llround((changes_[1].at - double(c0_)) / double(T)));
+    if (E >= std::int64_t(kMaxPhaseTicks)) return 0;
+    const double tick_s = double(T) / fmt_.clock_hz;
+    const double unit = std::ldexp(1.0 / fmt_.path_unit_mm, int(fmt_.frac_bits));   // timer units per mm
+    const i128 u = i128(std::llround(changes_.front().jerk * tick_s * tick_s * tick_s / 6.0 * unit));
+    if (!fits(u, fmt_.u_bits)) return 0;
+    State st{c0_, p0_, v0_, a0_, head_, cum_head_};
+    i128 dv = 0, dh = 0;
+    if (adjust) {
+        const double dt = (double(c0_) - changes_.front().at) / fmt_.clock_hz;
+        const double j = changes_.front().jerk;
+        const double v = changes_.front().v + changes_.front().a * dt + j * dt * dt / 2,
+                     a = changes_.front().a + j * dt;
+        dv = i128(std::llround(v * tick_s * unit)) - st.v0;
+        dh = i128(std::llround(a / 2 * tick_s * tick_s * unit)) - st.a0;
+        if (dv == 0 && dh == 0) return 0;
+        st.v0 += dv;
+        st.a0 += dh;
+    }
+    auto P = [&](std::int64_t k) {
+        const Terms t = terms(k, s);
+        return st.v0 * t.k + st.a0 * t.A + u * t.G;
+    };
+    if (!fits(st.v0, fmt_.v_bits) || !fits(st.a0, fmt_.h_bits) ||
+        !fits(st.v0 + 2 * st.a0 * i128(E) + 3 * u * i128(E) * i128(E), fmt_.v_bits) ||
+        !fits(st.a0 + 3 * u * i128(E), fmt_.h_bits))
+        return 0;
+    // Every tick's step stays >= 0.
+    auto step_at = [&](i128 m) { return st.v0 + st.a0 * (2 * m + 1) + u * (3 * m * m + 3 * m + 1); };
+    if (step_at(0) < 0 || step_at(E - 1) < 0) return 0;
+    if (u > 0) {
+        const i128 mstar = floor_div(-(2 * st.a0 + 3 * u), 6 * u);
+        for (i128 m = mstar - 1; m <= mstar + 2; ++m)
+            if (m >= 0 && m <= E - 1 && step_at(m) < 0) return 0;
+    }
+    const std::int64_t kend = E * T;
+    const i128 reach = P(kend);
+    std::size_t covered = 0;
+    for (std::size_t n = head_;; ++n) {
+        if (n >= queue_.size()) return all ? 0 : -1;   // moves to come may fire within it; the last ends greedily
+        const i128 target = ((cum_[n] - cum_head_) << s) - p0_;
+        const double tau = queue_[n];
+        const std::int64_t hi = static_cast<std::int64_t>(std::floor(tau));
+        const std::int64_t lo = static_cast<std::int64_t>(std::ceil(tau - tol_));
+        if (reach < target) {
+            // Not within this phase: its window must still be open after it.
+            if (hi <= c0_ + kend) return 0;
+            break;
+        }
+        std::int64_t kh = kend, kl = 0;   // reached(kh), not reached(kl)
+        while (kh - kl > 1) {
+            const std::int64_t mid = kl + (kh - kl) / 2;
+            if (P(mid) >= target) kh = mid; else kl = mid;
+        }
+        if (c0_ + kh > hi || c0_ + kh < lo) return 0;
+        ++covered;
+    }
+    Trial tr;
+    tr.covered = covered;
+    tr.j = u;
+    tr.E = E;
+    commit(st, tr, false, adjust, dv, dh);
+    ++stats_.plan_phases;
+    return 1;
+}
+
 // Greedy: phase after phase from the open phase's state (or, where that
 // times fewer moves per word, with v and a reloaded from the plan); `all`:
 // the queue has no more to come.
@@ -263,6 +401,14 @@ bool PhaseFitter::fit(bool all) {
     const unsigned s = fmt_.tick_log2;
     const i128 ONE = i128{1} << fmt_.frac_bits;
     while (head_ < queue_.size()) {
+        if (head_ > 4096) {   // keep the moves the plan's state is fitted to
+            const std::size_t drop = head_ - kPlanFit;
+            queue_.erase(queue_.begin(), queue_.begin() + std::ptrdiff_t(drop));
+            cum_.erase(cum_.begin(), cum_.begin() + std::ptrdiff_t(drop));
+            head_ -= drop;
+        }
+        if (const int taken = plan_phase(all); taken < 0) return true;
+        else if (taken > 0) continue;
         const State now{c0_, p0_, v0_, a0_, head_, cum_head_};
         State from = now;
         Trial tr = evaluate(now, all);
@@ -330,37 +476,7 @@ bool PhaseFitter::fit(bool all) {
                 }
             }
         }
-        State after = from;
-        advance(after, tr, &fires_);
-        c0_ = after.c0;
-        p0_ = after.p0;
-        v0_ = after.v0;
-        a0_ = after.a0;
-        cum_head_ = after.cum_head;
-        stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(a0_)));
-        stats_.max_velocity = std::max(stats_.max_velocity, to_i64(v0_));
-        if (reload) {
-            ++stats_.reloads;
-            stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(from.a0)));
-            stats_.max_velocity = std::max(stats_.max_velocity, to_i64(from.v0));
-        }
-        const unsigned p_drop = fmt_.frac_bits + fmt_.tick_log2 + 2 - 64;
-        phases_.push_back({std::uint64_t(tr.E), to_i64(tr.j), pending_rest_, reload, to_i64(from.v0),
-                           to_i64(from.a0), reload ? static_cast<std::uint64_t>(from.p0 >> p_drop) : 0});
-        stats_.rests += pending_rest_ ? 1 : 0;
-        pending_rest_ = false;
-        ++stats_.phases;
-        stats_.moves += tr.covered;
-        stats_.max_ticks = std::max<std::uint64_t>(stats_.max_ticks, std::uint64_t(tr.E));
-        stats_.max_abs_jerk = std::max(stats_.max_abs_jerk, to_i64(abs128(tr.j)));
-        stats_.max_phase_moves = std::max<std::uint64_t>(stats_.max_phase_moves, tr.covered);
-        head_ = after.head;
-        if (head_ > 4096) {   // keep the moves the plan's state is fitted to
-            const std::size_t drop = head_ - kPlanFit;
-            queue_.erase(queue_.begin(), queue_.begin() + std::ptrdiff_t(drop));
-            cum_.erase(cum_.begin(), cum_.begin() + std::ptrdiff_t(drop));
-            head_ -= drop;
-        }
+        commit(from, tr, reload);
     }
     (void)s;
     return true;
@@ -391,7 +507,7 @@ void PhaseFitter::advance(State& st, const Trial& tr, std::vector<std::int64_t>*
     }
     const Terms te = terms(E * T, s);
     const i128 P = v0 * te.k + a0 * te.A + j * te.G;
-    const i128 end = cum_[st.head + tr.covered - 1];
+    const i128 end = tr.covered > 0 ? cum_[st.head + tr.covered - 1] : st.cum_head;
     st.p0 = st.p0 + P - ((end - st.cum_head) << s);
     st.cum_head = end;
     st.v0 = v0 + 2 * a0 * i128(E) + 3 * j * i128(E) * i128(E);
@@ -414,6 +530,10 @@ std::vector<std::int64_t> simulate_phases(std::span<const TimerPhase> phases, Ph
     std::vector<std::int64_t> fires;
     for (const TimerPhase& ph : phases) {
         if (ph.rest) p = v = h = 0;
+        if (ph.adjust) {
+            v = ph.v;
+            h = ph.a;
+        }
         if (ph.reload) {
             p = i128(ph.p_top) << (format.frac_bits + format.tick_log2 + 2 - 64);
             v = ph.v;

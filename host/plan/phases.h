@@ -25,18 +25,29 @@
 //   P(k) = V k + H A(k) + u G(k),  k = M 2^s + r (0 <= r < 2^s),
 //   A(k) = 2^s M^2 + r (2M + 1),   G(k) = 2^s M^3 + r (3M^2 + 3M + 1),
 // linear in u: each move's window (never late, at most `tolerance` early, as
-// the chunks) gives u an interval, and a phase lasts while the intervals of
-// its moves meet (PhaseFitter, greedily).
+// the chunks) gives u an interval. PhaseFitter takes the feed plan's own phases
+// where they are given (PlanJerk; its jerk up to the tick nearest the next
+// change, as it stands or with V and H set back to the plan's) and otherwise a
+// greedy phase, which lasts while the intervals of its moves meet.
 #pragma once
 
 #include <cstdint>
 #include <span>
+#include <deque>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace cpstep::plan {
 
 __extension__ typedef __int128 i128;   // the timer's sums, exactly
+
+// One phase of the feed plan as the fitter may follow it (PhaseFormat::plan_jerk):
+// the absolute clock it starts at, its jerk, speed and acceleration there (mm/s^3,
+// mm/s, mm/s^2 along the path).
+struct PlanJerk {
+    double at = 0, jerk = 0, v = 0, a = 0;
+};
 
 struct PhaseFormat {
     unsigned tick_log2 = 6;    // a tick is 2^s clocks
@@ -47,6 +58,13 @@ struct PhaseFormat {
     // length in units of path_unit_mm * 2^-F, a move fires when p reaches
     // its own length (each card segment's length per move).
     double path_unit_mm = 0;
+    // Path domain, with the plan's jerk changes given to push(): each phase is
+    // first tried as the plan's own (its jerk, ending at the tick nearest the
+    // plan's next change), the greedy fit only where that misses a window.
+    bool plan_jerk = true;
+    double clock_hz = 0;       // the card's clock (plan_jerk: the jerk in the timer's units)
+    // The card's registers (rtl/cp_ptimer.v): u, V and H signed in these many bits.
+    unsigned u_bits = 24, v_bits = 56, h_bits = 40;
 };
 
 struct TimerPhase {
@@ -54,9 +72,12 @@ struct TimerPhase {
     std::int64_t jerk = 0;     // u: a sixth of the jerk, per tick^3
     bool rest = false;         // p, V and H set to zero at the phase's start
     bool reload = false;       // p, V and H set at the phase's start (after rest)
-    std::int64_t v = 0, a = 0; // V and H (a: half the acceleration)
+    std::int64_t v = 0, a = 0; // V and H (a: half the acceleration) for a reload or an adjust
     std::uint64_t p_top = 0;   // p = p_top * 2^(F + s + 2 - 64): p's top 64 of F + s + 2 bits
     bool timed = false;        // no jerk phase: one move `ticks` clocks after the phase's start, then p = 0
+    // V and H set at the phase's start, p kept (plan_jerk: the plan's own phase
+    // with its state brought back to the plan's; the card's "load V and H").
+    bool adjust = false;
     friend bool operator==(const TimerPhase&, const TimerPhase&) = default;
 };
 
@@ -67,6 +88,9 @@ struct PhaseStats {
     std::uint64_t rests = 0;
     std::uint64_t reloads = 0;
     std::uint64_t timed = 0;
+    std::uint64_t plan_phases = 0;    // the plan's own (plan_jerk)
+    std::uint64_t adjusts = 0;        // of them with V and H corrected
+    std::int64_t max_abs_adjust = 0;  // the largest correction of V or H
     std::uint64_t max_ticks = 0;
     std::int64_t max_abs_jerk = 0;
     std::int64_t max_abs_accel = 0;   // at phase ends
@@ -85,7 +109,8 @@ public:
     // earlier move's); rest_at >= 0: the motion starts from rest at that clock
     // (before the first of them), else it continues from the moves before.
     // False with error() when no phase can time a move within its window.
-    bool push(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at = -1);
+    bool push(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at = -1,
+              std::span<const PlanJerk> plan = {});
     // Every move pushed is fitted (the last phase closed).
     bool finish();
 
@@ -114,6 +139,11 @@ private:
     [[nodiscard]] Trial evaluate(const State& st, bool all, std::size_t cap = kNoCap) const;
     void advance(State& st, const Trial& tr, std::vector<std::int64_t>* fires) const;
     bool plan_state(i128& p, i128& v, i128& h) const;
+    // The plan's own phase from the open phase's start: 1 taken, 0 not (the
+    // greedy fit then), -1 wait for more moves.
+    int plan_phase(bool all);
+    int plan_phase_try(bool all, bool adjust);
+    void commit(const State& from, const Trial& tr, bool reload, bool adjust = false, i128 dv = 0, i128 dh = 0);
 
     PhaseFormat fmt_;
     double tol_;
@@ -121,6 +151,7 @@ private:
     std::int64_t c0_ = 0;
     i128 p0_ = 0, v0_ = 0, a0_ = 0;
     bool pending_rest_ = false;   // the open phase starts from rest
+    std::deque<PlanJerk> changes_;   // the plan's phases to come (a change of jerk or of state)
     std::vector<double> queue_;   // ideal times not yet in a closed phase
     std::vector<i128> cum_;       // each queued move's end on the path (units), from the job's start
     i128 cum_head_ = 0;           // the end of the move before queue_[head_]

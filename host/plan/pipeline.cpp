@@ -70,7 +70,8 @@ struct PlanStream::Impl {
     std::string file;
     ChunkLimits lim;
     double tol;
-    std::function<void(std::span<const double>, std::span<const double>, double)> on_move_times;
+    std::function<void(std::span<const double>, std::span<const double>, double, std::span<const PlanJerk>)>
+        on_move_times;
     double arc_path_done = 0;   // on_move_times: the path length of the arc's pieces so far
     StepSegmenter segmenter;
     FeedPlanner feeds;
@@ -118,6 +119,12 @@ struct PlanStream::Impl {
           feeds(machine, file) {
         conics = m.planner.arcs == ArcMode::conic && m.card.conic_width > 0;
         limit_s = std::ldexp(1.0, 62) / m.card.clock_hz;
+    }
+
+    // on_move_times: a feed's jerk changes, absolute clocks.
+    void jerk_changes(const PlannedSegment& f, std::vector<PlanJerk>& out) const {
+        for (const Phase& ph : f.profile.phases)
+            if (ph.duration > 0) out.push_back({(f.t_start + ph.t0) * m.card.clock_hz, ph.jerk, ph.v0, ph.a0});
     }
 
     [[nodiscard]] bool failed() const {
@@ -306,10 +313,14 @@ struct PlanStream::Impl {
                         last = here;
                     }
                     arc_path_done = last;
+                    std::vector<PlanJerk> changes;
+                    if (p == 0)
+                        for (const PlannedSegment& f : in.feeds) jerk_changes(f, changes);
                     on_move_times(piece.walk->ideal, lengths,
                                   p == 0 && in.feeds.front().profile.v_entry == 0
                                       ? in.feeds.front().t_start * m.card.clock_hz
-                                      : -1.0);
+                                      : -1.0,
+                                  changes);
                 }
                 auto chunks = compress(piece.walk->ideal, prev, tol, lim);
                 if (!chunks.ok()) {
@@ -365,9 +376,12 @@ struct PlanStream::Impl {
             const std::int64_t before = prev;
             if (on_move_times) {
                 const std::vector<double> lengths(ideal.size(), plan[i].length / double(total));
+                std::vector<PlanJerk> changes;
+                if (part.first_move == 0) jerk_changes(plan[i], changes);
                 on_move_times(ideal, lengths,
                               part.first_move == 0 && plan[i].profile.v_entry == 0 ? plan[i].t_start * m.card.clock_hz
-                                                                                 : -1.0);
+                                                                                 : -1.0,
+                              changes);
             }
             auto chunks = compress(ideal, prev, tol, lim);
             if (!chunks.ok()) {

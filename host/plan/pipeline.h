@@ -8,6 +8,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "plan/arc_fit.h"
@@ -15,6 +16,7 @@
 #include "plan/conic_arc.h"
 #include "plan/gcode.h"
 #include "plan/machine.h"
+#include "plan/phases.h"
 #include "plan/planner.h"
 #include "plan/reduce.h"
 #include "plan/segments.h"
@@ -66,7 +68,10 @@ struct PlanOptions {
     // times (absolute clocks) as the card loop times them, each move's length
     // along the path (mm), and the clock at which its motion starts from rest
     // (-1: it continues). Pause moves are not shown.
-    std::function<void(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at)>
+    // With them, the feed plan's phases that the batch's motion brings (each
+    // phase of its step segments' profiles), once per step segment.
+    std::function<void(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at,
+                       std::span<const PlanJerk> plan)>
         on_move_times;
 };
 

@@ -62,21 +62,30 @@ using Rng = std::mt19937_64;
 uint64_t pick(Rng& rng, uint64_t lo, uint64_t hi) { return std::uniform_int_distribution<uint64_t>(lo, hi)(rng); }
 bool chance(Rng& rng, unsigned pct) { return pick(rng, 0, 99) < pct; }
 
-// A phase's words, W0 last: {sel, data}.
-std::vector<std::pair<uint32_t, uint32_t>> phase_words(bool reload, bool rest, bool timed, uint32_t ticks, int64_t u,
-                                                       uint64_t p_top, int64_t v, int64_t h) {
+// A phase's words, W0 last: {sel, data}. kind = {load V and H, rest, timed, load p}.
+std::vector<std::pair<uint32_t, uint32_t>> phase_words(uint32_t kind, uint32_t ticks, int64_t u, uint64_t p_top,
+                                                       int64_t v, int64_t h) {
   std::vector<std::pair<uint32_t, uint32_t>> w;
   w.push_back({1, uint32_t(u)});
-  if (reload) {
+  if (kind & 1) {
     w.push_back({2, uint32_t(p_top)});
     w.push_back({3, uint32_t(p_top >> 32)});
+  }
+  if (kind & 8) {
     w.push_back({4, uint32_t(v)});
     w.push_back({5, uint32_t(uint64_t(v) >> 32)});
     w.push_back({6, uint32_t(h)});
     w.push_back({7, uint32_t(uint64_t(h) >> 32)});
   }
-  w.push_back({0, uint32_t(reload) << 31 | uint32_t(rest) << 30 | uint32_t(timed) << 29 | (ticks & 0xFFFFFF)});
+  w.push_back({0, (kind & 15) << 28 | (ticks & 0xFFFFFF)});
   return w;
+}
+
+// The card's words for one of the host's phases.
+std::vector<std::pair<uint32_t, uint32_t>> host_phase_words(const plan::TimerPhase& ph) {
+  const uint32_t kind = uint32_t(ph.reload || ph.adjust) << 3 | uint32_t(ph.rest) << 2 | uint32_t(ph.timed) << 1 |
+                        uint32_t(ph.reload);
+  return phase_words(kind, uint32_t(ph.ticks), ph.jerk, ph.p_top, ph.v, ph.a);
 }
 
 TEST(Ptimer, RandomPhasesMatchTheModel) {
@@ -85,7 +94,7 @@ TEST(Ptimer, RandomPhasesMatchTheModel) {
   ls.reset();
   model::CpPtimerIn in;
   std::deque<std::pair<uint32_t, uint32_t>> words;
-  uint64_t fired = 0, late = 0, starves = 0, loads[8] = {}, timed_fired = 0;
+  uint64_t fired = 0, late = 0, starves = 0, loads[16] = {}, timed_fired = 0;
   model::CpPtimerOut last;
   uint64_t held_fire = 0;
   for (int c = 0; c < 5000000; ++c) {
@@ -93,17 +102,14 @@ TEST(Ptimer, RandomPhasesMatchTheModel) {
     in.clear = pick(rng, 0, 199999) == 0;
     in.adv = chance(rng, 92);
     if (words.empty() && chance(rng, 30)) {
-      const uint32_t r = uint32_t(pick(rng, 0, 99));
-      // Kinds: reload, rest, timed, rest and timed, rest and reload (reload wins), carry.
-      const bool both = r >= 40 && r < 45;
-      const bool reload = r < 15 || both, rest = (r >= 15 && r < 30) || both,
-                 timed = (r >= 30 && r < 40) || (r >= 25 && r < 30);
+      // Kinds: carry (half the phases), else any combination of the four bits.
+      const uint32_t kind = chance(rng, 50) ? 0 : uint32_t(pick(rng, 1, 15));
       const uint32_t ticks = chance(rng, 5) ? 0 : chance(rng, 80) ? uint32_t(pick(rng, 1, 6)) : uint32_t(pick(rng, 7, 300));
       // Steps of about 2^50..2^56 against lengths of 2^52..2^58: moves a few clocks to a few hundred apart.
       const int64_t u = chance(rng, 10) ? int64_t(int32_t(rng())) : int64_t(pick(rng, 0, 1u << 22)) - (1 << 21);
       const int64_t v = chance(rng, 5) ? int64_t(rng()) : int64_t(pick(rng, 0, uint64_t{1} << 54));
       const int64_t h = chance(rng, 5) ? int64_t(rng()) : int64_t(pick(rng, 0, uint64_t{1} << 38)) - (int64_t{1} << 37);
-      auto w = phase_words(reload, rest, timed, ticks, u, rng(), v, h);
+      auto w = phase_words(kind, ticks, u, rng(), v, h);
       if (chance(rng, 20)) std::shuffle(w.begin(), w.end() - 1, rng);   // W0 stays last
       if (chance(rng, 3)) std::shuffle(w.begin(), w.end(), rng);        // W0 early: later words go elsewhere or nowhere
       for (auto& x : w) words.push_back(x);
@@ -125,64 +131,67 @@ TEST(Ptimer, RandomPhasesMatchTheModel) {
     const model::CpPtimerOut out = ls.step(in);
     fired += out.due && in.fire;
     late += out.due && !in.fire;
-    timed_fired += out.due && in.fire && (out.kind & 1);
+    timed_fired += out.due && in.fire && (out.kind & 2);
     starves += out.starved && !last.starved;
-    if (out.active && (!last.active || out.kind != last.kind)) ++loads[out.kind & 7];
+    if (out.active && (!last.active || out.kind != last.kind)) ++loads[out.kind & 15];
     last = out;
   }
-  std::printf("fired %llu, late %llu, starves %llu, timed fired %llu, loads by kind %llu %llu %llu %llu %llu %llu\n",
-              (unsigned long long)fired, (unsigned long long)late, (unsigned long long)starves,
-              (unsigned long long)timed_fired, (unsigned long long)loads[0], (unsigned long long)loads[1],
-              (unsigned long long)loads[2], (unsigned long long)loads[3], (unsigned long long)loads[4],
-              (unsigned long long)loads[6]);
+  std::printf("fired %llu, late %llu, starves %llu, timed fired %llu\n", (unsigned long long)fired,
+              (unsigned long long)late, (unsigned long long)starves, (unsigned long long)timed_fired);
   EXPECT_GT(fired, 20000u);
   EXPECT_GT(late, 1000u);
   EXPECT_GT(starves, 50u);
   EXPECT_GT(timed_fired, 50u);
-  for (unsigned k : {0u, 1u, 2u, 3u, 4u, 6u}) EXPECT_GT(loads[k], 50u) << "phases of kind " << k;
+  for (unsigned k = 0; k < 16; ++k) EXPECT_GT(loads[k], 10u) << "phases of kind " << k;
 }
 
-// The host's phases for two S-curves in moves (a stop between), written to the
-// timer as the buffer frees: every move due at the fitter's clock, in both.
+// The host's phases for two S-curves (a stop between) along a path of 1 mm moves,
+// the plan's own phases given (corrected where needed), written to the timer as
+// its buffer frees: every move due at the fitter's clock, in both.
 TEST(Ptimer, TheHostsPhasesFireEveryMoveWhereTheFitterSays) {
-  const plan::PhaseFormat fmt{6, 60, true, false, 0.0};
+  plan::PhaseFormat fmt{6, 60, true, false, 1.0};
   const double tol = 40, hz = 40e6;
+  fmt.clock_hz = hz;
   plan::PhaseFitter fitter(fmt, tol);
+  std::vector<double> all;
   auto curve = [&](double L, double vmax, double start_s) {
     const auto p = plan::make_profile(L, 0, 0, vmax, 40000, 160000);
     EXPECT_TRUE(p.has_value());
     std::vector<double> t;
     for (int n = 1; n <= int(L); ++n)
       t.push_back((start_s + (n == int(L) ? p->duration : p->time_at(double(n)))) * hz);
-    return t;
+    std::vector<plan::PlanJerk> plan;
+    for (const plan::Phase& ph : p->phases)
+      if (ph.duration > 0) plan.push_back({(start_s + ph.t0) * hz, ph.jerk, ph.v0, ph.a0});
+    const std::vector<double> lengths(t.size(), 1.0);
+    EXPECT_TRUE(fitter.push(t, lengths, start_s * hz, plan)) << fitter.error();
+    all.insert(all.end(), t.begin(), t.end());
+    return t.back() / hz;
   };
-  const auto a = curve(300, 6000, 0.0);
-  const double b_start = a.back() / hz + 0.01;
-  const auto b = curve(120, 3000, b_start);
-  ASSERT_TRUE(fitter.push(a, {}, 0.0));
-  ASSERT_TRUE(fitter.push(b, {}, b_start * hz));
+  const double a_end = curve(300, 6000, 0.0);
+  const double b_end = curve(120, 3000, a_end + 0.01);
   ASSERT_TRUE(fitter.finish()) << fitter.error();
   const auto& want = fitter.fire_clocks();
-  ASSERT_EQ(want.size(), a.size() + b.size());
+  ASSERT_EQ(want.size(), all.size());
+  EXPECT_GT(fitter.stats().plan_phases, 4u) << "the plan's own phases";
 
   Lockstep<PtimerPort> ls("ptimer_host");
   ls.reset();
   model::CpPtimerIn in;
-  in.len = uint64_t{1} << 60;
+  in.len = uint64_t(plan::move_length(1.0, fmt));
   std::deque<std::pair<uint32_t, uint32_t>> words;
   std::size_t next_phase = 0;
   const auto& phases = fitter.phases();
   int64_t start = -1;
   std::vector<int64_t> got;
-  for (int64_t c = 0; c < int64_t(b.back()) + 1000 && got.size() < want.size(); ++c) {
+  for (int64_t c = 0; c < int64_t(b_end * hz) + 1000 && got.size() < want.size(); ++c) {
     // The model tells this cycle's outputs before the inputs that depend on them
     // (the runner fires a due move in its cycle; the outputs do not depend on fire_i).
     ls.model().in = in;
     const model::CpPtimerOut now = ls.model().outputs();
     if (words.empty() && now.ready && next_phase < phases.size()) {
       const plan::TimerPhase& ph = phases[next_phase++];
-      for (auto& w : phase_words(ph.reload, ph.rest, ph.timed, uint32_t(ph.ticks), ph.jerk, ph.p_top, ph.v, ph.a))
-        words.push_back(w);
+      for (auto& w : host_phase_words(ph)) words.push_back(w);
     }
     in.wr = !words.empty();
     if (in.wr) {

@@ -6,6 +6,10 @@
 //   plan_figures bounds MACHINE JOB   planned time beside the lower bound (whole job and its
 //                                     feed moves), groups, lookahead, windowed - whole-job time
 //   plan_figures speed MACHINE JOB [reps]  planning throughput, G-code lines per second
+//   plan_figures phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy]]  moves timed by phases
+//                                     of constant jerk (plan/phases.h): ticks of 2^S clocks, F
+//                                     fractional bits, the path in UNIT mm (0: moves); without
+//                                     reloads; the greedy fit alone (not the plan's phases)
 #include <cstdio>
 #include <numeric>
 #include <random>
@@ -120,7 +124,8 @@ int chunks(const char* mpath, const char* jpath, const char* board = nullptr, un
 
 // Moves timed by phases of constant jerk (plan/phases.h): phases, rests and the
 // registers' ranges for the job on BOARD, ticks of 2^S clocks, F fractional bits.
-int phases(const char* mpath, const char* jpath, const char* board, unsigned s, unsigned f, double unit_mm) {
+int phases(const char* mpath, const char* jpath, const char* board, unsigned s, unsigned f, double unit_mm,
+           bool reload, bool plan_jerk) {
     auto m = load_bound(mpath, board);
     if (!m.ok()) { fmt::print(stderr, "{}\n", join(m.errors)); return 1; }
     auto job = load_gcode(jpath, gcode_options(*m));
@@ -129,21 +134,27 @@ int phases(const char* mpath, const char* jpath, const char* board, unsigned s, 
     format.tick_log2 = s;
     format.frac_bits = f;
     format.path_unit_mm = unit_mm;
+    format.reload = reload;
+    format.clock_hz = m->card.clock_hz;
+    format.plan_jerk = plan_jerk;
     PhaseFitter fitter(format, m->chunk_tolerance_cycles());
     std::uint64_t batches = 0;
     PlanOptions o;
-    o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths, double rest_at) {
+    o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths, double rest_at,
+                          std::span<const PlanJerk> changes) {
         ++batches;
-        fitter.push(ideal, lengths, rest_at);
+        fitter.push(ideal, lengths, rest_at, changes);
     };
     auto p = plan_job(*job, *m, o);
     if (!p.ok()) { fmt::print(stderr, "{}\n", join(p.errors)); return 1; }
     if (!fitter.finish()) { fmt::print(stderr, "{}: {}\n", jpath, fitter.error()); return 1; }
     const PhaseStats& st = fitter.stats();
-    const std::uint64_t bytes = 8 * (st.phases - st.reloads - st.timed) + 28 * st.reloads + 4 * st.timed;
-    fmt::print("{} {} s={} F={} unit={}: bytes={} card_segments={} moves={} chunks={} phases={} rests={} reloads={} timed={} moves/phase={:.1f} "
+    // Bytes in rtl/cp_ptimer.v's words: W0 and u (8), V and H (16 more), p (8 more);
+    // a timed move W0 alone.
+    const std::uint64_t bytes = 8 * (st.phases - st.timed) + 16 * (st.adjusts + st.reloads) + 8 * st.reloads + 4 * st.timed;
+    fmt::print("{} {} s={} F={} unit={}: bytes={} card_segments={} moves={} chunks={} phases={} plan_phases={} adjusts={} (max 2^{:.1f}) rests={} reloads={} timed={} moves/phase={:.1f} "
                "max_ticks={} max|j|={} (2^{:.1f}) max|a|=2^{:.1f} max_v=2^{:.1f} max_phase_moves={}\n",
-               jpath, board, s, f, unit_mm, bytes, p->stats.card_segments, st.moves, p->stats.chunks, st.phases, st.rests, st.reloads, st.timed,
+               jpath, board, s, f, unit_mm, bytes, p->stats.card_segments, st.moves, p->stats.chunks, st.phases, st.plan_phases, st.adjusts, std::log2(double(std::max<std::int64_t>(1, st.max_abs_adjust))), st.rests, st.reloads, st.timed,
                double(st.moves) / double(std::max<std::uint64_t>(1, st.phases)), st.max_ticks, st.max_abs_jerk,
                std::log2(double(std::max<std::int64_t>(1, st.max_abs_jerk))),
                std::log2(double(std::max<std::int64_t>(1, st.max_abs_accel))),
@@ -351,12 +362,18 @@ int main(int argc, char** argv) {
     if (cmd == "chunks" && argc == 4) return chunks(argv[2], argv[3]);
     if (cmd == "chunks" && argc == 6) return chunks(argv[2], argv[3], argv[4], unsigned(std::atoi(argv[5])));
     if (cmd == "split") return split();
-    if (cmd == "phases" && (argc == 7 || argc == 8))
+    if (cmd == "phases" && argc >= 7) {
+        bool reload = true, plan_jerk = true;
+        for (int a = 8; a < argc; ++a) {
+            reload = reload && std::string(argv[a]) != "noreload";
+            plan_jerk = plan_jerk && std::string(argv[a]) != "greedy";
+        }
         return phases(argv[2], argv[3], argv[4], unsigned(std::atoi(argv[5])), unsigned(std::atoi(argv[6])),
-                      argc == 8 ? std::atof(argv[7]) : 0.0);
+                      argc >= 8 ? std::atof(argv[7]) : 0.0, reload, plan_jerk);
+    }
     if (cmd == "bounds" && argc == 4) return bounds(argv[2], argv[3]);
     if (cmd == "fingerprint" && argc == 4) return fingerprint(argv[2], argv[3]);
     if (cmd == "speed" && argc >= 4) return speed(argv[2], argv[3], argc > 4 ? std::atoi(argv[4]) : 5);
-    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps] | fingerprint MACHINE JOB\n");
+    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps] | fingerprint MACHINE JOB | phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy]]\n");
     return 2;
 }

@@ -104,7 +104,7 @@ struct JobPhases {
     double tol = 0;   // cycles, the bound machine's
 };
 
-void fit_job(const char* machine, const char* job_file, const PhaseFormat& fmt, JobPhases& out, PhaseFitter*& fitter) {
+void fit_job(const char* machine, const char* job_file, PhaseFormat& fmt, JobPhases& out, PhaseFitter*& fitter) {
     auto loaded = load_machine(kDir + "/machines/" + machine);
     ASSERT_TRUE(loaded.ok()) << join(loaded.errors);
     const cpstep::builds::Build& b = *cpstep::builds::find(cpstep::builds::kDefaultBoard);
@@ -113,12 +113,14 @@ void fit_job(const char* machine, const char* job_file, const PhaseFormat& fmt, 
     auto job = load_gcode(kDir + "/jobs/" + job_file);
     ASSERT_TRUE(job.ok()) << join(job.errors);
     out.tol = m.chunk_tolerance_cycles();
+    fmt.clock_hz = m.card.clock_hz;   // the plan's phases in the timer's units
     fitter = new PhaseFitter(fmt, out.tol);
     PlanOptions o;
-    o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at) {
+    o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at,
+                          std::span<const PlanJerk> changes) {
         out.ideal.insert(out.ideal.end(), ideal.begin(), ideal.end());
         for (double l : lengths_mm) out.lengths.push_back(move_length(l, fmt));
-        ASSERT_TRUE(fitter->push(ideal, lengths_mm, rest_at)) << fitter->error();
+        ASSERT_TRUE(fitter->push(ideal, lengths_mm, rest_at, changes)) << fitter->error();
     };
     auto plan = plan_job(*job, m, o);
     ASSERT_TRUE(plan.ok()) << join(plan.errors);
@@ -128,8 +130,11 @@ void fit_job(const char* machine, const char* job_file, const PhaseFormat& fmt, 
 
 class ExamplePhases : public ::testing::TestWithParam<const char*> {};
 
-TEST_P(ExamplePhases, EveryMoveFiresInItsWindow) {
-    const PhaseFormat fmt{6, 60, true, true, 0.0125};
+// The greedy fit alone (the plan's phases not given), and the plan's own
+// phases first, corrected where needed, without reloads.
+TEST_P(ExamplePhases, GreedyFitFiresEveryMoveInItsWindow) {
+    PhaseFormat fmt{6, 60, true, false, 0.0125};
+    fmt.plan_jerk = false;
     JobPhases jp;
     PhaseFitter* f = nullptr;
     fit_job("seed002.toml", GetParam(), fmt, jp, f);
@@ -141,6 +146,24 @@ TEST_P(ExamplePhases, EveryMoveFiresInItsWindow) {
                 static_cast<unsigned long long>(f->stats().reloads), static_cast<unsigned long long>(f->stats().timed));
     // What the measurement in docs/BENCHMARKS.md rests on: fewer phases than chunks.
     EXPECT_LT(f->phases().size(), jp.chunks);
+}
+
+TEST_P(ExamplePhases, ThePlansPhasesWithoutReloadsFireEveryMoveInItsWindow) {
+    PhaseFormat fmt{6, 60, false, false, 0.0125};
+    JobPhases jp;
+    PhaseFitter* f = nullptr;
+    fit_job("seed002.toml", GetParam(), fmt, jp, f);
+    std::unique_ptr<PhaseFitter> owned(f);
+    ASSERT_TRUE(f);
+    check_fires(jp.ideal, jp.lengths, *f, fmt, jp.tol);
+    const PhaseStats& st = f->stats();
+    std::printf("%s: %zu moves, %llu chunks, %llu phases (%llu the plan's, %llu adjusted, %llu timed)\n", GetParam(),
+                jp.ideal.size(), static_cast<unsigned long long>(jp.chunks), static_cast<unsigned long long>(st.phases),
+                static_cast<unsigned long long>(st.plan_phases), static_cast<unsigned long long>(st.adjusts),
+                static_cast<unsigned long long>(st.timed));
+    EXPECT_EQ(st.reloads, 0u);
+    EXPECT_GT(st.plan_phases, st.phases / 3) << "the plan's own phases should carry most of the job";
+    EXPECT_LT(st.phases, jp.chunks);
 }
 
 INSTANTIATE_TEST_SUITE_P(Jobs, ExamplePhases, ::testing::Values("tab.ngc", "tight_arcs.ngc", "naca0025.ngc"),
