@@ -96,16 +96,17 @@ TEST(Phases, PathLengthsPerMoveChangeBetweenBatches) {
 }
 
 // Every move of a job, as the card loop times it, through the fitter (path
-// domain, the default board).
+// domain, the default board); every fire checked.
 struct JobPhases {
     std::vector<double> ideal;
     std::vector<i128> lengths;
     std::uint64_t chunks = 0;
     double tol = 0;   // cycles, the bound machine's
+    std::unique_ptr<PhaseFitter> fitter;
 };
 
-void fit_job(const char* machine, const char* job_file, PhaseFormat& fmt, JobPhases& out, PhaseFitter*& fitter) {
-    auto loaded = load_machine(kDir + "/machines/" + machine);
+void fit_job(const char* job_file, PhaseFormat& fmt, JobPhases& out) {
+    auto loaded = load_machine(kDir + "/machines/seed002.toml");
     ASSERT_TRUE(loaded.ok()) << join(loaded.errors);
     const cpstep::builds::Build& b = *cpstep::builds::find(cpstep::builds::kDefaultBoard);
     Machine m = *loaded;
@@ -114,18 +115,25 @@ void fit_job(const char* machine, const char* job_file, PhaseFormat& fmt, JobPha
     ASSERT_TRUE(job.ok()) << join(job.errors);
     out.tol = m.chunk_tolerance_cycles();
     fmt.clock_hz = m.card.clock_hz;   // the plan's phases in the timer's units
-    fitter = new PhaseFitter(fmt, out.tol);
+    out.fitter = std::make_unique<PhaseFitter>(fmt, out.tol);
     PlanOptions o;
     o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at,
                           std::span<const PlanJerk> changes) {
         out.ideal.insert(out.ideal.end(), ideal.begin(), ideal.end());
         for (double l : lengths_mm) out.lengths.push_back(move_length(l, fmt));
-        ASSERT_TRUE(fitter->push(ideal, lengths_mm, rest_at, changes)) << fitter->error();
+        ASSERT_TRUE(out.fitter->push(ideal, lengths_mm, rest_at, changes)) << out.fitter->error();
     };
     auto plan = plan_job(*job, m, o);
     ASSERT_TRUE(plan.ok()) << join(plan.errors);
-    ASSERT_TRUE(fitter->finish()) << fitter->error();
+    ASSERT_TRUE(out.fitter->finish()) << out.fitter->error();
     out.chunks = plan->stats.chunks;
+    check_fires(out.ideal, out.lengths, *out.fitter, fmt, out.tol);
+    const PhaseStats& st = out.fitter->stats();
+    std::printf("%s: %zu moves, %llu chunks, %llu phases (%llu the plan's, %llu adjusted, %llu reloads, %llu timed)\n",
+                job_file, out.ideal.size(), static_cast<unsigned long long>(out.chunks),
+                static_cast<unsigned long long>(st.phases), static_cast<unsigned long long>(st.plan_phases),
+                static_cast<unsigned long long>(st.adjusts), static_cast<unsigned long long>(st.reloads),
+                static_cast<unsigned long long>(st.timed));
 }
 
 class ExamplePhases : public ::testing::TestWithParam<const char*> {};
@@ -136,31 +144,16 @@ TEST_P(ExamplePhases, GreedyFitFiresEveryMoveInItsWindow) {
     PhaseFormat fmt{6, 60, true, false, 0.0125};
     fmt.plan_jerk = false;
     JobPhases jp;
-    PhaseFitter* f = nullptr;
-    fit_job("seed002.toml", GetParam(), fmt, jp, f);
-    std::unique_ptr<PhaseFitter> owned(f);
-    ASSERT_TRUE(f);
-    check_fires(jp.ideal, jp.lengths, *f, fmt, jp.tol);
-    std::printf("%s: %zu moves, %llu chunks, %zu phases (%llu reloads, %llu timed)\n", GetParam(), jp.ideal.size(),
-                static_cast<unsigned long long>(jp.chunks), f->phases().size(),
-                static_cast<unsigned long long>(f->stats().reloads), static_cast<unsigned long long>(f->stats().timed));
+    ASSERT_NO_FATAL_FAILURE(fit_job(GetParam(), fmt, jp));
     // What the measurement in docs/BENCHMARKS.md rests on: fewer phases than chunks.
-    EXPECT_LT(f->phases().size(), jp.chunks);
+    EXPECT_LT(jp.fitter->phases().size(), jp.chunks);
 }
 
 TEST_P(ExamplePhases, ThePlansPhasesWithoutReloadsFireEveryMoveInItsWindow) {
     PhaseFormat fmt{6, 60, false, false, 0.0125};
     JobPhases jp;
-    PhaseFitter* f = nullptr;
-    fit_job("seed002.toml", GetParam(), fmt, jp, f);
-    std::unique_ptr<PhaseFitter> owned(f);
-    ASSERT_TRUE(f);
-    check_fires(jp.ideal, jp.lengths, *f, fmt, jp.tol);
-    const PhaseStats& st = f->stats();
-    std::printf("%s: %zu moves, %llu chunks, %llu phases (%llu the plan's, %llu adjusted, %llu timed)\n", GetParam(),
-                jp.ideal.size(), static_cast<unsigned long long>(jp.chunks), static_cast<unsigned long long>(st.phases),
-                static_cast<unsigned long long>(st.plan_phases), static_cast<unsigned long long>(st.adjusts),
-                static_cast<unsigned long long>(st.timed));
+    ASSERT_NO_FATAL_FAILURE(fit_job(GetParam(), fmt, jp));
+    const PhaseStats& st = jp.fitter->stats();
     EXPECT_EQ(st.reloads, 0u);
     EXPECT_GT(st.plan_phases, st.phases / 3) << "the plan's own phases should carry most of the job";
     EXPECT_LT(st.phases, jp.chunks);
