@@ -14,7 +14,9 @@
 #include "common/lockstep.h"
 #include "core/core_bench.h"
 #include "model/cp_ptimer.h"
+#include "cpstep/builds.h"
 #include "plan/phases.h"
+#include "plan/pipeline.h"
 #include "plan/profile.h"
 #include "sim/dut.h"
 
@@ -145,6 +147,40 @@ TEST(Ptimer, RandomPhasesMatchTheModel) {
   for (unsigned k = 0; k < 16; ++k) EXPECT_GT(loads[k], 10u) << "phases of kind " << k;
 }
 
+// The host's phases written to the timer (RTL and twin in lockstep) as its buffer
+// frees, each move fired in its cycle with its own length (lens[n]): the clock of
+// each move's due, counted from the first phase's load, and whether the timer
+// ran out of phases before the last move.
+void run_host_phases(const std::string& name, const std::vector<plan::TimerPhase>& phases,
+                     const std::vector<uint64_t>& lens, int64_t max_cycles, std::vector<int64_t>& got) {
+  Lockstep<PtimerPort> ls(name);
+  ls.reset();
+  model::CpPtimerIn in;
+  std::deque<std::pair<uint32_t, uint32_t>> words;
+  std::size_t next_phase = 0;
+  int64_t start = -1;
+  for (int64_t c = 0; got.size() < lens.size() && (start < 0 || c - start < max_cycles); ++c) {
+    in.len = lens[std::min(got.size(), lens.size() - 1)];
+    // The model tells this cycle's outputs before the inputs that depend on them
+    // (the runner fires a due move in its cycle; the outputs do not depend on fire_i).
+    ls.model().in = in;
+    const model::CpPtimerOut now = ls.model().outputs();
+    if (words.empty() && now.ready && next_phase < phases.size())
+      for (auto& w : host_phase_words(phases[next_phase++])) words.push_back(w);
+    in.wr = !words.empty();
+    if (in.wr) {
+      in.sel = words.front().first;
+      in.data = words.front().second;
+      words.pop_front();
+    }
+    in.fire = now.due;
+    const model::CpPtimerOut out = ls.step(in);
+    if (out.active && start < 0) start = c;
+    if (out.due) got.push_back(c - start);
+    ASSERT_FALSE(out.starved && got.size() < lens.size()) << "the timer ran out of phases at cycle " << c;
+  }
+}
+
 // The host's phases for two S-curves (a stop between) along a path of 1 mm moves,
 // the plan's own phases given (corrected where needed), written to the timer as
 // its buffer frees: every move due at the fitter's clock, in both.
@@ -175,36 +211,43 @@ TEST(Ptimer, TheHostsPhasesFireEveryMoveWhereTheFitterSays) {
   ASSERT_EQ(want.size(), all.size());
   EXPECT_GT(fitter.stats().plan_phases, 4u) << "the plan's own phases";
 
-  Lockstep<PtimerPort> ls("ptimer_host");
-  ls.reset();
-  model::CpPtimerIn in;
-  in.len = uint64_t(plan::move_length(1.0, fmt));
-  std::deque<std::pair<uint32_t, uint32_t>> words;
-  std::size_t next_phase = 0;
-  const auto& phases = fitter.phases();
-  int64_t start = -1;
   std::vector<int64_t> got;
-  for (int64_t c = 0; c < int64_t(b_end * hz) + 1000 && got.size() < want.size(); ++c) {
-    // The model tells this cycle's outputs before the inputs that depend on them
-    // (the runner fires a due move in its cycle; the outputs do not depend on fire_i).
-    ls.model().in = in;
-    const model::CpPtimerOut now = ls.model().outputs();
-    if (words.empty() && now.ready && next_phase < phases.size()) {
-      const plan::TimerPhase& ph = phases[next_phase++];
-      for (auto& w : host_phase_words(ph)) words.push_back(w);
-    }
-    in.wr = !words.empty();
-    if (in.wr) {
-      in.sel = words.front().first;
-      in.data = words.front().second;
-      words.pop_front();
-    }
-    in.fire = now.due;
-    const model::CpPtimerOut out = ls.step(in);
-    if (out.active && start < 0) start = c;
-    if (out.due) got.push_back(c - start);
-    ASSERT_FALSE(out.starved && got.size() < want.size()) << "the timer ran out of phases at cycle " << c;
-  }
+  ASSERT_NO_FATAL_FAILURE(run_host_phases("ptimer_host", fitter.phases(),
+                                          std::vector<uint64_t>(want.size(), uint64_t(plan::move_length(1.0, fmt))),
+                                          int64_t(b_end * hz) + 1000, got));
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t n = 0; n < want.size(); ++n) ASSERT_EQ(got[n], want[n]) << "move " << n;
+}
+
+// An example job (tab.ngc on the default board, seed002.toml): the host's
+// phases for it, the plan's own where they fit, through the RTL and its twin,
+// each move's length from its card segment: every move due at the fitter's clock.
+TEST(Ptimer, AnExampleJobsMovesFireWhereTheFitterSays) {
+  auto loaded = plan::load_machine(std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/seed002.toml");
+  ASSERT_TRUE(loaded.ok());
+  const builds::Build& b = *builds::find(builds::kDefaultBoard);
+  plan::Machine m = *loaded;
+  ASSERT_TRUE(plan::bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw}).empty());
+  auto job = plan::load_gcode(std::string(CPSTEP_SOURCE_DIR) + "/examples/jobs/tab.ngc");
+  ASSERT_TRUE(job.ok());
+  plan::PhaseFormat fmt{6, 60, true, false, 0.0125};
+  fmt.clock_hz = m.card.clock_hz;
+  plan::PhaseFitter fitter(fmt, m.chunk_tolerance_cycles());
+  std::vector<uint64_t> lens;
+  plan::PlanOptions o;
+  o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at,
+                        std::span<const plan::PlanJerk> changes) {
+    for (double l : lengths_mm) lens.push_back(uint64_t(plan::move_length(l, fmt)));
+    EXPECT_TRUE(fitter.push(ideal, lengths_mm, rest_at, changes)) << fitter.error();
+  };
+  ASSERT_TRUE(plan::plan_job(*job, m, o).ok());
+  ASSERT_TRUE(fitter.finish()) << fitter.error();
+  const auto& want = fitter.fire_clocks();
+  ASSERT_EQ(want.size(), lens.size());
+  EXPECT_GT(fitter.stats().plan_phases, fitter.stats().phases / 2);
+
+  std::vector<int64_t> got;
+  ASSERT_NO_FATAL_FAILURE(run_host_phases("ptimer_tab", fitter.phases(), lens, want.back() + 1000, got));
   ASSERT_EQ(got.size(), want.size());
   for (std::size_t n = 0; n < want.size(); ++n) ASSERT_EQ(got[n], want[n]) << "move " << n;
 }
