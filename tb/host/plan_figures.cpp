@@ -152,9 +152,9 @@ int phases(const char* mpath, const char* jpath, const char* board, unsigned s, 
     // Bytes in rtl/cp_ptimer.v's words: W0 and u (8), V and H (16 more), p (8 more);
     // a timed move W0 alone.
     const std::uint64_t bytes = 8 * (st.phases - st.timed) + 16 * (st.adjusts + st.reloads) + 8 * st.reloads + 4 * st.timed;
-    fmt::print("{} {} s={} F={} unit={}: bytes={} card_segments={} moves={} chunks={} phases={} plan_phases={} adjusts={} (max 2^{:.1f}) rests={} reloads={} timed={} moves/phase={:.1f} "
+    fmt::print("{} {} s={} F={} unit={}: bytes={} conic_segments={} card_segments={} moves={} chunks={} phases={} plan_phases={} adjusts={} (max 2^{:.1f}) rests={} reloads={} timed={} moves/phase={:.1f} "
                "max_ticks={} max|j|={} (2^{:.1f}) max|a|=2^{:.1f} max_v=2^{:.1f} max_phase_moves={}\n",
-               jpath, board, s, f, unit_mm, bytes, p->stats.card_segments, st.moves, p->stats.chunks, st.phases, st.plan_phases, st.adjusts, std::log2(double(std::max<std::int64_t>(1, st.max_abs_adjust))), st.rests, st.reloads, st.timed,
+               jpath, board, s, f, unit_mm, bytes, p->stats.conic_segments, p->stats.card_segments, st.moves, p->stats.chunks, st.phases, st.plan_phases, st.adjusts, std::log2(double(std::max<std::int64_t>(1, st.max_abs_adjust))), st.rests, st.reloads, st.timed,
                double(st.moves) / double(std::max<std::uint64_t>(1, st.phases)), st.max_ticks, st.max_abs_jerk,
                std::log2(double(std::max<std::int64_t>(1, st.max_abs_jerk))),
                std::log2(double(std::max<std::int64_t>(1, st.max_abs_accel))),
