@@ -398,7 +398,6 @@ int PhaseFitter::plan_phase_try(bool all, bool adjust) {
 // times fewer moves per word, with v and a reloaded from the plan); `all`:
 // the queue has no more to come.
 bool PhaseFitter::fit(bool all) {
-    const unsigned s = fmt_.tick_log2;
     const i128 ONE = i128{1} << fmt_.frac_bits;
     while (head_ < queue_.size()) {
         if (head_ > 4096) {   // keep the moves the plan's state is fitted to
@@ -478,7 +477,6 @@ bool PhaseFitter::fit(bool all) {
         }
         commit(from, tr, reload);
     }
-    (void)s;
     return true;
 }
 
