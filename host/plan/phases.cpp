@@ -53,6 +53,20 @@ i128 abs128(i128 x) { return x < 0 ? -x : x; }
 // Whether x fits a signed register of `bits` bits.
 bool fits(i128 x, unsigned bits) { return x >= -(i128{1} << (bits - 1)) && x < (i128{1} << (bits - 1)); }
 
+// A phase from V, H with u for E ticks: every tick's step x(m+1) - x(m) =
+// V + H (2m+1) + u (3m^2+3m+1) >= 0 (the position never goes back) and the state
+// after it fits the card's registers.
+bool phase_holds(i128 v0, i128 a0, i128 u, std::int64_t E, const PhaseFormat& f) {
+    auto step_at = [&](i128 m) { return v0 + a0 * (2 * m + 1) + u * (3 * m * m + 3 * m + 1); };
+    if (step_at(0) < 0 || step_at(E - 1) < 0) return false;
+    if (u > 0) {
+        const i128 mstar = floor_div(-(2 * a0 + 3 * u), 6 * u);
+        for (i128 m = mstar - 1; m <= mstar + 2; ++m)
+            if (m >= 0 && m <= E - 1 && step_at(m) < 0) return false;
+    }
+    return fits(v0 + 2 * a0 * i128(E) + 3 * u * i128(E) * i128(E), f.v_bits) && fits(a0 + 3 * u * i128(E), f.h_bits);
+}
+
 }  // namespace
 
 i128 move_length(double length_mm, const PhaseFormat& format) {
@@ -207,18 +221,7 @@ PhaseFitter::Trial PhaseFitter::evaluate(const State& st, bool all, std::size_t 
         if (more && reached(E * T, next_target, j)) continue;
         // The next phase starts before the next move's window closes.
         if (more && st.c0 + E * T >= static_cast<std::int64_t>(std::floor(queue_[st.head + covered]))) continue;
-        // Every tick's step x(m+1) - x(m) = V + H (2m+1) + u (3m^2+3m+1) >= 0, m in [0, E-1].
-        auto step_at = [&](i128 m) { return v0 + a0 * (2 * m + 1) + j * (3 * m * m + 3 * m + 1); };
-        bool ok = step_at(0) >= 0 && step_at(E - 1) >= 0;
-        if (ok && j > 0) {
-            const i128 mstar = floor_div(-(2 * a0 + 3 * j), 6 * j);
-            for (i128 m = mstar - 1; m <= mstar + 2; ++m)
-                if (m >= 0 && m <= E - 1 && step_at(m) < 0) ok = false;
-        }
-        // The state after it fits the card's registers.
-        if (ok && (!fits(v0 + 2 * a0 * i128(E) + 3 * j * i128(E) * i128(E), fmt_.v_bits) ||
-                   !fits(a0 + 3 * j * i128(E), fmt_.h_bits)))
-            ok = false;
+        const bool ok = phase_holds(v0, a0, j, E, fmt_);
         if (!ok) continue;
         tr.covered = covered;
         tr.j = j;
@@ -351,18 +354,7 @@ int PhaseFitter::plan_phase_try(bool all, bool adjust) {
         const Terms t = terms(k, s);
         return st.v0 * t.k + st.a0 * t.A + u * t.G;
     };
-    if (!fits(st.v0, fmt_.v_bits) || !fits(st.a0, fmt_.h_bits) ||
-        !fits(st.v0 + 2 * st.a0 * i128(E) + 3 * u * i128(E) * i128(E), fmt_.v_bits) ||
-        !fits(st.a0 + 3 * u * i128(E), fmt_.h_bits))
-        return 0;
-    // Every tick's step stays >= 0.
-    auto step_at = [&](i128 m) { return st.v0 + st.a0 * (2 * m + 1) + u * (3 * m * m + 3 * m + 1); };
-    if (step_at(0) < 0 || step_at(E - 1) < 0) return 0;
-    if (u > 0) {
-        const i128 mstar = floor_div(-(2 * st.a0 + 3 * u), 6 * u);
-        for (i128 m = mstar - 1; m <= mstar + 2; ++m)
-            if (m >= 0 && m <= E - 1 && step_at(m) < 0) return 0;
-    }
+    if (!fits(st.v0, fmt_.v_bits) || !fits(st.a0, fmt_.h_bits) || !phase_holds(st.v0, st.a0, u, E, fmt_)) return 0;
     const std::int64_t kend = E * T;
     const i128 reach = P(kend);
     std::size_t covered = 0;
