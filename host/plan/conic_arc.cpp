@@ -82,6 +82,25 @@ std::array<std::uint32_t, 7> ConicWalk::words() const {
     return CpConicSerial::words(k, CpConic::at(k, u0, v0), cw, du, dv);
 }
 
+std::vector<std::uint64_t> conic_rule_divisors(const ConicWalk& w) {
+    const auto m = [&](std::int64_t x, std::int64_t y) {
+        const std::int64_t gx = 2 * w.a * x + w.b * y + w.d, gy = w.b * x + 2 * w.c * y + w.e;
+        return std::uint64_t(std::max(std::abs(gx), std::abs(gy)));
+    };
+    std::vector<std::uint64_t> out;
+    out.reserve(w.moves.size());
+    std::int64_t x = w.u0, y = w.v0;
+    std::uint64_t before = m(x, y);
+    for (std::uint8_t mv : w.moves) {
+        x += ConicWalk::dx_of(mv);
+        y += ConicWalk::dy_of(mv);
+        const std::uint64_t here = m(x, y);
+        out.push_back(before + here);
+        before = here;
+    }
+    return out;
+}
+
 ConicWalk ConicWalk::head(std::size_t n) const {
     ConicWalk h = *this;
     h.moves.resize(n);

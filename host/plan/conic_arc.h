@@ -57,6 +57,17 @@ struct ConicWalk {
     [[nodiscard]] ConicWalk tail(std::size_t n) const;
 };
 
+// A rule for the length of a conic's move that the card's walker can apply
+// (issue 13, toward timing moves by their path length on the card,
+// docs/PROTOCOL.md "Toward a compact wire"): move n, from node n-1 to node n,
+// is K / D_n long, D_n = m(node n-1) + m(node n), m(P) = max(|Gx(P)|, |Gy(P)|)
+// (the walker's gradient: Gx = 2Ax + By + D, Gy = Bx + 2Cy + E), K one constant
+// of the walk. On a circle ds/d(major) = |grad G| / |G of the minor's normal|:
+// the move advances the axis its octant steps every move by one, and the
+// gradient's larger component is the other one's, so 1 / D_n is the path per
+// move up to a constant, its two nodes averaged. One divisor per move of `w`.
+[[nodiscard]] std::vector<std::uint64_t> conic_rule_divisors(const ConicWalk& w);
+
 // One CONIC card segment: what the planner records of it (moves, delta, the other
 // axes' patterns over T with k = 0) and its walk.
 struct ConicPiece {

@@ -73,6 +73,9 @@ struct PlanStream::Impl {
     std::function<void(std::span<const double>, std::span<const double>, double, std::span<const PlanJerk>)>
         on_move_times;
     double arc_path_done = 0;   // on_move_times: the path length of the arc's pieces so far
+    bool conic_length_rule = false;
+    std::vector<double> rule_at;   // conic_length_rule: the arc's moves' path positions (mm)
+    std::size_t rule_next = 0;     // the next move's in rule_at
     StepSegmenter segmenter;
     FeedPlanner feeds;
     std::vector<Diagnostic> loop_warnings, loop_errors, time_errors;
@@ -115,6 +118,7 @@ struct PlanStream::Impl {
           lim(job_chunk_limits(machine, options)),
           tol(machine.chunk_tolerance_cycles()),
           on_move_times(options.on_move_times),
+          conic_length_rule(options.conic_length_rule),
           segmenter(machine, file),
           feeds(machine, file) {
         conics = m.planner.arcs == ArcMode::conic && m.card.conic_width > 0;
@@ -307,16 +311,36 @@ struct PlanStream::Impl {
                     };
                     std::vector<double> lengths;
                     double last = p == 0 ? 0.0 : arc_path_done;
-                    for (double c : piece.walk->ideal) {
-                        const double here = path_at(c);
-                        lengths.push_back(here - last);
-                        last = here;
+                    std::span<const double> ideal = piece.walk->ideal;
+                    std::vector<double> rule_ideal;
+                    if (conic_length_rule) {
+                        if (p == 0) rule_positions(*list, in.feeds);   // before any piece's walk is handed on
+                        for (std::size_t n = 0; n < piece.walk->ideal.size(); ++n) {
+                            const double here = rule_at[rule_next++];
+                            const double t = time_at(in.feeds, here);
+                            stats.conic_rule_shift_cycles =
+                                std::max(stats.conic_rule_shift_cycles, std::abs(t - piece.walk->ideal[n]));
+                            const double true_here = path_at(piece.walk->ideal[n]);
+                            stats.conic_rule_shift_steps = std::max(
+                                stats.conic_rule_shift_steps,
+                                std::abs(here - true_here) * m.axes[std::size_t(piece.walk->axis_u)].steps_per_mm);
+                            rule_ideal.push_back(t);
+                            lengths.push_back(here - last);
+                            last = here;
+                        }
+                        ideal = rule_ideal;
+                    } else {
+                        for (double c : piece.walk->ideal) {
+                            const double here = path_at(c);
+                            lengths.push_back(here - last);
+                            last = here;
+                        }
                     }
                     arc_path_done = last;
                     std::vector<PlanJerk> changes;
                     if (p == 0)
                         for (const PlannedSegment& f : in.feeds) jerk_changes(f, changes);
-                    on_move_times(piece.walk->ideal, lengths,
+                    on_move_times(ideal, lengths,
                                   p == 0 && in.feeds.front().profile.v_entry == 0
                                       ? in.feeds.front().t_start * m.card.clock_hz
                                       : -1.0,
@@ -358,6 +382,37 @@ struct PlanStream::Impl {
         chords_until = e;
         if (conics) loop_warnings.push_back({file, s.loc, "arc sent as chords: " + std::get<std::string>(pieces)});
         return line_segment();
+    }
+
+    // conic_length_rule: every move of the arc's pieces at its position along the
+    // arc's path (mm), move n's length K / D_n (plan::conic_rule_divisors), K such
+    // that the last move ends the arc's path, as the feeds plan it.
+    void rule_positions(const std::vector<ConicPiece>& pieces, std::span<const PlannedSegment> feeds) {
+        double total = 0;
+        for (const PlannedSegment& f : feeds) total += f.length;
+        std::vector<double> w;
+        for (const ConicPiece& piece : pieces)
+            for (std::uint64_t d : conic_rule_divisors(*piece.walk)) w.push_back(1.0 / double(std::max<std::uint64_t>(d, 1)));
+        double sum = 0;
+        for (double x : w) sum += x;
+        rule_at.clear();
+        double acc = 0;
+        for (double x : w) {
+            acc += x;
+            rule_at.push_back(total * acc / sum);
+        }
+        if (!rule_at.empty()) rule_at.back() = total;
+        rule_next = 0;
+    }
+    // The card cycle at which the feeds reach `s` mm along the arc's path.
+    [[nodiscard]] double time_at(std::span<const PlannedSegment> feeds, double s) const {
+        double done = 0;
+        for (const PlannedSegment& f : feeds) {
+            if (s <= done + f.length || &f == &feeds.back())
+                return (f.t_start + f.profile.time_at(std::clamp(s - done, 0.0, f.length))) * m.card.clock_hz;
+            done += f.length;
+        }
+        return 0;
     }
 
     // Step segment i as card segments: its parts of at most the pattern capacity.

@@ -47,6 +47,10 @@ struct PlanStats {
     std::uint64_t chord_arcs = 0;     // arcs sent as chords (planner.arcs, the card, or a reason)
     ConicArcStats conic;              // the walks' deviations
     ArcFitStats fit;                  // G1 chains fitted (planner.fit_arcs_mm)
+    // PlanOptions::conic_length_rule: the largest shift of a conic move's time,
+    // card cycles, and of its path position, steps of the walk's u axis.
+    double conic_rule_shift_cycles = 0;
+    double conic_rule_shift_steps = 0;
     double duration_s = 0;
     [[nodiscard]] double moves_per_chunk() const {
         return chunks ? static_cast<double>(moves) / static_cast<double>(chunks) : 0;
@@ -73,6 +77,12 @@ struct PlanOptions {
     std::function<void(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at,
                        std::span<const PlanJerk> plan)>
         on_move_times;
+    // on_move_times: a conic's moves as a card would time them by the length
+    // rule of plan::conic_rule_divisors (one K per arc, its moves' lengths summing
+    // to the arc's path), each at the plan's time for its position, instead of
+    // where the true curve passes its node. PlanStats::conic_rule_shift_cycles
+    // says how far that moves them.
+    bool conic_length_rule = false;
 };
 
 // The whole job planned: its blocks pushed through a PlanStream (after G1 chains

@@ -6,7 +6,7 @@
 //   plan_figures bounds MACHINE JOB   planned time beside the lower bound (whole job and its
 //                                     feed moves), groups, lookahead, windowed - whole-job time
 //   plan_figures speed MACHINE JOB [reps]  planning throughput, G-code lines per second
-//   plan_figures phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy]]  moves timed by phases
+//   plan_figures phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy] [rule]]  moves timed by phases
 //                                     of constant jerk (plan/phases.h): ticks of 2^S clocks, F
 //                                     fractional bits, the path in UNIT mm (0: moves); without
 //                                     reloads; the greedy fit alone (not the plan's phases)
@@ -125,7 +125,7 @@ int chunks(const char* mpath, const char* jpath, const char* board = nullptr, un
 // Moves timed by phases of constant jerk (plan/phases.h): phases, rests and the
 // registers' ranges for the job on BOARD, ticks of 2^S clocks, F fractional bits.
 int phases(const char* mpath, const char* jpath, const char* board, unsigned s, unsigned f, double unit_mm,
-           bool reload, bool plan_jerk) {
+           bool reload, bool plan_jerk, bool rule) {
     auto m = load_bound(mpath, board);
     if (!m.ok()) { fmt::print(stderr, "{}\n", join(m.errors)); return 1; }
     auto job = load_gcode(jpath, gcode_options(*m));
@@ -140,6 +140,7 @@ int phases(const char* mpath, const char* jpath, const char* board, unsigned s, 
     PhaseFitter fitter(format, m->chunk_tolerance_cycles());
     std::uint64_t batches = 0;
     PlanOptions o;
+    o.conic_length_rule = rule;
     o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths, double rest_at,
                           std::span<const PlanJerk> changes) {
         ++batches;
@@ -159,6 +160,10 @@ int phases(const char* mpath, const char* jpath, const char* board, unsigned s, 
                std::log2(double(std::max<std::int64_t>(1, st.max_abs_jerk))),
                std::log2(double(std::max<std::int64_t>(1, st.max_abs_accel))),
                std::log2(double(std::max<std::int64_t>(1, st.max_velocity))), st.max_phase_moves);
+    if (rule)
+        fmt::print("conic length rule: moves shifted by up to {:.1f} cycles ({:.3f} us), {:.4f} steps along the path\n",
+                   p->stats.conic_rule_shift_cycles, p->stats.conic_rule_shift_cycles / m->card.clock_hz * 1e6,
+                   p->stats.conic_rule_shift_steps);
     return 0;
 }
 
@@ -363,17 +368,18 @@ int main(int argc, char** argv) {
     if (cmd == "chunks" && argc == 6) return chunks(argv[2], argv[3], argv[4], unsigned(std::atoi(argv[5])));
     if (cmd == "split") return split();
     if (cmd == "phases" && argc >= 7) {
-        bool reload = true, plan_jerk = true;
+        bool reload = true, plan_jerk = true, rule = false;
         for (int a = 8; a < argc; ++a) {
             reload = reload && std::string(argv[a]) != "noreload";
             plan_jerk = plan_jerk && std::string(argv[a]) != "greedy";
+            rule = rule || std::string(argv[a]) == "rule";
         }
         return phases(argv[2], argv[3], argv[4], unsigned(std::atoi(argv[5])), unsigned(std::atoi(argv[6])),
-                      argc >= 8 ? std::atof(argv[7]) : 0.0, reload, plan_jerk);
+                      argc >= 8 ? std::atof(argv[7]) : 0.0, reload, plan_jerk, rule);
     }
     if (cmd == "bounds" && argc == 4) return bounds(argv[2], argv[3]);
     if (cmd == "fingerprint" && argc == 4) return fingerprint(argv[2], argv[3]);
     if (cmd == "speed" && argc >= 4) return speed(argv[2], argv[3], argc > 4 ? std::atoi(argv[4]) : 5);
-    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps] | fingerprint MACHINE JOB | phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy]]\n");
+    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps] | fingerprint MACHINE JOB | phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy] [rule]]\n");
     return 2;
 }

@@ -216,6 +216,83 @@ TEST(ConicArcs, AFullCircleEndsWhereItStarts) {
     EXPECT_NEAR(double(moves), 4 * r * std::sqrt(2.0), 8);
 }
 
+// The length rule a card could apply to time a conic's moves by their path
+// (plan::conic_rule_divisors, issue 13): each move's divisor is the walker's
+// gradient's larger component at both its nodes, here 2A times the node's larger
+// coordinate from the centre (the test's circle, centred on the origin); the
+// moves' lengths on the path are K / D_n; along each octant they follow the arc
+// where it passes each node on the axis the octant steps every move.
+TEST(ConicArcs, TheLengthRuleFollowsTheArcWithinEachOctant) {
+    const Machine m = machine();
+    auto job = parse_gcode("G21 G90 G17\nG0 X3.125 Y0\nG3 X0 Y3.125 I-3.125 J0 F600\n", "job.ngc");
+    ASSERT_TRUE(job.ok()) << join(job.errors);
+    PlanOptions o;
+    o.chunk_limits = card::chunk_limits();
+    o.conic_length_rule = true;
+    std::vector<std::vector<double>> batches;
+    o.on_move_times = [&](std::span<const double>, std::span<const double> lengths, double, std::span<const PlanJerk>) {
+        batches.emplace_back(lengths.begin(), lengths.end());
+    };
+    auto r = plan_job(*job, m, o);
+    ASSERT_TRUE(r.ok()) << join(r.errors);
+    const PlannedJob& pj = *r;
+    ASSERT_EQ(pj.stats.conic_arcs, 1u);
+    ASSERT_EQ(batches.size(), pj.card.size());
+    const double radius = 1000;   // steps
+    double k = 0, rule = 0;       // lengths * D (mm), the rule's path in steps (unscaled)
+    double octant_start_rule = -1, octant_start_arc = 0, worst_in_octant = 0;
+    std::int64_t x = 1000, y = 0;
+    const auto big = [](std::int64_t px, std::int64_t py) { return std::max(std::abs(px), std::abs(py)); };
+    std::uint64_t moves = 0;
+    for (std::size_t c = 0; c < pj.card.size(); ++c) {
+        if (!pj.card[c].conic) continue;
+        const ConicWalk& w = *pj.card[c].conic;
+        ASSERT_EQ(w.a, w.c);
+        ASSERT_EQ(w.b, 0);
+        const std::vector<std::uint64_t> d = conic_rule_divisors(w);
+        ASSERT_EQ(d.size(), w.moves.size());
+        ASSERT_EQ(batches[c].size(), w.moves.size());
+        EXPECT_EQ(w.u0, x);
+        EXPECT_EQ(w.v0, y);
+        for (std::size_t n = 0; n < w.moves.size(); ++n, ++moves) {
+            const std::int64_t x1 = x + ConicWalk::dx_of(w.moves[n]), y1 = y + ConicWalk::dy_of(w.moves[n]);
+            const std::int64_t expect = 2 * w.a * (big(x, y) + big(x1, y1));
+            ASSERT_EQ(d[n], std::uint64_t(expect)) << "move " << moves;
+            // The hook's lengths are the rule's: length * D the same for every move.
+            const double kn = batches[c][n] * double(expect);
+            if (k == 0) k = kn;
+            EXPECT_NEAR(kn / k, 1.0, 1e-9) << "move " << moves;
+            // Unscaled: ds/d(major) = r / (the larger coordinate), both nodes averaged.
+            rule += 4.0 * double(w.a) * radius / double(expect);
+            // Where the arc passes the node on the axis the octant steps every move.
+            const bool y_major = std::abs(x1) > std::abs(y1) + 1, x_major = std::abs(y1) > std::abs(x1) + 1;
+            const double arc = y_major ? radius * std::asin(double(y1) / radius)
+                                       : radius * std::acos(std::clamp(double(x1) / radius, -1.0, 1.0));
+            if (y_major) worst_in_octant = std::max(worst_in_octant, std::abs(rule - arc));
+            if (x_major) {
+                if (octant_start_rule < 0) octant_start_rule = rule, octant_start_arc = arc;
+                worst_in_octant =
+                    std::max(worst_in_octant, std::abs((rule - octant_start_rule) - (arc - octant_start_arc)));
+            }
+            x = x1;
+            y = y1;
+        }
+    }
+    EXPECT_EQ(x, 0);
+    EXPECT_EQ(y, 1000);
+    std::printf("quarter circle r = 1000 steps: %llu moves, the rule within each octant within %.4f steps, "
+                "its whole %.4f steps from r pi / 2; moves shifted by up to %.4f steps of path\n",
+                static_cast<unsigned long long>(moves), worst_in_octant, rule - radius * std::numbers::pi / 2,
+                pj.stats.conic_rule_shift_steps);
+    EXPECT_LT(worst_in_octant, 0.05);
+    EXPECT_NEAR(rule, radius * std::numbers::pi / 2, 0.6);
+    // Against the planner's own timing, which measures each octant on its own axis
+    // and so jumps where the octant changes (a node off the circle by d passes on
+    // the two axes up to d sqrt 2 apart): within that.
+    EXPECT_LT(pj.stats.conic_rule_shift_steps, 0.5 * std::sqrt(2.0));
+    EXPECT_GT(pj.stats.conic_rule_shift_steps, 0.0);
+}
+
 TEST(ConicArcs, TheRFormIsTheSameCircle) {
     // G2 with R 5 from (0, 0) to (10, 0): the half circle about (5, 0); then G3 R 5 to
     // (20, 0): the half circle about (15, 0).

@@ -102,21 +102,27 @@ struct JobPhases {
     std::vector<i128> lengths;
     std::uint64_t chunks = 0;
     double tol = 0;   // cycles, the bound machine's
+    double rule_shift_steps = 0;   // PlanStats::conic_rule_shift_steps
+    std::uint64_t conic_segments = 0;
     std::unique_ptr<PhaseFitter> fitter;
 };
 
-void fit_job(const char* job_file, PhaseFormat& fmt, JobPhases& out) {
+void fit_job(const char* job_file, PhaseFormat& fmt, JobPhases& out, bool conic_rule = false,
+             std::string_view board = cpstep::builds::kDefaultBoard) {
     auto loaded = load_machine(kDir + "/machines/seed002.toml");
     ASSERT_TRUE(loaded.ok()) << join(loaded.errors);
-    const cpstep::builds::Build& b = *cpstep::builds::find(cpstep::builds::kDefaultBoard);
+    const cpstep::builds::Build& b = *cpstep::builds::find(board);
     Machine m = *loaded;
-    ASSERT_TRUE(bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw}).empty());
+    CardFacts facts{std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw};
+    if (b.conic) facts.conic_width = 40;   // the walker's width (READ 0x26)
+    ASSERT_TRUE(bind_card(m, facts).empty());
     auto job = load_gcode(kDir + "/jobs/" + job_file);
     ASSERT_TRUE(job.ok()) << join(job.errors);
     out.tol = m.chunk_tolerance_cycles();
     fmt.clock_hz = m.card.clock_hz;   // the plan's phases in the timer's units
     out.fitter = std::make_unique<PhaseFitter>(fmt, out.tol);
     PlanOptions o;
+    o.conic_length_rule = conic_rule;
     o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at,
                           std::span<const PlanJerk> changes) {
         out.ideal.insert(out.ideal.end(), ideal.begin(), ideal.end());
@@ -127,6 +133,8 @@ void fit_job(const char* job_file, PhaseFormat& fmt, JobPhases& out) {
     ASSERT_TRUE(plan.ok()) << join(plan.errors);
     ASSERT_TRUE(out.fitter->finish()) << out.fitter->error();
     out.chunks = plan->stats.chunks;
+    out.rule_shift_steps = plan->stats.conic_rule_shift_steps;
+    out.conic_segments = plan->stats.conic_segments;
     check_fires(out.ideal, out.lengths, *out.fitter, fmt, out.tol);
     const PhaseStats& st = out.fitter->stats();
     std::printf("%s: %zu moves, %llu chunks, %llu phases (%llu the plan's, %llu adjusted, %llu reloads, %llu timed)\n",
@@ -157,6 +165,24 @@ TEST_P(ExamplePhases, ThePlansPhasesWithoutReloadsFireEveryMoveInItsWindow) {
     EXPECT_EQ(st.reloads, 0u);
     EXPECT_GT(st.plan_phases, st.phases / 3) << "the plan's own phases should carry most of the job";
     EXPECT_LT(st.phases, jp.chunks);
+}
+
+// Conics timed by the card's length rule (plan::conic_rule_divisors) on the HX8K
+// (the board with the walker): every move in its window, and about as few phases
+// as with each move's exact length along the arc.
+TEST(Phases, ConicMovesTimedByTheCardsLengthRule) {
+    PhaseFormat exact_fmt{6, 60, false, false, 0.0125};
+    JobPhases exact;
+    ASSERT_NO_FATAL_FAILURE(fit_job("tight_arcs.ngc", exact_fmt, exact, false, "hx8k"));
+    PhaseFormat fmt{6, 60, false, false, 0.0125};
+    JobPhases jp;
+    ASSERT_NO_FATAL_FAILURE(fit_job("tight_arcs.ngc", fmt, jp, true, "hx8k"));
+    EXPECT_EQ(jp.ideal.size(), exact.ideal.size());
+    EXPECT_EQ(jp.conic_segments, 4u);
+    EXPECT_GT(jp.rule_shift_steps, 0.0);
+    EXPECT_LT(jp.rule_shift_steps, 0.5);
+    EXPECT_LT(double(jp.fitter->stats().phases), 1.25 * double(exact.fitter->stats().phases));
+    EXPECT_EQ(jp.fitter->stats().reloads, 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(Jobs, ExamplePhases, ::testing::Values("tab.ngc", "tight_arcs.ngc", "naca0025.ngc"),
