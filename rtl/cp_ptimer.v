@@ -6,7 +6,8 @@
 //   every clock of a jerk phase (adv_i):  p += step; when p >= len_i * 2^S the
 //       move is due (fire_i takes it: p -= len_i * 2^S in the same clock's sum)
 //   at the end of each tick (2^S clocks from the phase's start):
-//       V += 2H + 3u, H += 3u, step = V + H + u (with the new V and H)
+//       V += 2H + 3u, H += 3u, step = V + H + u (with the new V and H),
+//       summed bit-serially over the tick's clocks (below), the same bits
 //
 // V, H and u are the cubic's own derivatives at the tick (velocity per tick, half
 // the acceleration, a sixth of the jerk), so a phase changes u without p, V or H
@@ -34,7 +35,7 @@ module cp_ptimer #(
     parameter integer HW = 40,    // H (signed)
     parameter integer UW = 24,    // u (signed)
     parameter integer LW = 62     // a move's length (unsigned, 2^-F units)
-    // (32 < HW <= VW <= 64, UW <= 32, UW <= HW, LW + S <= F + S + 2, F + S + 2 >= 64)
+    // (32 < HW <= VW <= 64, VW <= 2^S, UW <= 32, UW <= HW, LW + S <= F + S + 2, F + S + 2 >= 64)
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -67,6 +68,11 @@ reg  [UW-1:0] nu_q;
 reg  [63:0]   np_q;
 reg  [VW-1:0] nv_q;
 reg  [HW-1:0] nh_q;
+reg  [VW-1:0] sn_q;           // the next tick's step, shifted in bit by bit
+reg  [5:0]    cy_q;           // the serial sums' carries
+reg           up_q, hp_q;     // u's and H's bit before (for 2u, 2H)
+reg           hs_old_q;       // the tick's H's sign (its bits past HW)
+reg           hs_new_q;       // the next H's sign (wrapped to HW bits)
 
 wire [PW-1:0] thresh = {{(PW-LW-S){1'b0}}, len_i, {S{1'b0}}};
 wire          due = tdue_q || (!timed_q && p_q >= thresh);
@@ -76,14 +82,35 @@ assign ready_o   = !nvalid_q;
 assign starved_o = starved_q;
 assign kind_o    = kind_q;
 
-// The tick's end: the next V, H and step.
-wire signed [VW-1:0] u_v  = {{(VW-UW){u_q[UW-1]}}, u_q};
-wire signed [VW-1:0] h_v  = {{(VW-HW){h_q[HW-1]}}, h_q};
-wire signed [VW-1:0] v_up = v_q + (h_v <<< 1) + u_v + (u_v <<< 1);
-wire signed [HW-1:0] u_h  = {{(HW-UW){u_q[UW-1]}}, u_q};
-wire signed [HW-1:0] h_up = h_q + u_h + (u_h <<< 1);
-wire signed [VW-1:0] h_upv = {{(VW-HW){h_up[HW-1]}}, h_up};
-wire signed [VW-1:0] step_up = v_up + h_upv + u_v;
+// The tick's end: the next V, H and step, computed bit-serially over the tick
+// (bit i at its clock i, least significant first; S >= log2(VW)): V, H and u
+// rotate through v_q, h_q and u_q, which hold the tick's values at its start and
+// the next tick's (v_q, h_q) at its end; the step goes into sn_q and moves to
+// step_q at the tick's end. So at the tick's end every register holds what the
+// parallel sums V += 2H + 3u, H += 3u, step = V + H + u would give.
+localparam integer HW1 = HW - 1;
+localparam [S:0] BU = UW[S:0], BH = HW[S:0], BV = VW[S:0], BH1 = HW1[S:0];
+wire [S:0]   bi    = {1'b0, tcnt_q};               // the bit of this clock
+wire         b0    = tcnt_q == {S{1'b0}};
+wire         u_b   = (bi < BU) ? u_q[0] : u_q[UW-1];   // u, sign-extended (u_q is whole again at UW)
+wire         h_b   = (bi < BH) ? h_q[0] : hs_old_q;    // the tick's H, sign-extended
+wire         u2_b  = b0 ? 1'b0 : up_q;                 // 2u: u's bit before
+wire         h2_b  = b0 ? 1'b0 : hp_q;                 // 2H
+wire [5:0]   cy    = b0 ? 6'd0 : cy_q;                 // the six sums' carries
+// t = 3u = u + 2u; H' = H + t; a = V + 2H; V' = a + t; s = V' + H' + u
+wire t_b  = u_b ^ u2_b ^ cy[0];
+wire hu_b = h_b ^ t_b ^ cy[1];
+wire a_b  = v_q[0] ^ h2_b ^ cy[2];
+wire vu_b = a_b ^ t_b ^ cy[3];
+wire hn_b = (bi < BH) ? hu_b : hs_new_q;           // H' wrapped to HW bits, sign-extended
+wire s1_b = vu_b ^ hn_b ^ cy[4];
+wire st_b = s1_b ^ u_b ^ cy[5];
+wire [5:0] cy_n = {(s1_b & u_b) | (s1_b & cy[5]) | (u_b & cy[5]),
+                   (vu_b & hn_b) | (vu_b & cy[4]) | (hn_b & cy[4]),
+                   (a_b & t_b) | (a_b & cy[3]) | (t_b & cy[3]),
+                   (v_q[0] & h2_b) | (v_q[0] & cy[2]) | (h2_b & cy[2]),
+                   (h_b & t_b) | (h_b & cy[1]) | (t_b & cy[1]),
+                   (u_b & u2_b) | (u_b & cy[0]) | (u2_b & cy[0])};
 
 wire          tick_end  = tcnt_q == {S{1'b1}};
 wire          running   = active_q && adv_i;
@@ -94,8 +121,8 @@ wire          load      = phase_end || (!active_q && nvalid_q);
 // The loaded phase's V, H, p and step.
 wire signed [UW-1:0] nu = nu_q;
 wire signed [VW-1:0] nu_v = {{(VW-UW){nu[UW-1]}}, nu};
-wire signed [VW-1:0] v_cur = (running && !timed_q && tick_end) ? v_up : v_q;
-wire signed [HW-1:0] h_cur = (running && !timed_q && tick_end) ? h_up : h_q;
+wire signed [VW-1:0] v_cur = v_q;   // at a tick's end: the next tick's, shifted in
+wire signed [HW-1:0] h_cur = h_q;
 wire signed [VW-1:0] v_ld = nkind_q[3] ? nv_q : nkind_q[2] ? {VW{1'b0}} : v_cur;
 wire signed [HW-1:0] h_ld = nkind_q[3] ? nh_q : nkind_q[2] ? {HW{1'b0}} : h_cur;
 wire signed [VW-1:0] h_ldv = {{(VW-HW){h_ld[HW-1]}}, h_ld};
@@ -128,6 +155,12 @@ always @(posedge clk) begin
         np_q      <= 64'd0;
         nv_q      <= {VW{1'b0}};
         nh_q      <= {HW{1'b0}};
+        sn_q      <= {VW{1'b0}};
+        cy_q      <= 6'd0;
+        up_q      <= 1'b0;
+        hp_q      <= 1'b0;
+        hs_old_q  <= 1'b0;
+        hs_new_q  <= 1'b0;
     end else begin
         if (wr_i && !nvalid_q) begin
             case (sel_i)
@@ -150,10 +183,21 @@ always @(posedge clk) begin
         if (running && timed_q && !phase_end) tleft_q <= tleft_q - 1'b1;
         if (running && !timed_q) begin
             tcnt_q <= tcnt_q + 1'b1;
+            cy_q   <= cy_n;
+            up_q   <= u_b;
+            hp_q   <= h_b;
+            if (bi == BH1) begin
+                hs_old_q <= h_b;
+                hs_new_q <= hu_b;
+            end
+            if (bi < BV) begin
+                v_q  <= {vu_b, v_q[VW-1:1]};
+                sn_q <= {st_b, sn_q[VW-1:1]};
+            end
+            if (bi < BH) h_q <= {hu_b, h_q[HW-1:1]};
+            if (bi < BU) u_q <= {u_q[0], u_q[UW-1:1]};
             if (tick_end) begin
-                v_q    <= v_up;
-                h_q    <= h_up;
-                step_q <= step_up;
+                step_q <= sn_q;
                 if (!phase_end) tleft_q <= tleft_q - 1'b1;
             end
         end
