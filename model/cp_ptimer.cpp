@@ -44,7 +44,7 @@ void CpPtimer::tick() {
   if (in.wr && !o.nvalid) {
     switch (in.sel & 7) {
       case 0:
-        n.nkind = in.data >> 28;   // {load V and H, rest, timed, load p}
+        n.nkind = in.data >> 28;   // {load S and H, rest, timed, load p}
         n.nticks = in.data & ((uint32_t{1} << p_.tw) - 1);
         n.nvalid = true;
         break;
@@ -64,7 +64,6 @@ void CpPtimer::tick() {
     else p -= threshold();
   }
   bool phase_end = false;
-  int64_t v = o.v, h = o.h;   // after this clock's tick end, if any
   if (o.active && in.adv) {
     if (o.timed) {
       if (o.tleft == 1) {
@@ -78,16 +77,13 @@ void CpPtimer::tick() {
       p += o.step;
       n.tcnt = (o.tcnt + 1) & ((uint32_t{1} << p_.s) - 1);
       if (o.tcnt == (uint32_t{1} << p_.s) - 1) {
-        v = sx(o.v + 2 * o.h + 3 * o.u, p_.vw);
-        h = sx(o.h + 3 * o.u, p_.hw);
-        n.step = sx(v + h + o.u, p_.vw);
+        n.step = sx(o.step + 2 * o.h + 6 * o.u, p_.vw);
+        n.h = sx(o.h + 3 * o.u, p_.hw);
         if (o.tleft == 1) phase_end = true;
         else n.tleft = o.tleft - 1;
       }
     }
   }
-  n.v = v;
-  n.h = h;
   if (phase_end || (!o.active && o.nvalid)) {
     if (o.nvalid) {
       const int64_t u = sx(o.nu, p_.uw);
@@ -100,15 +96,14 @@ void CpPtimer::tick() {
       n.tleft = o.nticks == 0 ? 1 : o.nticks;
       n.tcnt = 0;
       if (o.nkind & 4) {   // from rest
-        n.v = n.h = 0;
+        n.step = n.h = 0;
         p = 0;
       }
-      if (o.nkind & 8) {   // load V and H
-        n.v = sx(int64_t(o.nv), p_.vw);
+      if (o.nkind & 8) {   // load S and H
+        n.step = sx(int64_t(o.nv), p_.vw);
         n.h = sx(int64_t(o.nh), p_.hw);
       }
       if (o.nkind & 1) p = cp_i128(o.np) << (pw() - 64);   // load p
-      if (!(o.nkind & 2)) n.step = sx(n.v + n.h + u, p_.vw);
     } else {
       n.active = false;
       n.starved = true;

@@ -7,16 +7,18 @@
 //   every clock of a jerk phase (adv):  p += step; when p >= len * 2^S the move
 //       is due (fire_i takes it: p -= len * 2^S in the same clock's sum)
 //   at the end of each tick (2^S clocks from the phase's start):
-//       V += 2H + 3u, H += 3u, step = V + H + u (with the new V and H)
-//   a phase (W0 = {load V and H, rest, timed, load p, 4'b0, ticks[23:0]}) holds u
-//   for `ticks` ticks (0: 1), then the next phase loads at once (none: the timer
-//   stops, `starved`). It carries p, V and H on, or starts from rest (p, V, H =
-//   0), and/or loads V and H, and/or p, from the buffer (in that order); a timed
-//   phase is one move, due `ticks` clocks after the phase's start, with p, V and H
-//   frozen until then and p = 0 after.
+//       step += 2H + 6u, H += 3u
+//   (the step S = V + H + u of the cubic V m + H m^2 + u m^3 over ticks; no V is
+//   kept). A phase (W0 = {load S and H, rest, timed, load p, 4'b0, ticks[23:0]})
+//   holds u for `ticks` ticks (0: 1), then the next phase loads at once (none: the
+//   timer stops, `starved`). It carries p, S and H on (a new u changes the step
+//   from its second tick on), or starts from rest (p, S, H = 0), and/or loads S
+//   and H, and/or p, from the buffer (in that order); a timed phase is one move,
+//   due `ticks` clocks after the phase's start, with p, S and H frozen until then
+//   and p = 0 after.
 //
 // The next phase is written word by word into a buffer (sel 1: u; 2, 3: p's top
-// 64 bits, low word first; 4, 5: V; 6, 7: H) and committed by W0 (sel 0) while
+// 64 bits, low word first; 4, 5: S; 6, 7: H) and committed by W0 (sel 0) while
 // `ready`; a write while not ready changes nothing. outputs() before the edge,
 // tick() the edge.
 #pragma once
@@ -43,14 +45,14 @@ struct CpPtimerOut {
   bool active = false;
   bool ready = false;      // the buffer takes the next phase
   bool starved = false;    // a phase ended with none after it (until one loads)
-  uint32_t kind = 0;       // the running phase's {load V and H, rest, timed, load p}
+  uint32_t kind = 0;       // the running phase's {load S and H, rest, timed, load p}
   bool operator==(const CpPtimerOut&) const = default;
 };
 
 struct CpPtimerParams {
   unsigned s = 6;    // a tick is 2^S clocks
   unsigned f = 60;   // fractional bits of p, V, H, u
-  unsigned vw = 56, hw = 40, uw = 24, tw = 24, lw = 62;   // register widths (signed V, H, u)
+  unsigned vw = 56, hw = 40, uw = 24, tw = 24, lw = 62;   // register widths (signed S, H, u)
 };
 
 class CpPtimer {
@@ -66,7 +68,7 @@ class CpPtimer {
 
   // For the benches.
   cp_i128 p() const { return r_.p; }
-  int64_t v() const { return r_.v; }
+  int64_t step() const { return r_.step; }
   int64_t h() const { return r_.h; }
   unsigned pw() const { return p_.f + p_.s + 2; }
 
@@ -75,12 +77,12 @@ class CpPtimer {
     bool active = false, timed = false, tdue = false, starved = false;
     uint32_t kind = 0;
     uint32_t tleft = 0, tcnt = 0;
-    int64_t u = 0, v = 0, h = 0, step = 0;
+    int64_t u = 0, h = 0, step = 0;   // u, H, the step S
     cp_i128 p = 0;
     bool nvalid = false;
     uint32_t nkind = 0, nticks = 0;
     int64_t nu = 0;
-    uint64_t np = 0, nv = 0, nh = 0;   // as written (64 bits each)
+    uint64_t np = 0, nv = 0, nh = 0;   // p, S, H as written (64 bits each)
   };
   cp_i128 threshold() const;
   Params p_;

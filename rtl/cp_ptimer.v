@@ -6,21 +6,23 @@
 //   every clock of a jerk phase (adv_i):  p += step; when p >= len_i * 2^S the
 //       move is due (fire_i takes it: p -= len_i * 2^S in the same clock's sum)
 //   at the end of each tick (2^S clocks from the phase's start):
-//       V += 2H + 3u, H += 3u, step = V + H + u (with the new V and H),
+//       step += 2H + 6u, H += 3u
 //       summed bit-serially over the tick's clocks (below), the same bits
 //
-// V, H and u are the cubic's own derivatives at the tick (velocity per tick, half
-// the acceleration, a sixth of the jerk), so a phase changes u without p, V or H
-// jumping. A phase (W0 = {load V and H, rest, timed, load p, 4'b0, ticks[23:0]})
-// holds u for `ticks` ticks (0: 1), then the next phase loads at once (none: the
-// timer stops and says `starved`). It carries p, V and H on, or starts from rest
-// (p, V, H = 0), and/or loads V and H (the host's correction back to its plan),
-// and/or p, from the buffer, in that order; a timed phase is one move, due
-// `ticks` clocks after the phase's start, p, V and H frozen until then and p = 0
-// after (the last move of a stop, which no phase times within 1 us).
+// The step S, H and u are the cubic V m + H m^2 + u m^3 over ticks as the timer
+// needs it (S = V + H + u: the distance of the tick; H half the acceleration, u a
+// sixth of the jerk; no V is kept), so a phase changes u without p, S or H
+// jumping (a new u changes the step from the phase's second tick on). A phase
+// (W0 = {load S and H, rest, timed, load p, 4'b0, ticks[23:0]}) holds u for
+// `ticks` ticks (0: 1), then the next phase loads at once (none: the timer stops
+// and says `starved`). It carries p, S and H on, or starts from rest (p, S, H =
+// 0), and/or loads S and H (the host's correction back to its plan), and/or p,
+// from the buffer, in that order; a timed phase is one move, due `ticks` clocks
+// after the phase's start, p, S and H frozen until then and p = 0 after (the last
+// move of a stop, which no phase times within 1 us).
 //
 // The next phase is written word by word into a buffer (sel 1: u; 2, 3: p's top
-// 64 bits, low word first; 4, 5: V; 6, 7: H) and committed by W0 (sel 0) while
+// 64 bits, low word first; 4, 5: S; 6, 7: H) and committed by W0 (sel 0) while
 // ready_o; a write while not ready changes nothing.
 //
 // Model twin model/cp_ptimer.*, bench tb/core/test_ptimer.cpp.
@@ -30,8 +32,8 @@
 
 module cp_ptimer #(
     parameter integer S  = 6,     // a tick is 2^S clocks
-    parameter integer F  = 60,    // fractional bits of p, V, H and u
-    parameter integer VW = 56,    // V and step (signed)
+    parameter integer F  = 60,    // fractional bits of p, S, H and u
+    parameter integer VW = 56,    // the step S (signed)
     parameter integer HW = 40,    // H (signed)
     parameter integer UW = 24,    // u (signed)
     parameter integer LW = 62     // a move's length (unsigned, 2^-F units)
@@ -50,7 +52,7 @@ module cp_ptimer #(
     output wire          active_o,
     output wire          ready_o,
     output wire          starved_o,
-    output wire [3:0]    kind_o         // the running phase's {load V and H, rest, timed, load p}
+    output wire [3:0]    kind_o         // the running phase's {load S and H, rest, timed, load p}
 );
 
 localparam integer PW = F + S + 2;      // p
@@ -61,18 +63,17 @@ reg  [3:0]    kind_q, nkind_q;
 reg  [TW-1:0] tleft_q, nticks_q;
 reg  [S-1:0]  tcnt_q;
 reg  signed [UW-1:0] u_q;
-reg  signed [VW-1:0] v_q, step_q;
+reg  signed [VW-1:0] step_q;     // the step S
 reg  signed [HW-1:0] h_q;
 reg  [PW-1:0] p_q;
 reg  [UW-1:0] nu_q;
 reg  [63:0]   np_q;
 reg  [VW-1:0] nv_q;
 reg  [HW-1:0] nh_q;
-reg  [VW-1:0] sn_q;           // the next tick's step, shifted in bit by bit
-reg  [5:0]    cy_q;           // the serial sums' carries
-reg           up_q, hp_q;     // u's and H's bit before (for 2u, 2H)
-reg           hs_old_q;       // the tick's H's sign (its bits past HW)
-reg           hs_new_q;       // the next H's sign (wrapped to HW bits)
+reg  [VW-1:0] sn_q;           // the step again, rotating out and the next shifting in
+reg  [3:0]    cy_q;           // the serial sums' carries
+reg           up_q, hp_q, tp_q;   // u's, H's and 3u's bit before (for 2u, 2H, 6u)
+reg           hs_q;           // the tick's H's sign (its bits past HW)
 
 wire [PW-1:0] thresh = {{(PW-LW-S){1'b0}}, len_i, {S{1'b0}}};
 wire          due = tdue_q || (!timed_q && p_q >= thresh);
@@ -82,33 +83,29 @@ assign ready_o   = !nvalid_q;
 assign starved_o = starved_q;
 assign kind_o    = kind_q;
 
-// The tick's end: the next V, H and step, computed bit-serially over the tick
-// (bit i at its clock i, least significant first; S >= log2(VW)): V, H and u
-// rotate through v_q, h_q and u_q, which hold the tick's values at its start and
-// the next tick's (v_q, h_q) at its end; the step goes into sn_q and moves to
-// step_q at the tick's end. So at the tick's end every register holds what the
-// parallel sums V += 2H + 3u, H += 3u, step = V + H + u would give.
+// The tick's end: the next step and H, computed bit-serially over the tick (bit
+// i at its clock i, least significant first; VW <= 2^S): the step rotates through
+// sn_q, H and u through h_q and u_q, which hold the tick's values at its start
+// and (sn_q, h_q) the next tick's at its end, when sn_q moves to step_q. So at
+// the tick's end every register holds what the parallel sums step += 2H + 6u,
+// H += 3u would give.
 localparam integer HW1 = HW - 1;
 localparam [S:0] BU = UW[S:0], BH = HW[S:0], BV = VW[S:0], BH1 = HW1[S:0];
 wire [S:0]   bi    = {1'b0, tcnt_q};               // the bit of this clock
 wire         b0    = tcnt_q == {S{1'b0}};
 wire         u_b   = (bi < BU) ? u_q[0] : u_q[UW-1];   // u, sign-extended (u_q is whole again at UW)
-wire         h_b   = (bi < BH) ? h_q[0] : hs_old_q;    // the tick's H, sign-extended
+wire         h_b   = (bi < BH) ? h_q[0] : hs_q;        // the tick's H, sign-extended
 wire         u2_b  = b0 ? 1'b0 : up_q;                 // 2u: u's bit before
 wire         h2_b  = b0 ? 1'b0 : hp_q;                 // 2H
-wire [5:0]   cy    = b0 ? 6'd0 : cy_q;                 // the six sums' carries
-// t = 3u = u + 2u; H' = H + t; a = V + 2H; V' = a + t; s = V' + H' + u
+wire [3:0]   cy    = b0 ? 4'd0 : cy_q;                 // the four sums' carries
+// t = 3u = u + 2u; H' = H + t; a = S + 2H; S' = a + 2t
 wire t_b  = u_b ^ u2_b ^ cy[0];
+wire t2_b = b0 ? 1'b0 : tp_q;                          // 6u = 2t
 wire hu_b = h_b ^ t_b ^ cy[1];
-wire a_b  = v_q[0] ^ h2_b ^ cy[2];
-wire vu_b = a_b ^ t_b ^ cy[3];
-wire hn_b = (bi < BH) ? hu_b : hs_new_q;           // H' wrapped to HW bits, sign-extended
-wire s1_b = vu_b ^ hn_b ^ cy[4];
-wire st_b = s1_b ^ u_b ^ cy[5];
-wire [5:0] cy_n = {(s1_b & u_b) | (s1_b & cy[5]) | (u_b & cy[5]),
-                   (vu_b & hn_b) | (vu_b & cy[4]) | (hn_b & cy[4]),
-                   (a_b & t_b) | (a_b & cy[3]) | (t_b & cy[3]),
-                   (v_q[0] & h2_b) | (v_q[0] & cy[2]) | (h2_b & cy[2]),
+wire a_b  = sn_q[0] ^ h2_b ^ cy[2];
+wire su_b = a_b ^ t2_b ^ cy[3];
+wire [3:0] cy_n = {(a_b & t2_b) | (a_b & cy[3]) | (t2_b & cy[3]),
+                   (sn_q[0] & h2_b) | (sn_q[0] & cy[2]) | (h2_b & cy[2]),
                    (h_b & t_b) | (h_b & cy[1]) | (t_b & cy[1]),
                    (u_b & u2_b) | (u_b & cy[0]) | (u2_b & cy[0])};
 
@@ -118,15 +115,10 @@ wire          phase_end = running && (timed_q ? (tleft_q == {{(TW-1){1'b0}}, 1'b
                                                : (tick_end && tleft_q == {{(TW-1){1'b0}}, 1'b1}));
 wire          load      = phase_end || (!active_q && nvalid_q);
 
-// The loaded phase's V, H, p and step.
-wire signed [UW-1:0] nu = nu_q;
-wire signed [VW-1:0] nu_v = {{(VW-UW){nu[UW-1]}}, nu};
-wire signed [VW-1:0] v_cur = v_q;   // at a tick's end: the next tick's, shifted in
-wire signed [HW-1:0] h_cur = h_q;
-wire signed [VW-1:0] v_ld = nkind_q[3] ? nv_q : nkind_q[2] ? {VW{1'b0}} : v_cur;
-wire signed [HW-1:0] h_ld = nkind_q[3] ? nh_q : nkind_q[2] ? {HW{1'b0}} : h_cur;
-wire signed [VW-1:0] h_ldv = {{(VW-HW){h_ld[HW-1]}}, h_ld};
-wire signed [VW-1:0] step_ld = v_ld + h_ldv + nu_v;
+// The loaded phase's step, H and p: sn_q and h_q are the step and H carried on
+// (at a tick's end the next tick's, shifted in).
+wire signed [VW-1:0] step_ld = nkind_q[3] ? nv_q : nkind_q[2] ? {VW{1'b0}} : sn_q;
+wire signed [HW-1:0] h_ld    = nkind_q[3] ? nh_q : nkind_q[2] ? {HW{1'b0}} : h_q;
 
 // p: this clock's fire and step.
 wire [PW-1:0] step_p = {{(PW-VW){step_q[VW-1]}}, step_q};
@@ -147,7 +139,6 @@ always @(posedge clk) begin
         nticks_q  <= {TW{1'b0}};
         tcnt_q    <= {S{1'b0}};
         u_q       <= {UW{1'b0}};
-        v_q       <= {VW{1'b0}};
         h_q       <= {HW{1'b0}};
         step_q    <= {VW{1'b0}};
         p_q       <= {PW{1'b0}};
@@ -156,11 +147,11 @@ always @(posedge clk) begin
         nv_q      <= {VW{1'b0}};
         nh_q      <= {HW{1'b0}};
         sn_q      <= {VW{1'b0}};
-        cy_q      <= 6'd0;
+        cy_q      <= 4'd0;
         up_q      <= 1'b0;
         hp_q      <= 1'b0;
-        hs_old_q  <= 1'b0;
-        hs_new_q  <= 1'b0;
+        tp_q      <= 1'b0;
+        hs_q      <= 1'b0;
     end else begin
         if (wr_i && !nvalid_q) begin
             case (sel_i)
@@ -186,14 +177,9 @@ always @(posedge clk) begin
             cy_q   <= cy_n;
             up_q   <= u_b;
             hp_q   <= h_b;
-            if (bi == BH1) begin
-                hs_old_q <= h_b;
-                hs_new_q <= hu_b;
-            end
-            if (bi < BV) begin
-                v_q  <= {vu_b, v_q[VW-1:1]};
-                sn_q <= {st_b, sn_q[VW-1:1]};
-            end
+            tp_q   <= t_b;
+            if (bi == BH1) hs_q <= h_b;
+            if (bi < BV) sn_q <= {su_b, sn_q[VW-1:1]};
             if (bi < BH) h_q <= {hu_b, h_q[HW-1:1]};
             if (bi < BU) u_q <= {u_q[0], u_q[UW-1:1]};
             if (tick_end) begin
@@ -209,12 +195,12 @@ always @(posedge clk) begin
                 starved_q <= 1'b0;
                 kind_q    <= nkind_q;
                 timed_q   <= nkind_q[1];
-                u_q       <= nu;
+                u_q       <= nu_q;
                 tleft_q   <= (nticks_q == {TW{1'b0}}) ? {{(TW-1){1'b0}}, 1'b1} : nticks_q;
                 tcnt_q    <= {S{1'b0}};
-                v_q       <= v_ld;
                 h_q       <= h_ld;
-                if (!nkind_q[1]) step_q <= step_ld;
+                step_q    <= step_ld;
+                sn_q      <= step_ld;
                 if (nkind_q[2]) p_q <= {PW{1'b0}};
                 if (nkind_q[0]) p_q <= {np_q, {(PW-64){1'b0}}};
             end else begin

@@ -32,14 +32,18 @@ constexpr std::size_t kPlanFit = 4;
 
 // P(k) = V k + H A(k) + u G(k): the position k clocks into a phase (units of
 // 2^-F / 2^s), each tick m adding x(m+1) - x(m) every clock, x(m) = V m + H m^2 + u m^3.
+// The card keeps the step S = V + H + u of the tick, not V, and carries S from one
+// phase into the next (a new u changes the step from the next tick on), so a
+// phase from S and H is P(k) = (S - H) k + H A(k) + u Gs(k), Gs = G - k.
 struct Terms {
-    i128 k, A, G;
+    i128 k, A, G, Gs;
 };
 
 Terms terms(std::int64_t k, unsigned s) {
     const i128 T = i128{1} << s;
     const i128 M = k >> s, r = k & ((std::int64_t{1} << s) - 1);
-    return {k, T * M * M + r * (2 * M + 1), T * M * M * M + r * (3 * M * M + 3 * M + 1)};
+    const i128 G = T * M * M * M + r * (3 * M * M + 3 * M + 1);
+    return {k, T * M * M + r * (2 * M + 1), G, G - k};
 }
 
 std::int64_t to_i64(i128 x) {
@@ -53,18 +57,18 @@ i128 abs128(i128 x) { return x < 0 ? -x : x; }
 // Whether x fits a signed register of `bits` bits.
 bool fits(i128 x, unsigned bits) { return x >= -(i128{1} << (bits - 1)) && x < (i128{1} << (bits - 1)); }
 
-// A phase from V, H with u for E ticks: every tick's step x(m+1) - x(m) =
-// V + H (2m+1) + u (3m^2+3m+1) >= 0 (the position never goes back) and the state
-// after it fits the card's registers.
-bool phase_holds(i128 v0, i128 a0, i128 u, std::int64_t E, const PhaseFormat& f) {
-    auto step_at = [&](i128 m) { return v0 + a0 * (2 * m + 1) + u * (3 * m * m + 3 * m + 1); };
+// A phase from S, H with u for E ticks: every tick's step S + 2H m + 3u m (m + 1)
+// >= 0 (the position never goes back) and the state after it fits the card's
+// registers.
+bool phase_holds(i128 s0, i128 a0, i128 u, std::int64_t E, const PhaseFormat& f) {
+    auto step_at = [&](i128 m) { return s0 + 2 * a0 * m + 3 * u * m * (m + 1); };
     if (step_at(0) < 0 || step_at(E - 1) < 0) return false;
     if (u > 0) {
         const i128 mstar = floor_div(-(2 * a0 + 3 * u), 6 * u);
         for (i128 m = mstar - 1; m <= mstar + 2; ++m)
             if (m >= 0 && m <= E - 1 && step_at(m) < 0) return false;
     }
-    return fits(v0 + 2 * a0 * i128(E) + 3 * u * i128(E) * i128(E), f.v_bits) && fits(a0 + 3 * u * i128(E), f.h_bits);
+    return fits(s0 + 2 * a0 * i128(E) + 3 * u * i128(E) * i128(E + 1), f.v_bits) && fits(a0 + 3 * u * i128(E), f.h_bits);
 }
 
 }  // namespace
@@ -103,7 +107,7 @@ bool PhaseFitter::push(std::span<const double> ideal, std::span<const double> le
         const std::int64_t T = std::int64_t{1} << fmt_.tick_log2;
         const double gap = rest_at - double(c0_);
         const std::uint64_t R = gap > 0 ? std::uint64_t(std::floor(gap / double(T))) : 0;
-        p0_ = v0_ = a0_ = 0;
+        p0_ = s0_ = a0_ = 0;
         if (R > 0) {
             for (std::uint64_t left = R; left > 0;) {
                 const std::uint64_t t = std::min(left, kMaxPhaseTicks);
@@ -134,13 +138,13 @@ bool PhaseFitter::finish() { return error_.empty() && fit(true); }
 // last move with the next move still to come in its own window and the
 // position never going back.
 PhaseFitter::Trial PhaseFitter::evaluate(const State& st, bool all, std::size_t cap) const {
-    const i128 v0 = st.v0, a0 = st.a0;
+    const i128 s0 = st.s0, a0 = st.a0, b0 = s0 - a0;
     const unsigned s = fmt_.tick_log2;
     const std::int64_t T = std::int64_t{1} << s;
     const i128 kInf = i128{1} << 120;
     Trial tr;
     std::vector<i128> lo_run, hi_run;
-    if (!fits(v0, fmt_.v_bits) || !fits(a0, fmt_.h_bits)) return tr;
+    if (!fits(s0, fmt_.v_bits) || !fits(a0, fmt_.h_bits)) return tr;
     i128 jlo = -(i128{1} << (fmt_.u_bits - 1)), jhi = (i128{1} << (fmt_.u_bits - 1)) - 1;
     std::size_t n = st.head;
     for (; n < queue_.size() && n - st.head < cap; ++n) {
@@ -152,19 +156,19 @@ PhaseFitter::Trial PhaseFitter::evaluate(const State& st, bool all, std::size_t 
         const i128 target = ((cum_[n] - st.cum_head) << s) - st.p0;
         i128 l = jlo, h = jhi;
         const Terms th = terms(khi, s);
-        const i128 need_hi = target - v0 * th.k - a0 * th.A;   // j G >= need_hi
-        if (th.G == 0) {
+        const i128 need_hi = target - b0 * th.k - a0 * th.A;   // j Gs >= need_hi
+        if (th.Gs == 0) {
             if (need_hi > 0) break;
         } else {
-            l = std::max(l, ceil_div(need_hi, th.G));
+            l = std::max(l, ceil_div(need_hi, th.Gs));
         }
         if (klo >= 1) {
             const Terms tl = terms(klo, s);
-            const i128 need_lo = target - v0 * tl.k - a0 * tl.A;   // j G < need_lo
-            if (tl.G == 0) {
+            const i128 need_lo = target - b0 * tl.k - a0 * tl.A;   // j Gs < need_lo
+            if (tl.Gs == 0) {
                 if (need_lo <= 0) break;
             } else {
-                h = std::min(h, floor_div(need_lo - 1, tl.G));
+                h = std::min(h, floor_div(need_lo - 1, tl.Gs));
             }
         }
         if (l > h) break;
@@ -182,7 +186,7 @@ PhaseFitter::Trial PhaseFitter::evaluate(const State& st, bool all, std::size_t 
     };
     auto reached = [&](std::int64_t k, i128 tgt, i128 j) {
         const Terms t = terms(k, s);
-        return v0 * t.k + a0 * t.A + j * t.G >= tgt;
+        return b0 * t.k + a0 * t.A + j * t.Gs >= tgt;
     };
     for (std::size_t covered = n - st.head; covered > 0; --covered) {
         const i128 l = lo_run[covered - 1], h = hi_run[covered - 1];
@@ -196,8 +200,8 @@ PhaseFitter::Trial PhaseFitter::evaluate(const State& st, bool all, std::size_t 
             const std::int64_t kn = static_cast<std::int64_t>(std::llround(queue_[q] - tol_ / 2)) - st.c0;
             if (kn < 1) continue;
             const Terms t = terms(kn, s);
-            const double g = double(t.G);
-            const double want = double(((cum_[q] - st.cum_head) << s) - st.p0 - v0 * t.k - a0 * t.A);
+            const double g = double(t.Gs);
+            const double want = double(((cum_[q] - st.cum_head) << s) - st.p0 - b0 * t.k - a0 * t.A);
             sgg += g * g;
             sgt += g * want;
         }
@@ -221,7 +225,7 @@ PhaseFitter::Trial PhaseFitter::evaluate(const State& st, bool all, std::size_t 
         if (more && reached(E * T, next_target, j)) continue;
         // The next phase starts before the next move's window closes.
         if (more && st.c0 + E * T >= static_cast<std::int64_t>(std::floor(queue_[st.head + covered]))) continue;
-        const bool ok = phase_holds(v0, a0, j, E, fmt_);
+        const bool ok = phase_holds(s0, a0, j, E, fmt_);
         if (!ok) continue;
         tr.covered = covered;
         tr.j = j;
@@ -276,8 +280,8 @@ bool PhaseFitter::plan_state(i128& p, i128& v, i128& h) const {
     const double next = double(cum_[head_] - cum_head_) / ONE;
     const double pos = std::clamp(n0, 0.0, next * (1 - 1e-9));
     p = i128(pos * ONE * TT);
-    v = i128(b * TT * ONE);
     h = i128(c2 * TT * TT * ONE);
+    v = i128(b * TT * ONE) + h;   // the step S = V + H (+ u, which the phase's fit takes up)
     return true;
 }
 
@@ -287,19 +291,19 @@ void PhaseFitter::commit(const State& from, const Trial& tr, bool reload, bool a
     advance(after, tr, &fires_);
     c0_ = after.c0;
     p0_ = after.p0;
-    v0_ = after.v0;
+    s0_ = after.s0;
     a0_ = after.a0;
     cum_head_ = after.cum_head;
     head_ = after.head;
     stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(a0_)));
-    stats_.max_velocity = std::max(stats_.max_velocity, to_i64(v0_));
+    stats_.max_velocity = std::max(stats_.max_velocity, to_i64(s0_));
     if (reload) {
         ++stats_.reloads;
         stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(from.a0)));
-        stats_.max_velocity = std::max(stats_.max_velocity, to_i64(from.v0));
+        stats_.max_velocity = std::max(stats_.max_velocity, to_i64(from.s0));
     }
     const unsigned p_drop = fmt_.frac_bits + fmt_.tick_log2 + 2 - 64;
-    phases_.push_back({std::uint64_t(tr.E), to_i64(tr.j), pending_rest_, reload, to_i64(from.v0),
+    phases_.push_back({std::uint64_t(tr.E), to_i64(tr.j), pending_rest_, reload, to_i64(from.s0),
                        to_i64(from.a0), reload ? static_cast<std::uint64_t>(from.p0 >> p_drop) : 0, false, adjust});
     if (adjust) {
         ++stats_.adjusts;
@@ -337,24 +341,25 @@ int PhaseFitter::plan_phase_try(bool all, bool adjust) {
     const double unit = std::ldexp(1.0 / fmt_.path_unit_mm, int(fmt_.frac_bits));   // timer units per mm
     const i128 u = i128(std::llround(changes_.front().jerk * tick_s * tick_s * tick_s / 6.0 * unit));
     if (!fits(u, fmt_.u_bits)) return 0;
-    State st{c0_, p0_, v0_, a0_, head_, cum_head_};
+    State st{c0_, p0_, s0_, a0_, head_, cum_head_};
     i128 dv = 0, dh = 0;
     if (adjust) {
         const double dt = (double(c0_) - changes_.front().at) / fmt_.clock_hz;
         const double j = changes_.front().jerk;
         const double v = changes_.front().v + changes_.front().a * dt + j * dt * dt / 2,
                      a = changes_.front().a + j * dt;
-        dv = i128(std::llround(v * tick_s * unit)) - st.v0;
-        dh = i128(std::llround(a / 2 * tick_s * tick_s * unit)) - st.a0;
+        const i128 hp = i128(std::llround(a / 2 * tick_s * tick_s * unit));
+        dv = i128(std::llround(v * tick_s * unit)) + hp + u - st.s0;   // the plan's S = V + H + u
+        dh = hp - st.a0;
         if (dv == 0 && dh == 0) return 0;
-        st.v0 += dv;
+        st.s0 += dv;
         st.a0 += dh;
     }
     auto P = [&](std::int64_t k) {
         const Terms t = terms(k, s);
-        return st.v0 * t.k + st.a0 * t.A + u * t.G;
+        return (st.s0 - st.a0) * t.k + st.a0 * t.A + u * t.Gs;
     };
-    if (!fits(st.v0, fmt_.v_bits) || !fits(st.a0, fmt_.h_bits) || !phase_holds(st.v0, st.a0, u, E, fmt_)) return 0;
+    if (!fits(st.s0, fmt_.v_bits) || !fits(st.a0, fmt_.h_bits) || !phase_holds(st.s0, st.a0, u, E, fmt_)) return 0;
     const std::int64_t kend = E * T;
     const i128 reach = P(kend);
     std::size_t covered = 0;
@@ -400,7 +405,7 @@ bool PhaseFitter::fit(bool all) {
         }
         if (const int taken = plan_phase(all); taken < 0) return true;
         else if (taken > 0) continue;
-        const State now{c0_, p0_, v0_, a0_, head_, cum_head_};
+        const State now{c0_, p0_, s0_, a0_, head_, cum_head_};
         State from = now;
         Trial tr = evaluate(now, all);
         if (tr.wait) return true;   // the phase may go on with later moves
@@ -429,7 +434,7 @@ bool PhaseFitter::fit(bool all) {
                 error_ = fmt::format("no phase times move {} (ideal clock {:.1f}) from the state at clock {} "
                                      "(p {:.4f} v {:.4g} a {:.4g} moves/clock)",
                                      stats_.moves + 1, tau, c0_, double(p0_) / double(ONE),
-                                     double(v0_) / double(ONE), double(a0_) / double(ONE));
+                                     double(s0_) / double(ONE), double(a0_) / double(ONE));
                 return false;
             }
             phases_.push_back({std::uint64_t(at - c0_), 0, pending_rest_, false, 0, 0, 0, true});
@@ -476,11 +481,11 @@ bool PhaseFitter::fit(bool all) {
 void PhaseFitter::advance(State& st, const Trial& tr, std::vector<std::int64_t>* fires) const {
     const unsigned s = fmt_.tick_log2;
     const std::int64_t T = std::int64_t{1} << s;
-    const i128 v0 = st.v0, a0 = st.a0, j = tr.j;
+    const i128 s0 = st.s0, a0 = st.a0, j = tr.j;
     const std::int64_t E = tr.E;
     auto reached = [&](std::int64_t k, i128 tgt) {
         const Terms t = terms(k, s);
-        return v0 * t.k + a0 * t.A + j * t.G >= tgt;
+        return (s0 - a0) * t.k + a0 * t.A + j * t.Gs >= tgt;
     };
     if (fires) {
         for (std::size_t m = 0; m < tr.covered; ++m) {
@@ -496,11 +501,11 @@ void PhaseFitter::advance(State& st, const Trial& tr, std::vector<std::int64_t>*
         }
     }
     const Terms te = terms(E * T, s);
-    const i128 P = v0 * te.k + a0 * te.A + j * te.G;
+    const i128 P = (s0 - a0) * te.k + a0 * te.A + j * te.Gs;
     const i128 end = tr.covered > 0 ? cum_[st.head + tr.covered - 1] : st.cum_head;
     st.p0 = st.p0 + P - ((end - st.cum_head) << s);
     st.cum_head = end;
-    st.v0 = v0 + 2 * a0 * i128(E) + 3 * j * i128(E) * i128(E);
+    st.s0 = s0 + 2 * a0 * i128(E) + 3 * j * i128(E) * i128(E + 1);
     st.a0 = a0 + 3 * j * i128(E);
     st.c0 += E * T;
     st.head += tr.covered;
@@ -515,18 +520,18 @@ std::vector<std::int64_t> simulate_phases(std::span<const TimerPhase> phases, Ph
         const i128 len = next < lengths.size() ? lengths[next] : i128{1} << format.frac_bits;
         return len << format.tick_log2;
     };
-    i128 p = 0, v = 0, h = 0;
+    i128 p = 0, step = 0, h = 0;   // p, the step S, H
     std::int64_t clock = 0;
     std::vector<std::int64_t> fires;
     for (const TimerPhase& ph : phases) {
-        if (ph.rest) p = v = h = 0;
+        if (ph.rest) p = step = h = 0;
         if (ph.adjust) {
-            v = ph.v;
+            step = ph.s;
             h = ph.a;
         }
         if (ph.reload) {
             p = i128(ph.p_top) << (format.frac_bits + format.tick_log2 + 2 - 64);
-            v = ph.v;
+            step = ph.s;
             h = ph.a;
         }
         if (ph.timed) {   // a move after `ticks` clocks
@@ -538,7 +543,6 @@ std::vector<std::int64_t> simulate_phases(std::span<const TimerPhase> phases, Ph
         }
         const i128 u = ph.jerk;
         for (std::uint64_t t = 0; t < ph.ticks; ++t) {
-            const i128 step = v + h + u;
             for (std::int64_t c = 0; c < T; ++c) {
                 ++clock;
                 p += step;
@@ -548,7 +552,7 @@ std::vector<std::int64_t> simulate_phases(std::span<const TimerPhase> phases, Ph
                     p -= th;
                 }
             }
-            v += 2 * h + 3 * u;
+            step += 2 * h + 6 * u;
             h += 3 * u;
         }
     }

@@ -6,28 +6,33 @@
 // being the cubic's own derivatives (so that a phase's jerk can change
 // without the position, velocity or acceleration jumping):
 //
-//   every tick m (2^s clocks, counted from the phase's start): step = V + H + u,
-//       then V += 2H + 3u, H += 3u     (x(m) = V m + H m^2 + u m^3 over ticks)
-//   every clock of the tick:  p += step; when p >= the next move's length
-//       (times 2^s): the move fires, p -= that length
+//   every clock of a tick (2^s clocks):  p += S; when p >= the next move's
+//       length (times 2^s): the move fires, p -= that length
+//   at each tick's end:  S += 2H + 6u, H += 3u
 //
-// V, H and u in units of 2^-F moves (path_unit_mm = 0) or of 2^-F
+// S is the tick's step, V + H + u of the cubic x(m) = V m + H m^2 + u m^3 over
+// ticks (V, H, u: its velocity per tick, half its acceleration, a sixth of its
+// jerk); the card keeps S, H and u (no V) and carries S and H from a phase into
+// the next, so a new u changes the step from the phase's second tick on (its
+// first tick's step is the one the phase before left).
+//
+// S, H and u in units of 2^-F moves (path_unit_mm = 0) or of 2^-F
 // path_unit_mm of path (path_unit_mm > 0; each card segment would carry its
 // length per move), per tick, per tick^2 (half the acceleration) and per
-// tick^3 (a sixth of the jerk). Phases are (ticks, u), maybe from rest (p, V,
-// H = 0), maybe reloading p, V and H from the plan, or a timed move (fired a
+// tick^3 (a sixth of the jerk). Phases are (ticks, u), maybe from rest (p, S,
+// H = 0), maybe reloading p, S and H from the plan, or a timed move (fired a
 // given number of clocks after the phase's start; the last move of a stop,
 // which the position reaches too flatly for any phase to time within 1 us:
 // 3e-14 moves 41 clocks before the end).
 //
-// Move n (1, 2, ...) of a phase that starts at clock c0 with p0, V, H fires
+// Move n (1, 2, ...) of a phase that starts at clock c0 with p0, S, H fires
 // at the first clock c0 + k where p0 + P(k) reaches the moves' lengths up to n,
-//   P(k) = V k + H A(k) + u G(k),  k = M 2^s + r (0 <= r < 2^s),
+//   P(k) = (S - H) k + H A(k) + u (G(k) - k),  k = M 2^s + r (0 <= r < 2^s),
 //   A(k) = 2^s M^2 + r (2M + 1),   G(k) = 2^s M^3 + r (3M^2 + 3M + 1),
 // linear in u: each move's window (never late, at most `tolerance` early, as
 // the chunks) gives u an interval. PhaseFitter takes the feed plan's own phases
 // where they are given (PlanJerk; its jerk up to the tick nearest the next
-// change, as it stands or with V and H set back to the plan's) and otherwise a
+// change, as it stands or with S and H set back to the plan's) and otherwise a
 // greedy phase, which lasts while the intervals of its moves meet.
 #pragma once
 
@@ -52,7 +57,7 @@ struct PlanJerk {
 struct PhaseFormat {
     unsigned tick_log2 = 6;    // a tick is 2^s clocks
     unsigned frac_bits = 60;   // F: V, H and u in 2^-F moves (or path units), p in 2^-F-s
-    bool reload = true;        // a phase may set p, V and H (from the plan) where that saves words
+    bool reload = true;        // a phase may set p, S and H (from the plan) where that saves words
     bool lookahead = false;    // a phase may end early where the next then carries on further
     // 0: p counts moves (a move fires at each whole move). > 0: p is the path
     // length in units of path_unit_mm * 2^-F, a move fires when p reaches
@@ -63,20 +68,20 @@ struct PhaseFormat {
     // plan's next change), the greedy fit only where that misses a window.
     bool plan_jerk = true;
     double clock_hz = 0;       // the card's clock (plan_jerk: the jerk in the timer's units)
-    // The card's registers (rtl/cp_ptimer.v): u, V and H signed in these many bits.
+    // The card's registers (rtl/cp_ptimer.v): u, S and H signed in these many bits.
     unsigned u_bits = 24, v_bits = 56, h_bits = 40;
 };
 
 struct TimerPhase {
     std::uint64_t ticks = 0;   // ticks (a timed move: clocks)
     std::int64_t jerk = 0;     // u: a sixth of the jerk, per tick^3
-    bool rest = false;         // p, V and H set to zero at the phase's start
-    bool reload = false;       // p, V and H set at the phase's start (after rest)
-    std::int64_t v = 0, a = 0; // V and H (a: half the acceleration) for a reload or an adjust
+    bool rest = false;         // p, S and H set to zero at the phase's start
+    bool reload = false;       // p, S and H set at the phase's start (after rest)
+    std::int64_t s = 0, a = 0; // S (the step) and H (half the acceleration) for a reload or an adjust
     std::uint64_t p_top = 0;   // p = p_top * 2^(F + s + 2 - 64): p's top 64 of F + s + 2 bits
     bool timed = false;        // no jerk phase: one move `ticks` clocks after the phase's start, then p = 0
-    // V and H set at the phase's start, p kept (plan_jerk: the plan's own phase
-    // with its state brought back to the plan's; the card's "load V and H").
+    // S and H set at the phase's start, p kept (plan_jerk: the plan's own phase
+    // with its state brought back to the plan's; the card's "load S and H").
     bool adjust = false;
     friend bool operator==(const TimerPhase&, const TimerPhase&) = default;
 };
@@ -89,12 +94,12 @@ struct PhaseStats {
     std::uint64_t reloads = 0;
     std::uint64_t timed = 0;
     std::uint64_t plan_phases = 0;    // the plan's own (plan_jerk)
-    std::uint64_t adjusts = 0;        // of them with V and H corrected
-    std::int64_t max_abs_adjust = 0;  // the largest correction of V or H
+    std::uint64_t adjusts = 0;        // of them with S and H corrected
+    std::int64_t max_abs_adjust = 0;  // the largest correction of S or H
     std::uint64_t max_ticks = 0;
     std::int64_t max_abs_jerk = 0;
     std::int64_t max_abs_accel = 0;   // at phase ends
-    std::int64_t max_velocity = 0;    // at phase ends
+    std::int64_t max_velocity = 0;    // the step S at phase ends
     std::uint64_t max_phase_moves = 0;
 };
 
@@ -120,11 +125,11 @@ public:
     [[nodiscard]] const std::string& error() const { return error_; }
 
 private:
-    // Where a phase starts: clock, p, V, H, the next queued move and the end
+    // Where a phase starts: clock, p, S, H, the next queued move and the end
     // of the move before it on the path.
     struct State {
         std::int64_t c0 = 0;
-        i128 p0 = 0, v0 = 0, a0 = 0;
+        i128 p0 = 0, s0 = 0, a0 = 0;   // p, S, H
         std::size_t head = 0;
         i128 cum_head = 0;
     };
@@ -149,7 +154,7 @@ private:
     double tol_;
     // The state at the start of the open phase (clock c0_, exact).
     std::int64_t c0_ = 0;
-    i128 p0_ = 0, v0_ = 0, a0_ = 0;
+    i128 p0_ = 0, s0_ = 0, a0_ = 0;
     bool pending_rest_ = false;   // the open phase starts from rest
     std::deque<PlanJerk> changes_;   // the plan's phases to come (a change of jerk or of state)
     std::vector<double> queue_;   // ideal times not yet in a closed phase

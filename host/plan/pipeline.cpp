@@ -387,9 +387,9 @@ struct PlanStream::Impl {
     // conic_length_rule: every move of the arc's pieces at its position along the
     // arc's path (mm), move n's length K / D_n (plan::conic_rule_divisors), K such
     // that the last move ends the arc's path, as the feeds plan it.
-    void rule_positions(const std::vector<ConicPiece>& pieces, std::span<const PlannedSegment> feeds) {
+    void rule_positions(const std::vector<ConicPiece>& pieces, std::span<const PlannedSegment> arc_feeds) {
         double total = 0;
-        for (const PlannedSegment& f : feeds) total += f.length;
+        for (const PlannedSegment& f : arc_feeds) total += f.length;
         std::vector<double> w;
         for (const ConicPiece& piece : pieces)
             for (std::uint64_t d : conic_rule_divisors(*piece.walk)) w.push_back(1.0 / double(std::max<std::uint64_t>(d, 1)));
@@ -405,10 +405,10 @@ struct PlanStream::Impl {
         rule_next = 0;
     }
     // The card cycle at which the feeds reach `s` mm along the arc's path.
-    [[nodiscard]] double time_at(std::span<const PlannedSegment> feeds, double s) const {
+    [[nodiscard]] double time_at(std::span<const PlannedSegment> arc_feeds, double s) const {
         double done = 0;
-        for (const PlannedSegment& f : feeds) {
-            if (s <= done + f.length || &f == &feeds.back())
+        for (const PlannedSegment& f : arc_feeds) {
+            if (s <= done + f.length || &f == &arc_feeds.back())
                 return (f.t_start + f.profile.time_at(std::clamp(s - done, 0.0, f.length))) * m.card.clock_hz;
             done += f.length;
         }

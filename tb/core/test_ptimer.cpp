@@ -64,9 +64,9 @@ using Rng = std::mt19937_64;
 uint64_t pick(Rng& rng, uint64_t lo, uint64_t hi) { return std::uniform_int_distribution<uint64_t>(lo, hi)(rng); }
 bool chance(Rng& rng, unsigned pct) { return pick(rng, 0, 99) < pct; }
 
-// A phase's words, W0 last: {sel, data}. kind = {load V and H, rest, timed, load p}.
+// A phase's words, W0 last: {sel, data}. kind = {load S and H, rest, timed, load p}.
 std::vector<std::pair<uint32_t, uint32_t>> phase_words(uint32_t kind, uint32_t ticks, int64_t u, uint64_t p_top,
-                                                       int64_t v, int64_t h) {
+                                                       int64_t s, int64_t h) {
   std::vector<std::pair<uint32_t, uint32_t>> w;
   w.push_back({1, uint32_t(u)});
   if (kind & 1) {
@@ -74,8 +74,8 @@ std::vector<std::pair<uint32_t, uint32_t>> phase_words(uint32_t kind, uint32_t t
     w.push_back({3, uint32_t(p_top >> 32)});
   }
   if (kind & 8) {
-    w.push_back({4, uint32_t(v)});
-    w.push_back({5, uint32_t(uint64_t(v) >> 32)});
+    w.push_back({4, uint32_t(s)});
+    w.push_back({5, uint32_t(uint64_t(s) >> 32)});
     w.push_back({6, uint32_t(h)});
     w.push_back({7, uint32_t(uint64_t(h) >> 32)});
   }
@@ -87,7 +87,7 @@ std::vector<std::pair<uint32_t, uint32_t>> phase_words(uint32_t kind, uint32_t t
 std::vector<std::pair<uint32_t, uint32_t>> host_phase_words(const plan::TimerPhase& ph) {
   const uint32_t kind = uint32_t(ph.reload || ph.adjust) << 3 | uint32_t(ph.rest) << 2 | uint32_t(ph.timed) << 1 |
                         uint32_t(ph.reload);
-  return phase_words(kind, uint32_t(ph.ticks), ph.jerk, ph.p_top, ph.v, ph.a);
+  return phase_words(kind, uint32_t(ph.ticks), ph.jerk, ph.p_top, ph.s, ph.a);
 }
 
 TEST(Ptimer, RandomPhasesMatchTheModel) {
@@ -109,9 +109,9 @@ TEST(Ptimer, RandomPhasesMatchTheModel) {
       const uint32_t ticks = chance(rng, 5) ? 0 : chance(rng, 80) ? uint32_t(pick(rng, 1, 6)) : uint32_t(pick(rng, 7, 300));
       // Steps of about 2^50..2^56 against lengths of 2^52..2^58: moves a few clocks to a few hundred apart.
       const int64_t u = chance(rng, 10) ? int64_t(int32_t(rng())) : int64_t(pick(rng, 0, 1u << 22)) - (1 << 21);
-      const int64_t v = chance(rng, 5) ? int64_t(rng()) : int64_t(pick(rng, 0, uint64_t{1} << 54));
+      const int64_t s = chance(rng, 5) ? int64_t(rng()) : int64_t(pick(rng, 0, uint64_t{1} << 54));
       const int64_t h = chance(rng, 5) ? int64_t(rng()) : int64_t(pick(rng, 0, uint64_t{1} << 38)) - (int64_t{1} << 37);
-      auto w = phase_words(kind, ticks, u, rng(), v, h);
+      auto w = phase_words(kind, ticks, u, rng(), s, h);
       if (chance(rng, 20)) std::shuffle(w.begin(), w.end() - 1, rng);   // W0 stays last
       if (chance(rng, 3)) std::shuffle(w.begin(), w.end(), rng);        // W0 early: later words go elsewhere or nowhere
       for (auto& x : w) words.push_back(x);
