@@ -13,18 +13,24 @@ int64_t sx(int64_t x, unsigned w) {
   return int64_t(v);
 }
 
-cp_i128 mask(cp_i128 x, unsigned w) { return x & ((cp_i128{1} << w) - 1); }
+// The low `w` bits of x as a signed value (w < 128).
+cp_i128 sx128(cp_i128 x, unsigned w) {
+  const unsigned __int128 m = (static_cast<unsigned __int128>(1) << w) - 1;
+  unsigned __int128 v = static_cast<unsigned __int128>(x) & m;
+  if (v >> (w - 1) & 1) v |= ~m;
+  return static_cast<cp_i128>(v);
+}
 
 }  // namespace
 
 cp_i128 CpPtimer::threshold() const {
   const uint64_t len = p_.lw >= 64 ? in.len : in.len & ((uint64_t{1} << p_.lw) - 1);
-  return mask(cp_i128(len) << p_.s, pw());
+  return cp_i128(len) << p_.s;
 }
 
 CpPtimerOut CpPtimer::outputs() const {
   Out o;
-  o.due = r_.tdue || (!r_.timed && r_.p >= threshold());
+  o.due = r_.tdue || (!r_.timed && !r_.fresh && r_.r >= 0);
   o.active = r_.active;
   o.ready = !r_.nvalid;
   o.starved = r_.starved;
@@ -39,12 +45,12 @@ void CpPtimer::tick() {
   }
   const Regs o = r_;
   Regs n = r_;
-  const bool due = o.tdue || (!o.timed && o.p >= threshold());
+  const bool due = o.tdue || (!o.timed && !o.fresh && o.r >= 0);
   // The next phase's buffer: written while free, W0 last.
   if (in.wr && !o.nvalid) {
     switch (in.sel & 7) {
       case 0:
-        n.nkind = in.data >> 28;   // {load S and H, rest, timed, load p}
+        n.nkind = in.data >> 28;   // {load S and H, rest, timed, load r}
         n.nticks = in.data & ((uint32_t{1} << p_.tw) - 1);
         n.nvalid = true;
         break;
@@ -57,24 +63,27 @@ void CpPtimer::tick() {
       default: n.nh = (o.nh & 0xFFFFFFFF) | uint64_t{in.data} << 32; break;
     }
   }
-  // The due move fires: a timed one clears its flag, else p gives up its length.
-  cp_i128 p = o.p;
-  if (in.fire && due) {
-    if (o.tdue) n.tdue = false;
-    else p -= threshold();
+  // The due move fires (a timed one clears its flag): r takes off the length of
+  // the move now pending, the next one.
+  // (The clock after a start from rest takes off the pending move's length.)
+  cp_i128 r = o.r;
+  n.fresh = false;
+  if ((in.fire && due) || o.fresh) {
+    if (in.fire && due && o.tdue) n.tdue = false;
+    r -= threshold();
   }
   bool phase_end = false;
   if (o.active && in.adv) {
     if (o.timed) {
       if (o.tleft == 1) {
         n.tdue = true;
-        p = 0;
+        r = 0;   // p = 0, the timed move's fire takes off the next one's length
         phase_end = true;
       } else {
         n.tleft = o.tleft - 1;
       }
     } else {
-      p += o.step;
+      r += o.step;
       n.tcnt = (o.tcnt + 1) & ((uint32_t{1} << p_.s) - 1);
       if (o.tcnt == (uint32_t{1} << p_.s) - 1) {
         n.step = sx(o.step + 2 * o.h + 6 * o.u, p_.vw);
@@ -95,21 +104,25 @@ void CpPtimer::tick() {
       n.u = u;
       n.tleft = o.nticks == 0 ? 1 : o.nticks;
       n.tcnt = 0;
-      if (o.nkind & 4) {   // from rest
+      if (o.nkind & 4) {   // from rest: p = 0, r = 0 until the pending move's length is taken off
         n.step = n.h = 0;
-        p = 0;
+        r = 0;
+        n.fresh = !n.tdue;   // next clock (a timed move still to fire takes off the next's)
       }
       if (o.nkind & 8) {   // load S and H
         n.step = sx(int64_t(o.nv), p_.vw);
         n.h = sx(int64_t(o.nh), p_.hw);
       }
-      if (o.nkind & 1) p = cp_i128(o.np) << (pw() - 64);   // load p
+      if (o.nkind & 1) {   // load r (its top 64 bits)
+        r = cp_i128(int64_t(o.np)) << (rw() - 64);
+        n.fresh = false;
+      }
     } else {
       n.active = false;
       n.starved = true;
     }
   }
-  n.p = mask(p, pw());
+  n.r = sx128(r, rw());
   r_ = n;
 }
 

@@ -4,20 +4,22 @@
 // wire; the unit on its own, not yet part of cp_core). The host's side is
 // plan/phases.h, whose arithmetic this is, clock by clock:
 //
-//   every clock of a jerk phase (adv):  p += step; when p >= len * 2^S the move
-//       is due (fire_i takes it: p -= len * 2^S in the same clock's sum)
+//   every clock of a jerk phase (adv):  p += step; the pending move is due while
+//       p >= its length * 2^S. Kept as r = p - that length * 2^S (due: r >= 0);
+//       a fire takes off the next move's length (`len` is the length of the move
+//       pending after this clock: in a clock that fires, the next one's)
 //   at the end of each tick (2^S clocks from the phase's start):
 //       step += 2H + 6u, H += 3u
 //   (the step S = V + H + u of the cubic V m + H m^2 + u m^3 over ticks; no V is
-//   kept). A phase (W0 = {load S and H, rest, timed, load p, 4'b0, ticks[23:0]})
+//   kept). A phase (W0 = {load S and H, rest, timed, load r, 4'b0, ticks[23:0]})
 //   holds u for `ticks` ticks (0: 1), then the next phase loads at once (none: the
-//   timer stops, `starved`). It carries p, S and H on (a new u changes the step
+//   timer stops, `starved`). It carries r, S and H on (a new u changes the step
 //   from its second tick on), or starts from rest (p, S, H = 0), and/or loads S
-//   and H, and/or p, from the buffer (in that order); a timed phase is one move,
+//   and H, and/or r, from the buffer (in that order); a timed phase is one move,
 //   due `ticks` clocks after the phase's start, with p, S and H frozen until then
-//   and p = 0 after.
+//   and p = 0 after (r = 0 until the timed move fires and takes off the next's).
 //
-// The next phase is written word by word into a buffer (sel 1: u; 2, 3: p's top
+// The next phase is written word by word into a buffer (sel 1: u; 2, 3: r's top
 // 64 bits, low word first; 4, 5: S; 6, 7: H) and committed by W0 (sel 0) while
 // `ready`; a write while not ready changes nothing. outputs() before the edge,
 // tick() the edge.
@@ -27,7 +29,7 @@
 
 namespace cpstep::model {
 
-__extension__ typedef __int128 cp_i128;   // p: F + S + 2 bits
+__extension__ typedef __int128 cp_i128;   // r: F + S + 3 bits, signed
 
 struct CpPtimerIn {
   bool rst = false;
@@ -37,7 +39,7 @@ struct CpPtimerIn {
   uint32_t sel = 0;
   uint32_t data = 0;
   bool fire = false;       // the due move fires now
-  uint64_t len = 0;        // the next move's length, 2^-F units (LW bits)
+  uint64_t len = 0;        // the pending move's length after this clock, 2^-F units (LW bits)
 };
 
 struct CpPtimerOut {
@@ -45,7 +47,7 @@ struct CpPtimerOut {
   bool active = false;
   bool ready = false;      // the buffer takes the next phase
   bool starved = false;    // a phase ended with none after it (until one loads)
-  uint32_t kind = 0;       // the running phase's {load S and H, rest, timed, load p}
+  uint32_t kind = 0;       // the running phase's {load S and H, rest, timed, load r}
   bool operator==(const CpPtimerOut&) const = default;
 };
 
@@ -67,18 +69,21 @@ class CpPtimer {
   void tick();
 
   // For the benches.
-  cp_i128 p() const { return r_.p; }
+  cp_i128 r() const { return r_.r; }
   int64_t step() const { return r_.step; }
   int64_t h() const { return r_.h; }
-  unsigned pw() const { return p_.f + p_.s + 2; }
+  unsigned rw() const { return p_.f + p_.s + 3; }
 
  private:
   struct Regs {
     bool active = false, timed = false, tdue = false, starved = false;
+    bool fresh = false;   // started from rest last clock: r = 0, the pending length not yet taken off
     uint32_t kind = 0;
     uint32_t tleft = 0, tcnt = 0;
     int64_t u = 0, h = 0, step = 0;   // u, H, the step S
-    cp_i128 p = 0;
+    // p minus the pending move's length (times 2^S), signed in rw() bits; -1 after
+    // reset and clear: nothing due until a phase starts from rest or loads r.
+    cp_i128 r = -1;
     bool nvalid = false;
     uint32_t nkind = 0, nticks = 0;
     int64_t nu = 0;

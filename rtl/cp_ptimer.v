@@ -3,8 +3,11 @@
 // toward the compact wire; the unit on its own, not yet part of cp_core). The
 // host's side is host/plan/phases.h, whose arithmetic this is, clock by clock:
 //
-//   every clock of a jerk phase (adv_i):  p += step; when p >= len_i * 2^S the
-//       move is due (fire_i takes it: p -= len_i * 2^S in the same clock's sum)
+//   every clock of a jerk phase (adv_i):  p += step; the pending move is due
+//       while p >= its length * 2^S, kept as r = p - that length * 2^S (due: r's
+//       sign clear); a fire (fire_i) takes off the next move's length: len_i is
+//       the length of the move pending after this clock (in a clock that fires,
+//       the next one's)
 //   at the end of each tick (2^S clocks from the phase's start):
 //       step += 2H + 6u, H += 3u
 //       summed bit-serially over the tick's clocks (below), the same bits
@@ -13,15 +16,16 @@
 // needs it (S = V + H + u: the distance of the tick; H half the acceleration, u a
 // sixth of the jerk; no V is kept), so a phase changes u without p, S or H
 // jumping (a new u changes the step from the phase's second tick on). A phase
-// (W0 = {load S and H, rest, timed, load p, 4'b0, ticks[23:0]}) holds u for
+// (W0 = {load S and H, rest, timed, load r, 4'b0, ticks[23:0]}) holds u for
 // `ticks` ticks (0: 1), then the next phase loads at once (none: the timer stops
-// and says `starved`). It carries p, S and H on, or starts from rest (p, S, H =
-// 0), and/or loads S and H (the host's correction back to its plan), and/or p,
+// and says `starved`). It carries r, S and H on, or starts from rest (p, S, H =
+// 0), and/or loads S and H (the host's correction back to its plan), and/or r,
 // from the buffer, in that order; a timed phase is one move, due `ticks` clocks
-// after the phase's start, p, S and H frozen until then and p = 0 after (the last
-// move of a stop, which no phase times within 1 us).
+// after the phase's start, p, S and H frozen until then and p = 0 after (r = 0
+// until the timed move fires and takes off the next one's length; the last move
+// of a stop, which no phase times within 1 us).
 //
-// The next phase is written word by word into a buffer (sel 1: u; 2, 3: p's top
+// The next phase is written word by word into a buffer (sel 1: u; 2, 3: r's top
 // 64 bits, low word first; 4, 5: S; 6, 7: H) and committed by W0 (sel 0) while
 // ready_o; a write while not ready changes nothing.
 //
@@ -32,12 +36,12 @@
 
 module cp_ptimer #(
     parameter integer S  = 6,     // a tick is 2^S clocks
-    parameter integer F  = 60,    // fractional bits of p, S, H and u
+    parameter integer F  = 60,    // fractional bits of r, S, H and u
     parameter integer VW = 56,    // the step S (signed)
     parameter integer HW = 40,    // H (signed)
     parameter integer UW = 24,    // u (signed)
     parameter integer LW = 62     // a move's length (unsigned, 2^-F units)
-    // (32 < HW <= VW <= 64, VW <= 2^S, UW <= 32, UW <= HW, LW + S <= F + S + 2, F + S + 2 >= 64)
+    // (32 < HW <= VW <= 64, VW <= 2^S, UW <= 32, UW <= HW, LW <= F + 2, F + S + 3 > 64)
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -47,25 +51,26 @@ module cp_ptimer #(
     input  wire [2:0]    sel_i,
     input  wire [31:0]   data_i,
     input  wire          fire_i,        // the due move fires now
-    input  wire [LW-1:0] len_i,         // the next move's length
+    input  wire [LW-1:0] len_i,         // the pending move's length after this clock
     output wire          due_o,
     output wire          active_o,
     output wire          ready_o,
     output wire          starved_o,
-    output wire [3:0]    kind_o         // the running phase's {load S and H, rest, timed, load p}
+    output wire [3:0]    kind_o         // the running phase's {load S and H, rest, timed, load r}
 );
 
-localparam integer PW = F + S + 2;      // p
+localparam integer RW = F + S + 3;      // r (signed)
 localparam integer TW = 24;             // ticks
 
 reg           active_q, timed_q, tdue_q, starved_q, nvalid_q;
+reg           fresh_q;        // started from rest last clock: r = 0, the pending length still to take off
 reg  [3:0]    kind_q, nkind_q;
 reg  [TW-1:0] tleft_q, nticks_q;
 reg  [S-1:0]  tcnt_q;
 reg  signed [UW-1:0] u_q;
 reg  signed [VW-1:0] step_q;     // the step S
 reg  signed [HW-1:0] h_q;
-reg  [PW-1:0] p_q;
+reg  [RW-1:0] r_q;            // p minus the pending move's length (times 2^S)
 reg  [UW-1:0] nu_q;
 reg  [63:0]   np_q;
 reg  [VW-1:0] nv_q;
@@ -75,8 +80,8 @@ reg  [3:0]    cy_q;           // the serial sums' carries
 reg           up_q, hp_q, tp_q;   // u's, H's and 3u's bit before (for 2u, 2H, 6u)
 reg           hs_q;           // the tick's H's sign (its bits past HW)
 
-wire [PW-1:0] thresh = {{(PW-LW-S){1'b0}}, len_i, {S{1'b0}}};
-wire          due = tdue_q || (!timed_q && p_q >= thresh);
+wire [RW-1:0] thresh = {{(RW-LW-S){1'b0}}, len_i, {S{1'b0}}};
+wire          due = tdue_q || (!timed_q && !fresh_q && !r_q[RW-1]);
 assign due_o     = due;
 assign active_o  = active_q;
 assign ready_o   = !nvalid_q;
@@ -121,10 +126,13 @@ wire signed [VW-1:0] step_ld = nkind_q[3] ? nv_q : nkind_q[2] ? {VW{1'b0}} : sn_
 wire signed [HW-1:0] h_ld    = nkind_q[3] ? nh_q : nkind_q[2] ? {HW{1'b0}} : h_q;
 
 // p: this clock's fire and step.
-wire [PW-1:0] step_p = {{(PW-VW){step_q[VW-1]}}, step_q};
-wire [PW-1:0] p_fired = (fire_i && due && !tdue_q) ? p_q - thresh : p_q;
-wire [PW-1:0] p_run = (running && !timed_q) ? p_fired + step_p
-                    : (running && timed_q && phase_end) ? {PW{1'b0}} : p_fired;
+// r: this clock's fire (or the clock after a start from rest, p = 0) takes off the
+// pending move's length; then the step.
+wire          tdue_n  = (tdue_q && !(fire_i && due)) || (running && timed_q && phase_end);
+wire [RW-1:0] step_r  = {{(RW-VW){step_q[VW-1]}}, step_q};
+wire [RW-1:0] r_fired = ((fire_i && due) || fresh_q) ? r_q - thresh : r_q;
+wire [RW-1:0] r_run   = (running && !timed_q) ? r_fired + step_r
+                      : (running && timed_q && phase_end) ? {RW{1'b0}} : r_fired;
 
 always @(posedge clk) begin
     if (rst || clear_i) begin
@@ -141,7 +149,8 @@ always @(posedge clk) begin
         u_q       <= {UW{1'b0}};
         h_q       <= {HW{1'b0}};
         step_q    <= {VW{1'b0}};
-        p_q       <= {PW{1'b0}};
+        r_q       <= {RW{1'b1}};   // -1: nothing due until a phase from rest or loading r
+        fresh_q   <= 1'b0;
         nu_q      <= {UW{1'b0}};
         np_q      <= 64'd0;
         nv_q      <= {VW{1'b0}};
@@ -187,7 +196,8 @@ always @(posedge clk) begin
                 if (!phase_end) tleft_q <= tleft_q - 1'b1;
             end
         end
-        p_q <= p_run;
+        r_q     <= r_run;
+        fresh_q <= 1'b0;
         if (load) begin
             if (nvalid_q) begin
                 nvalid_q  <= 1'b0;
@@ -201,8 +211,13 @@ always @(posedge clk) begin
                 h_q       <= h_ld;
                 step_q    <= step_ld;
                 sn_q      <= step_ld;
-                if (nkind_q[2]) p_q <= {PW{1'b0}};
-                if (nkind_q[0]) p_q <= {np_q, {(PW-64){1'b0}}};
+                // p = 0: r = 0, the pending move's length taken off the next clock
+                // (a timed move still to fire takes off the next one's itself).
+                if (nkind_q[2]) begin
+                    r_q     <= {RW{1'b0}};
+                    fresh_q <= !tdue_n && !nkind_q[0];
+                end
+                if (nkind_q[0]) r_q <= {np_q, {(RW-64){1'b0}}};
             end else begin
                 active_q  <= 1'b0;
                 starved_q <= 1'b1;

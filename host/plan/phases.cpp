@@ -302,9 +302,14 @@ void PhaseFitter::commit(const State& from, const Trial& tr, bool reload, bool a
         stats_.max_abs_accel = std::max(stats_.max_abs_accel, to_i64(abs128(from.a0)));
         stats_.max_velocity = std::max(stats_.max_velocity, to_i64(from.s0));
     }
-    const unsigned p_drop = fmt_.frac_bits + fmt_.tick_log2 + 2 - 64;
+    // A reload's r = p minus the pending move's length (times 2^s), its top 64 bits.
+    const unsigned r_drop = fmt_.frac_bits + fmt_.tick_log2 + 3 - 64;
+    // (Right after a timed move, which fires a clock after the phase that follows it
+    // loads, the card takes off the next length then: r = p.)
+    const bool after_timed = !phases_.empty() && phases_.back().timed;
+    const i128 pending = reload && !after_timed ? (cum_[from.head] - from.cum_head) << fmt_.tick_log2 : 0;
     phases_.push_back({std::uint64_t(tr.E), to_i64(tr.j), pending_rest_, reload, to_i64(from.s0),
-                       to_i64(from.a0), reload ? static_cast<std::uint64_t>(from.p0 >> p_drop) : 0, false, adjust});
+                       to_i64(from.a0), reload ? to_i64((from.p0 - pending) >> r_drop) : 0, false, adjust});
     if (adjust) {
         ++stats_.adjusts;
         stats_.max_abs_adjust = std::max({stats_.max_abs_adjust, to_i64(abs128(dv)), to_i64(abs128(dh))});
@@ -412,8 +417,9 @@ bool PhaseFitter::fit(bool all) {
         bool reload = false;
         i128 pp = 0, pv = 0, pa = 0;
         if (fmt_.reload && !pending_rest_ && plan_state(pp, pv, pa)) {
-            // p as the card takes it: its top 64 of F + s + 2 bits.
-            const unsigned drop = fmt_.frac_bits + fmt_.tick_log2 + 2 - 64;
+            // p as the card takes it: r = p minus the pending move's length, its top
+            // 64 of F + s + 3 bits (the length's low s bits are 0).
+            const unsigned drop = fmt_.frac_bits + fmt_.tick_log2 + 3 - 64;
             pp = (pp >> drop) << drop;
             const State re{c0_, pp, pv, pa, head_, cum_head_};
             Trial rt = evaluate(re, all);
@@ -521,6 +527,7 @@ std::vector<std::int64_t> simulate_phases(std::span<const TimerPhase> phases, Ph
         return len << format.tick_log2;
     };
     i128 p = 0, step = 0, h = 0;   // p, the step S, H
+    bool after_timed = false;      // the phase before was a timed move
     std::int64_t clock = 0;
     std::vector<std::int64_t> fires;
     for (const TimerPhase& ph : phases) {
@@ -530,10 +537,11 @@ std::vector<std::int64_t> simulate_phases(std::span<const TimerPhase> phases, Ph
             h = ph.a;
         }
         if (ph.reload) {
-            p = i128(ph.p_top) << (format.frac_bits + format.tick_log2 + 2 - 64);
+            p = (i128(ph.r_top) << (format.frac_bits + format.tick_log2 + 3 - 64)) + (after_timed ? 0 : threshold());
             step = ph.s;
             h = ph.a;
         }
+        after_timed = ph.timed;
         if (ph.timed) {   // a move after `ticks` clocks
             clock += std::int64_t(ph.ticks);
             fires.push_back(clock);

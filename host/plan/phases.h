@@ -78,7 +78,9 @@ struct TimerPhase {
     bool rest = false;         // p, S and H set to zero at the phase's start
     bool reload = false;       // p, S and H set at the phase's start (after rest)
     std::int64_t s = 0, a = 0; // S (the step) and H (half the acceleration) for a reload or an adjust
-    std::uint64_t p_top = 0;   // p = p_top * 2^(F + s + 2 - 64): p's top 64 of F + s + 2 bits
+    // A reload's p as the card takes it: r = p minus the pending move's length
+    // (times 2^s) = r_top * 2^(F + s + 3 - 64), r's top 64 of F + s + 3 bits.
+    std::int64_t r_top = 0;
     bool timed = false;        // no jerk phase: one move `ticks` clocks after the phase's start, then p = 0
     // S and H set at the phase's start, p kept (plan_jerk: the plan's own phase
     // with its state brought back to the plan's; the card's "load S and H").
