@@ -6,7 +6,7 @@
 //   plan_figures bounds MACHINE JOB   planned time beside the lower bound (whole job and its
 //                                     feed moves), groups, lookahead, windowed - whole-job time
 //   plan_figures speed MACHINE JOB [reps]  planning throughput, G-code lines per second
-//   plan_figures phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy] [rule]]  moves timed by phases
+//   plan_figures phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy] [rule]] | wire MACHINE JOB BOARD [FIT_ARCS_MM]  moves timed by phases
 //                                     of constant jerk (plan/phases.h): ticks of 2^S clocks, F
 //                                     fractional bits, the path in UNIT mm (0: moves); without
 //                                     reloads; the greedy fit alone (not the plan's phases)
@@ -27,10 +27,14 @@
 
 #include <malloc.h>
 
+#include "card/caps.h"
+#include "card/job.h"
+#include "card/protocol.h"
 #include "cpstep/builds.h"
 #include "plan/phases.h"
 #include "plan/pipeline.h"
 #include "plan/steptime.h"
+#include "run/card_job.h"
 
 using namespace cpstep::plan;
 
@@ -164,6 +168,107 @@ int phases(const char* mpath, const char* jpath, const char* board, unsigned s, 
         fmt::print("conic length rule: moves shifted by up to {:.1f} cycles ({:.3f} us), {:.4f} steps along the path\n",
                    p->stats.conic_rule_shift_cycles, p->stats.conic_rule_shift_cycles / m->card.clock_hz * 1e6,
                    p->stats.conic_rule_shift_steps);
+    return 0;
+}
+
+// A projection for the compact wire (issue 13), not a wire the card takes: every
+// example job's bytes if each card segment's header were sent in a compact form
+// and its moves timed by phases of constant jerk (rtl/cp_ptimer.v's words, the
+// conics' moves by the length rule, plan::conic_rule_divisors) instead of chunks.
+// The compact header of a wire segment (split at UMAX only: no chunk queue to fill):
+//   H0, 4 bytes: opcode, end, torch, k, CONIC's cw, continuation and plane axes,
+//       a mask of the axes that step, their directions, which of them has v = U;
+//   U, then v_i of every other axis that steps: each an unsigned LEB128 varint;
+//   a line's length per move, or a whole conic's K (the rule's constant), 4 bytes;
+//   a whole conic's A, B, C, G, Gx, Gy, and any conic's du, dv: zigzag varints.
+// The setup words (CONFIG, START, ...) are counted as today.
+std::size_t varint_bytes(std::uint64_t x) {
+    std::size_t n = 1;
+    while (x >= 0x80) x >>= 7, ++n;
+    return n;
+}
+std::size_t zigzag_bytes(std::int64_t x) { return varint_bytes(x < 0 ? (std::uint64_t(-(x + 1)) << 1) | 1 : std::uint64_t(x) << 1); }
+
+std::size_t compact_header_bytes(const cpstep::card::WireSegment& w) {
+    std::size_t b = 4 + varint_bytes(w.u);
+    bool major_skipped = false, steps = false;
+    for (std::uint32_t v : w.v) {
+        if (v == 0) continue;
+        steps = true;
+        if (v == w.u && !major_skipped) { major_skipped = true; continue; }
+        b += varint_bytes(v);
+    }
+    if (w.conic) {
+        const auto& k = w.conic->words;
+        const auto s24 = [](std::uint32_t x) { return std::int64_t(std::int32_t(x << 8) >> 8); };
+        if (!w.conic->cont) {
+            b += 4;   // K
+            b += zigzag_bytes(std::int16_t(k[0] & 0xFFFF)) + zigzag_bytes(std::int16_t(k[0] >> 16)) +
+                 zigzag_bytes(std::int16_t(k[1] & 0xFFFF));
+            b += zigzag_bytes(std::int32_t(k[2])) + zigzag_bytes(std::int32_t(k[3])) + zigzag_bytes(std::int32_t(k[4]));
+        }
+        b += zigzag_bytes(s24(k[5])) + zigzag_bytes(s24(k[6]));
+    } else if (steps) {
+        b += 4;   // the length per move
+    }
+    return b;
+}
+
+int wire(const char* mpath, const char* jpath, const char* board, double fit_arcs_mm) {
+    namespace card = cpstep::card;
+    const auto caps = card::board_caps(board);
+    if (!caps) { fmt::print(stderr, "no board {}\n", board); return 1; }
+    auto m = cpstep::run::load_card_machine(mpath, *caps);
+    if (!m.ok()) { fmt::print(stderr, "{}\n", join(m.errors)); return 1; }
+    if (fit_arcs_mm > 0) m.value->planner.fit_arcs_mm = fit_arcs_mm;
+    auto job = cpstep::run::read_card_gcode(jpath, *m);
+    if (!job.ok()) { fmt::print(stderr, "{}\n", join(job.errors)); return 1; }
+    // Today's wire: every command word.
+    auto cj = cpstep::run::plan_card_job(*job, *m, *caps);
+    if (!cj.ok()) { fmt::print(stderr, "{}\n", join(cj.errors)); return 1; }
+    std::size_t segment_words = 0;
+    for (const card::WireSegment& w : cj->wire.segments) {
+        std::vector<std::uint32_t> words;
+        card::encode_segment(w, words);
+        segment_words += words.size();
+    }
+    const std::size_t setup_bytes = 4 * (cj->words.size() - segment_words);
+    // The compact headers: the planned card segments cut at UMAX only.
+    card::CardLimits lim = card::limits(*caps);
+    lim.chunk_queue = 1u << 30;
+    std::size_t header_bytes = 0, wire_segments = 0;
+    const auto& pj = cj->planned;
+    for (std::size_t s = 0; s < pj.card.size(); ++s) {
+        std::vector<card::WireSegment> out;
+        if (auto d = card::to_wire_segment(pj, s, pj.card[s].chunks, pj.card[s].conic.get(), jpath, lim, out)) {
+            fmt::print(stderr, "{}\n", d->message);
+            return 1;
+        }
+        for (const card::WireSegment& w : out) header_bytes += compact_header_bytes(w);
+        wire_segments += out.size();
+    }
+    // The phases: the same plan with the hook, conics by the length rule.
+    PhaseFormat format;
+    format.path_unit_mm = 0.0125;
+    format.clock_hz = m->card.clock_hz;
+    PhaseFitter fitter(format, m->chunk_tolerance_cycles());
+    PlanOptions o;
+    o.chunk_limits = card::chunk_limits(card::limits(*caps));
+    o.conic_length_rule = true;
+    o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths, double rest_at,
+                          std::span<const PlanJerk> changes) { fitter.push(ideal, lengths, rest_at, changes); };
+    auto p = plan_job(*job, *m, o);
+    if (!p.ok()) { fmt::print(stderr, "{}\n", join(p.errors)); return 1; }
+    if (!fitter.finish()) { fmt::print(stderr, "{}: {}\n", jpath, fitter.error()); return 1; }
+    const PhaseStats& st = fitter.stats();
+    const std::uint64_t phase_bytes =
+        8 * (st.phases - st.timed) + 16 * (st.adjusts + st.reloads) + 8 * st.reloads + 4 * st.timed;
+    fmt::print("{} {}{}: today {} bytes ({} wire segments); projected: setup {} + headers {} ({} segments, "
+               "{:.1f} bytes each) + phases {} ({}) = {} bytes\n",
+               jpath, board, fit_arcs_mm > 0 ? fmt::format(" fit_arcs_mm={}", fit_arcs_mm) : std::string(),
+               4 * cj->words.size(), cj->wire.segments.size(), setup_bytes, header_bytes, wire_segments,
+               double(header_bytes) / double(std::max<std::size_t>(1, wire_segments)), phase_bytes, st.phases,
+               setup_bytes + header_bytes + phase_bytes);
     return 0;
 }
 
@@ -377,9 +482,10 @@ int main(int argc, char** argv) {
         return phases(argv[2], argv[3], argv[4], unsigned(std::atoi(argv[5])), unsigned(std::atoi(argv[6])),
                       argc >= 8 ? std::atof(argv[7]) : 0.0, reload, plan_jerk, rule);
     }
+    if (cmd == "wire" && argc >= 5) return wire(argv[2], argv[3], argv[4], argc >= 6 ? std::atof(argv[5]) : 0.0);
     if (cmd == "bounds" && argc == 4) return bounds(argv[2], argv[3]);
     if (cmd == "fingerprint" && argc == 4) return fingerprint(argv[2], argv[3]);
     if (cmd == "speed" && argc >= 4) return speed(argv[2], argv[3], argc > 4 ? std::atoi(argv[4]) : 5);
-    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps] | fingerprint MACHINE JOB | phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy] [rule]]\n");
+    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps] | fingerprint MACHINE JOB | phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy] [rule]] | wire MACHINE JOB BOARD [FIT_ARCS_MM]\n");
     return 2;
 }
