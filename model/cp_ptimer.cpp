@@ -57,8 +57,8 @@ void CpPtimer::tick() {
       case 1: n.nu = int64_t(int32_t(in.data)); break;
       case 2: n.np = (o.np & ~uint64_t{0xFFFFFFFF}) | in.data; break;
       case 3: n.np = (o.np & 0xFFFFFFFF) | uint64_t{in.data} << 32; break;
-      case 4: n.nv = (o.nv & ~uint64_t{0xFFFFFFFF}) | in.data; break;
-      case 5: n.nv = (o.nv & 0xFFFFFFFF) | uint64_t{in.data} << 32; break;
+      case 4: n.ns = (o.ns & ~uint64_t{0xFFFFFFFF}) | in.data; break;
+      case 5: n.ns = (o.ns & 0xFFFFFFFF) | uint64_t{in.data} << 32; break;
       case 6: n.nh = (o.nh & ~uint64_t{0xFFFFFFFF}) | in.data; break;
       default: n.nh = (o.nh & 0xFFFFFFFF) | uint64_t{in.data} << 32; break;
     }
@@ -110,7 +110,7 @@ void CpPtimer::tick() {
         n.fresh = !n.tdue;   // next clock (a timed move still to fire takes off the next's)
       }
       if (o.nkind & 8) {   // load S and H
-        n.step = sx(int64_t(o.nv), p_.vw);
+        n.step = sx(int64_t(o.ns), p_.vw);
         n.h = sx(int64_t(o.nh), p_.hw);
       }
       if (o.nkind & 1) {   // load r (its top 64 bits)

@@ -87,7 +87,7 @@ class CpPtimer {
     bool nvalid = false;
     uint32_t nkind = 0, nticks = 0;
     int64_t nu = 0;
-    uint64_t np = 0, nv = 0, nh = 0;   // p, S, H as written (64 bits each)
+    uint64_t np = 0, ns = 0, nh = 0;   // r, S, H as written (64 bits each)
   };
   cp_i128 threshold() const;
   Params p_;

@@ -72,8 +72,8 @@ reg  signed [VW-1:0] step_q;     // the step S
 reg  signed [HW-1:0] h_q;
 reg  [RW-1:0] r_q;            // p minus the pending move's length (times 2^S)
 reg  [UW-1:0] nu_q;
-reg  [63:0]   np_q;
-reg  [VW-1:0] nv_q;
+reg  [63:0]   np_q;           // r's top 64 bits (a reload)
+reg  [VW-1:0] ns_q;           // S (an adjust or a reload)
 reg  [HW-1:0] nh_q;
 reg  [VW-1:0] sn_q;           // the step again, rotating out and the next shifting in
 reg  [3:0]    cy_q;           // the serial sums' carries
@@ -120,12 +120,11 @@ wire          phase_end = running && (timed_q ? (tleft_q == {{(TW-1){1'b0}}, 1'b
                                                : (tick_end && tleft_q == {{(TW-1){1'b0}}, 1'b1}));
 wire          load      = phase_end || (!active_q && nvalid_q);
 
-// The loaded phase's step, H and p: sn_q and h_q are the step and H carried on
-// (at a tick's end the next tick's, shifted in).
-wire signed [VW-1:0] step_ld = nkind_q[3] ? nv_q : nkind_q[2] ? {VW{1'b0}} : sn_q;
+// The loaded phase's step and H: sn_q and h_q are the step and H carried on (at
+// a tick's end the next tick's, shifted in).
+wire signed [VW-1:0] step_ld = nkind_q[3] ? ns_q : nkind_q[2] ? {VW{1'b0}} : sn_q;
 wire signed [HW-1:0] h_ld    = nkind_q[3] ? nh_q : nkind_q[2] ? {HW{1'b0}} : h_q;
 
-// p: this clock's fire and step.
 // r: this clock's fire (or the clock after a start from rest, p = 0) takes off the
 // pending move's length; then the step.
 wire          tdue_n  = (tdue_q && !(fire_i && due)) || (running && timed_q && phase_end);
@@ -153,7 +152,7 @@ always @(posedge clk) begin
         fresh_q   <= 1'b0;
         nu_q      <= {UW{1'b0}};
         np_q      <= 64'd0;
-        nv_q      <= {VW{1'b0}};
+        ns_q      <= {VW{1'b0}};
         nh_q      <= {HW{1'b0}};
         sn_q      <= {VW{1'b0}};
         cy_q      <= 4'd0;
@@ -172,8 +171,8 @@ always @(posedge clk) begin
                 3'd1: nu_q <= data_i[UW-1:0];
                 3'd2: np_q[31:0]  <= data_i;
                 3'd3: np_q[63:32] <= data_i;
-                3'd4: nv_q[31:0]  <= data_i;
-                3'd5: nv_q[VW-1:32] <= data_i[VW-33:0];
+                3'd4: ns_q[31:0]  <= data_i;
+                3'd5: ns_q[VW-1:32] <= data_i[VW-33:0];
                 3'd6: nh_q[31:0]  <= data_i;
                 default: nh_q[HW-1:32] <= data_i[HW-33:0];
             endcase
