@@ -76,6 +76,7 @@ struct PlanStream::Impl {
     bool conic_length_rule = false;
     std::vector<double> rule_at;   // conic_length_rule: the arc's moves' path positions (mm)
     std::size_t rule_next = 0;     // the next move's in rule_at
+    double rule_last_time = 0;     // the last rule-timed move's time (cycles)
     StepSegmenter segmenter;
     FeedPlanner feeds;
     std::vector<Diagnostic> loop_warnings, loop_errors, time_errors;
@@ -324,6 +325,10 @@ struct PlanStream::Impl {
                             stats.conic_rule_shift_steps = std::max(
                                 stats.conic_rule_shift_steps,
                                 std::abs(here - true_here) * m.axes[std::size_t(piece.walk->axis_u)].steps_per_mm);
+                            if (!rule_ideal.empty() || rule_next > 1)
+                                stats.conic_rule_min_gap_cycles =
+                                    std::min(stats.conic_rule_min_gap_cycles, t - rule_last_time);
+                            rule_last_time = t;
                             rule_ideal.push_back(t);
                             lengths.push_back(here - last);
                             last = here;

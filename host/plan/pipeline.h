@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -51,6 +52,9 @@ struct PlanStats {
     // card cycles, and of its path position, steps of the walk's u axis.
     double conic_rule_shift_cycles = 0;
     double conic_rule_shift_steps = 0;
+    // ... and the shortest time between two of an arc's moves so timed (cycles; the
+    // walker needs conic_gap_cycles).
+    double conic_rule_min_gap_cycles = std::numeric_limits<double>::infinity();
     double duration_s = 0;
     [[nodiscard]] double moves_per_chunk() const {
         return chunks ? static_cast<double>(moves) / static_cast<double>(chunks) : 0;

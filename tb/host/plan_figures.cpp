@@ -165,9 +165,11 @@ int phases(const char* mpath, const char* jpath, const char* board, unsigned s, 
                std::log2(double(std::max<std::int64_t>(1, st.max_abs_accel))),
                std::log2(double(std::max<std::int64_t>(1, st.max_velocity))), st.max_phase_moves);
     if (rule)
-        fmt::print("conic length rule: moves shifted by up to {:.1f} cycles ({:.3f} us), {:.4f} steps along the path\n",
+        fmt::print("conic length rule: moves shifted by up to {:.1f} cycles ({:.3f} us), {:.4f} steps along the path; "
+                   "moves at least {:.1f} cycles apart (the walker needs {})\n",
                    p->stats.conic_rule_shift_cycles, p->stats.conic_rule_shift_cycles / m->card.clock_hz * 1e6,
-                   p->stats.conic_rule_shift_steps);
+                   p->stats.conic_rule_shift_steps, p->stats.conic_rule_min_gap_cycles,
+                   conic_gap_cycles(m->card.conic_width));
     return 0;
 }
 

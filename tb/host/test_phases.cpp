@@ -103,6 +103,7 @@ struct JobPhases {
     std::uint64_t chunks = 0;
     double tol = 0;   // cycles, the bound machine's
     double rule_shift_steps = 0;   // PlanStats::conic_rule_shift_steps
+    double rule_min_gap_cycles = 0, walker_gap_cycles = 0;
     std::uint64_t conic_segments = 0;
     std::unique_ptr<PhaseFitter> fitter;
 };
@@ -134,6 +135,8 @@ void fit_job(const char* job_file, PhaseFormat& fmt, JobPhases& out, bool conic_
     ASSERT_TRUE(out.fitter->finish()) << out.fitter->error();
     out.chunks = plan->stats.chunks;
     out.rule_shift_steps = plan->stats.conic_rule_shift_steps;
+    out.rule_min_gap_cycles = plan->stats.conic_rule_min_gap_cycles;
+    out.walker_gap_cycles = double(conic_gap_cycles(m.card.conic_width));
     out.conic_segments = plan->stats.conic_segments;
     check_fires(out.ideal, out.lengths, *out.fitter, fmt, out.tol);
     const PhaseStats& st = out.fitter->stats();
@@ -181,6 +184,7 @@ TEST(Phases, ConicMovesTimedByTheCardsLengthRule) {
     EXPECT_EQ(jp.conic_segments, 4u);
     EXPECT_GT(jp.rule_shift_steps, 0.0);
     EXPECT_LT(jp.rule_shift_steps, 0.5);
+    EXPECT_GE(jp.rule_min_gap_cycles, jp.walker_gap_cycles) << "the walker's pace";
     EXPECT_LT(double(jp.fitter->stats().phases), 1.25 * double(exact.fitter->stats().phases));
     EXPECT_EQ(jp.fitter->stats().reloads, 0u);
 }
