@@ -235,10 +235,11 @@ PhaseFitter::Trial PhaseFitter::evaluate(const State& st, bool all, std::size_t 
     return tr;
 }
 
-// The plan's position, velocity and half acceleration at the open phase's
-// start, in the timer's units: a cubic through the ideal times of the moves
-// around it (least squares, up to kPlanFit before and after).
-bool PhaseFitter::plan_state(i128& p, i128& v, i128& h) const {
+// The plan's position, step (S = V + H, the phase's u to come) and half
+// acceleration at the open phase's start, in the timer's units: a cubic through
+// the ideal times of the moves around it (least squares, up to kPlanFit before
+// and after).
+bool PhaseFitter::plan_state(i128& p, i128& step, i128& h) const {
     const std::size_t from = head_ >= kPlanFit ? head_ - kPlanFit : 0;
     const std::size_t to = std::min(queue_.size(), head_ + kPlanFit);
     const std::size_t m = to - from;
@@ -281,12 +282,12 @@ bool PhaseFitter::plan_state(i128& p, i128& v, i128& h) const {
     const double pos = std::clamp(n0, 0.0, next * (1 - 1e-9));
     p = i128(pos * ONE * TT);
     h = i128(c2 * TT * TT * ONE);
-    v = i128(b * TT * ONE) + h;   // the step S = V + H (+ u, which the phase's fit takes up)
+    step = i128(b * TT * ONE) + h;   // V + H (+ u, which the phase's fit takes up)
     return true;
 }
 
 // Close phase `tr` from `from`: the state after it, its record, the figures.
-void PhaseFitter::commit(const State& from, const Trial& tr, bool reload, bool adjust, i128 dv, i128 dh) {
+void PhaseFitter::commit(const State& from, const Trial& tr, bool reload, bool adjust, i128 ds, i128 dh) {
     State after = from;
     advance(after, tr, &fires_);
     c0_ = after.c0;
@@ -312,7 +313,7 @@ void PhaseFitter::commit(const State& from, const Trial& tr, bool reload, bool a
                        to_i64(from.a0), reload ? to_i64((from.p0 - pending) >> r_drop) : 0, false, adjust});
     if (adjust) {
         ++stats_.adjusts;
-        stats_.max_abs_adjust = std::max({stats_.max_abs_adjust, to_i64(abs128(dv)), to_i64(abs128(dh))});
+        stats_.max_abs_adjust = std::max({stats_.max_abs_adjust, to_i64(abs128(ds)), to_i64(abs128(dh))});
     }
     stats_.rests += pending_rest_ ? 1 : 0;
     pending_rest_ = false;
@@ -347,17 +348,17 @@ int PhaseFitter::plan_phase_try(bool all, bool adjust) {
     const i128 u = i128(std::llround(changes_.front().jerk * tick_s * tick_s * tick_s / 6.0 * unit));
     if (!fits(u, fmt_.u_bits)) return 0;
     State st{c0_, p0_, s0_, a0_, head_, cum_head_};
-    i128 dv = 0, dh = 0;
+    i128 ds = 0, dh = 0;
     if (adjust) {
         const double dt = (double(c0_) - changes_.front().at) / fmt_.clock_hz;
         const double j = changes_.front().jerk;
         const double v = changes_.front().v + changes_.front().a * dt + j * dt * dt / 2,
                      a = changes_.front().a + j * dt;
         const i128 hp = i128(std::llround(a / 2 * tick_s * tick_s * unit));
-        dv = i128(std::llround(v * tick_s * unit)) + hp + u - st.s0;   // the plan's S = V + H + u
+        ds = i128(std::llround(v * tick_s * unit)) + hp + u - st.s0;   // the plan's S = V + H + u
         dh = hp - st.a0;
-        if (dv == 0 && dh == 0) return 0;
-        st.s0 += dv;
+        if (ds == 0 && dh == 0) return 0;
+        st.s0 += ds;
         st.a0 += dh;
     }
     auto P = [&](std::int64_t k) {
@@ -391,7 +392,7 @@ int PhaseFitter::plan_phase_try(bool all, bool adjust) {
     tr.covered = covered;
     tr.j = u;
     tr.E = E;
-    commit(st, tr, false, adjust, dv, dh);
+    commit(st, tr, false, adjust, ds, dh);
     ++stats_.plan_phases;
     return 1;
 }
@@ -438,7 +439,7 @@ bool PhaseFitter::fit(bool all) {
             const std::int64_t at = static_cast<std::int64_t>(std::floor(tau - tol_ / 2));
             if (at <= c0_ || at < static_cast<std::int64_t>(std::ceil(tau - tol_)) || at - c0_ >= kMaxTimedClocks) {
                 error_ = fmt::format("no phase times move {} (ideal clock {:.1f}) from the state at clock {} "
-                                     "(p {:.4f} v {:.4g} a {:.4g} moves/clock)",
+                                     "(p {:.4f}, step {:.4g}, H {:.4g} moves a tick)",
                                      stats_.moves + 1, tau, c0_, double(p0_) / double(ONE),
                                      double(s0_) / double(ONE), double(a0_) / double(ONE));
                 return false;

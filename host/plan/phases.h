@@ -145,12 +145,12 @@ private:
     bool fit(bool all);
     [[nodiscard]] Trial evaluate(const State& st, bool all, std::size_t cap = kNoCap) const;
     void advance(State& st, const Trial& tr, std::vector<std::int64_t>* fires) const;
-    bool plan_state(i128& p, i128& v, i128& h) const;
+    bool plan_state(i128& p, i128& step, i128& h) const;
     // The plan's own phase from the open phase's start: 1 taken, 0 not (the
     // greedy fit then), -1 wait for more moves.
     int plan_phase(bool all);
     int plan_phase_try(bool all, bool adjust);
-    void commit(const State& from, const Trial& tr, bool reload, bool adjust = false, i128 dv = 0, i128 dh = 0);
+    void commit(const State& from, const Trial& tr, bool reload, bool adjust = false, i128 ds = 0, i128 dh = 0);
 
     PhaseFormat fmt_;
     double tol_;
