@@ -56,7 +56,7 @@ struct PlanJerk {
 
 struct PhaseFormat {
     unsigned tick_log2 = 6;    // a tick is 2^s clocks
-    unsigned frac_bits = 60;   // F: V, H and u in 2^-F moves (or path units), p in 2^-F-s
+    unsigned frac_bits = 60;   // F: S, H and u in 2^-F moves (or path units), p in 2^-F-s
     bool reload = true;        // a phase may set p, S and H (from the plan) where that saves words
     bool lookahead = false;    // a phase may end early where the next then carries on further
     // 0: p counts moves (a move fires at each whole move). > 0: p is the path

@@ -64,7 +64,7 @@ using Rng = std::mt19937_64;
 uint64_t pick(Rng& rng, uint64_t lo, uint64_t hi) { return std::uniform_int_distribution<uint64_t>(lo, hi)(rng); }
 bool chance(Rng& rng, unsigned pct) { return pick(rng, 0, 99) < pct; }
 
-// A phase's words, W0 last: {sel, data}. kind = {load S and H, rest, timed, load p}.
+// A phase's words, W0 last: {sel, data}. kind = {load S and H, rest, timed, load r}.
 std::vector<std::pair<uint32_t, uint32_t>> phase_words(uint32_t kind, uint32_t ticks, int64_t u, uint64_t r_top,
                                                        int64_t s, int64_t h) {
   std::vector<std::pair<uint32_t, uint32_t>> w;
