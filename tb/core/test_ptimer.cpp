@@ -12,6 +12,7 @@
 
 #include "Vcp_ptimer.h"
 #include "common/lockstep.h"
+#include "core/bench_random.h"
 #include "core/core_bench.h"
 #include "model/cp_ptimer.h"
 #include "cpstep/builds.h"
@@ -60,9 +61,9 @@ struct PtimerPort {
   }
 };
 
-using Rng = std::mt19937_64;
-uint64_t pick(Rng& rng, uint64_t lo, uint64_t hi) { return std::uniform_int_distribution<uint64_t>(lo, hi)(rng); }
-bool chance(Rng& rng, unsigned pct) { return pick(rng, 0, 99) < pct; }
+using unit_random::Rng;
+using unit_random::pick;
+using unit_random::chance;
 
 // A phase's words, W0 last: {sel, data}. kind = {load S and H, rest, timed, load r}.
 std::vector<std::pair<uint32_t, uint32_t>> phase_words(uint32_t kind, uint32_t ticks, int64_t u, uint64_t r_top,
