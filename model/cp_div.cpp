@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: MIT
 #include "model/cp_div.h"
 
+#include "model/bits.h"
+
 namespace cpstep::model {
 
 namespace {
-uint64_t low(uint64_t x, unsigned w) { return w >= 64 ? x : x & ((uint64_t{1} << w) - 1); }
+uint64_t low(uint64_t x, unsigned w) { return x & bits::mask64(w); }
 }  // namespace
 
 CpDivOut CpDiv::outputs() const {

@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: MIT
 #include "model/cp_ptimer.h"
 
+#include "model/bits.h"
+
 namespace cpstep::model {
 
 namespace {
 
 // The low `w` bits of x as a signed value.
 int64_t sx(int64_t x, unsigned w) {
-  const uint64_t m = w >= 64 ? ~uint64_t{0} : (uint64_t{1} << w) - 1;
+  const uint64_t m = bits::mask64(w);
   uint64_t v = uint64_t(x) & m;
   if (w < 64 && (v >> (w - 1) & 1)) v |= ~m;
   return int64_t(v);
@@ -24,7 +26,7 @@ cp_i128 sx128(cp_i128 x, unsigned w) {
 }  // namespace
 
 cp_i128 CpPtimer::threshold() const {
-  const uint64_t len = p_.lw >= 64 ? in.len : in.len & ((uint64_t{1} << p_.lw) - 1);
+  const uint64_t len = in.len & bits::mask64(p_.lw);
   return cp_i128(len) << p_.s;
 }
 
