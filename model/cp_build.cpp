@@ -9,7 +9,7 @@ CpBuild::CpBuild(Params p)
     : p_(p),
       aw_(CpEngineParams{p.w}.aw()),
       uw_(bits::clog2(uint64_t(p.umax) + 2)),
-      sqw_(p.saw + bits::clog2(p.n + 1)),
+      sqw_(p.saw + bits::clog2(p.n + 1 + (p.ptimer ? 1 : 0))),
       engine_(CpEngineParams{p.w, 0, 1, p.umax}) {}
 
 CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
@@ -32,6 +32,7 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
         d.out = (i.seg_head >> (29 + p_.n) & 1) != 0;
         d.conic = p_.conic && (i.seg_head >> (30 + p_.n) & 1) != 0;
         d.cont = p_.conic && (i.seg_head >> (31 + p_.n) & 1) != 0;
+        d.k = uint32_t(i.seg_head >> (24 + p_.n)) & 15;
         d.axis = 0;
         d.moving = 0;
         d.state = State::next_axis;
@@ -81,7 +82,11 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
           d.av = word >> 25 & 7;
         }
         d.k_index = (q.k_index + 1) & 7;
-        if (q.k_index == 6) {
+        if (q.k_index == 6 && p_.ptimer) {
+          o.cw_start = true;
+          o.cw_cont = q.cont;
+          d.state = State::length;
+        } else if (q.k_index == 6) {
           o.cw_start = true;
           o.cw_cont = q.cont;
           o.run_wr = true;
@@ -94,6 +99,22 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
         }
       }
       break;
+    case State::length:
+      // ptimer: the segment's last word, its length per move, goes with it into the
+      // run queue, with its k and U.
+      if (i.seg_valid) {
+        o.seg_pop = true;
+        o.run_wr = true;
+        o.run_data = uint64_t(q.conic) << (2 * p_.n + 9) | uint64_t(q.au) << (2 * p_.n + 6) |
+                     uint64_t(q.av) << (2 * p_.n + 3) | uint64_t(q.out) << (2 * p_.n + 2) |
+                     uint64_t(q.build_lane) << (2 * p_.n + 1) | uint64_t(q.end) << (2 * p_.n) |
+                     uint64_t(q.moving) << p_.n | q.dir;
+        if (!p_.conic) o.run_data &= bits::mask64(3 + 2 * p_.n);
+        o.run_data_pt = (i.seg_head & 0xFFFFFFFF) << 28 | uint64_t(q.k) << 24 | q.u;
+        d.build_lane = !q.build_lane;
+        d.state = State::idle;
+      }
+      break;
   }
   o.cw_sel = q.k_index;
   o.cw_data = uint32_t(i.seg_head);
@@ -101,6 +122,8 @@ CpBuild::Out CpBuild::eval(const In& i, Regs& d, Engine& e) const {
     if (q.axis == p_.n - 1 && q.conic) {
       d.k_index = q.cont ? 5 : 0;
       d.state = State::conic_words;
+    } else if (q.axis == p_.n - 1 && p_.ptimer) {
+      d.state = State::length;
     } else if (q.axis == p_.n - 1) {
       o.run_wr = true;
       o.run_data = uint64_t(q.out) << (2 * p_.n + 2) | uint64_t(q.build_lane) << (2 * p_.n + 1) |

@@ -13,6 +13,7 @@ namespace cpstep::model {
 struct CpBuildParams {
   unsigned n = 4, w = 1024, umax = 1048575, saw = 2;
   bool conic = false;  // CONIC segments (docs/CORE.md): the walker's words, wider queue words
+  bool ptimer = false;  // a segment's last word its length per move, into the run queue with k and U
 };
 
 struct CpBuildIn {
@@ -29,6 +30,7 @@ struct CpBuildOut {
   bool seg_pop = false;
   bool run_wr = false;
   uint64_t run_data = 0;  // {[conic, u, v,] lane, end, moving[N], dir[N]}
+  uint64_t run_data_pt = 0;  // ptimer: the fields above those, {L[31:0], k[3:0], U[23:0]}
   bool bank_we = false;
   uint32_t bank_axis = 0, bank_waddr = 0;
   bool bank_wbit = false;
@@ -66,7 +68,7 @@ class CpBuild {
   uint32_t segq() const { return r_.segq; }
 
  private:
-  enum class State { idle, next_axis, capture, conic_words };
+  enum class State { idle, next_axis, capture, conic_words, length };
   struct Regs {
     State state = State::idle;  // reset
     bool build_lane = false;    // reset
@@ -78,6 +80,7 @@ class CpBuild {
     bool conic = false;                 // the segment being built is a conic
     bool cont = false;                  // ... that continues the last walk
     uint32_t au = 0, av = 0, k_index = 0;
+    uint32_t k = 0;                     // ptimer: the segment's k
     bool operator==(const Regs&) const = default;
   };
   struct Engine {

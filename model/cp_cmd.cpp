@@ -7,6 +7,7 @@ namespace cpstep::model {
 namespace {
 
 constexpr uint32_t kOpSegment = 0x1, kOpConfig = 0x2, kOpControl = 0x3, kOpRead = 0x4, kOpConic = 0x5;
+constexpr uint32_t kOpPhase = 0x6;
 constexpr uint64_t kMask34 = (uint64_t(1) << 34) - 1;  // the count sum's width
 
 // Chunk queue word (81 bits): interval, add, count, add2, and the flag of a
@@ -27,7 +28,9 @@ bool CpCmd::ready(const In& i) const {
     case Parse::chunk_interval: return true;
     case Parse::seg_h1:
     case Parse::seg_v:
-    case Parse::conic_words: return !keep || !i.seg_full;
+    case Parse::conic_words:
+    case Parse::seg_length: return !keep || !i.seg_full;
+    case Parse::phase_words: return !keep || !i.ch_full;
     case Parse::chunk_count: return r_.seg_add2 || !keep || !i.ch_full;
     case Parse::chunk_add2: return !keep || !i.ch_full;
     default: return false;  // checking a chunk, or a reply waits
@@ -93,7 +96,7 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
             if (d.hdr_k > p_.kmax) {
               refuse(CoreError::seg_k);
               d.discard = true;
-            } else if (d.chunks_left == 0 || d.chunks_left > (1u << p_.caw)) {
+            } else if (p_.ptimer ? d.chunks_left != 0 : (d.chunks_left == 0 || d.chunks_left > (1u << p_.caw))) {
               refuse(CoreError::seg_chunks);
               d.discard = true;
             } else if (d.hdr_conic && (d.hdr_au == d.hdr_av || d.hdr_au >= p_.n || d.hdr_av >= p_.n)) {
@@ -105,6 +108,17 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
             }
           }
           d.parse = Parse::seg_h1;
+          break;
+        case kOpPhase:
+          if (!p_.ptimer) {
+            refuse(CoreError::bad_opcode);
+            break;
+          }
+          // W0 = {kind, 4 zeros, ticks} kept for the end; u next.
+          d.interval = (word & 0x0F000000) << 4 | (word & 0xFFFFFF);
+          d.v_index = 1;
+          d.discard = i.fault;
+          d.parse = Parse::phase_words;
           break;
         case kOpConfig: {
           const uint32_t axis = word >> 24 & 0xF, field = word >> 20 & 0xF, value = word & 0xFFFF;
@@ -166,7 +180,8 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
       // A segment announced with no chunk was refused at its header; it ends here.
       if (q.v_index == p_.n - 1) {
         d.v_index = q.hdr_cont ? 5 : 0;  // a continuation has K5, K6 only
-        d.parse = q.hdr_conic                  ? Parse::conic_words
+        d.parse = q.hdr_conic          ? Parse::conic_words
+                  : p_.ptimer          ? Parse::seg_length
                   : q.chunks_left == 0 ? Parse::command
                                        : Parse::chunk_interval;
       }
@@ -182,7 +197,48 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
                        ? (uint32_t(q.hdr_cw) << 31 | q.hdr_au << 28 | q.hdr_av << 25 | (word & 0xFFFFFF))
                        : word;
       d.v_index = (q.v_index + 1) & 7;
-      if (q.v_index == 6) d.parse = q.chunks_left == 0 ? Parse::command : Parse::chunk_interval;
+      if (q.v_index == 6)
+        d.parse = p_.ptimer ? Parse::seg_length : q.chunks_left == 0 ? Parse::command : Parse::chunk_interval;
+      break;
+    case Parse::seg_length:
+      // A ptimer segment's last word, its length per move (not 0): committed whole.
+      if (!take) break;
+      o.seg_wr = keep;
+      o.seg_data = word;
+      d.parse = Parse::command;
+      if (keep && word == 0) {
+        refuse(CoreError::seg_length);
+        d.discard = true;
+      }
+      if (!keep || o.fault) {
+        o.seg_rollback = true;
+      } else {
+        o.seg_commit = true;
+        d.lc_valid = q.hdr_conic;
+        d.lc_au = q.hdr_au;
+        d.lc_av = q.hdr_av;
+        d.lc_cw = q.hdr_cw;
+      }
+      break;
+    case Parse::phase_words: {
+      // u (sel 1), r (2, 3) if kind[0], S and H (4 .. 7) if kind[3], then W0.
+      if (!take) break;
+      const bool load_r = (q.interval >> 28 & 1) != 0, load_sh = (q.interval >> 31 & 1) != 0;
+      const uint32_t next = q.v_index == 1 ? (load_r ? 2 : load_sh ? 4 : 0)
+                            : q.v_index == 3 ? (load_sh ? 4 : 0)
+                            : q.v_index == 7 ? 0
+                                             : q.v_index + 1;
+      o.ch_wr = keep;
+      d.v_index = next;
+      if (next == 0) d.parse = Parse::phase_w0;
+      break;
+    }
+    case Parse::phase_w0:
+      if (keep && i.ch_full) break;
+      o.ch_wr = keep;
+      o.ch_commit = keep;
+      o.ch_rollback = !keep;
+      d.parse = Parse::command;
       break;
     case Parse::chunk_interval:
       if (!take) break;
@@ -259,6 +315,11 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
   // A fault (E-stop among them) or an ABORT flushes the walk a continuation would go on from.
   if (i.fault || o.fault || o.abort) d.lc_valid = false;
   o.ch_data = chunk_word(q.interval, d.add, d.count, d.add2, q.chunks_left == 1);
+  if (p_.ptimer) {
+    // The phase timer's word {sel, data}: W0 (sel 0) the PHASE header kept.
+    const bool w0 = q.parse == Parse::phase_w0;
+    o.ch_data = {uint64_t(w0 ? 0 : q.v_index & 7) << 32 | (w0 ? q.interval : word), 0, 0, 0};
+  }
   // FLUSH: back to a command's first word; what this cycle would have done is not
   // done (the queues are emptied in this cycle).
   if (i.flush) {

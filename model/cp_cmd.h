@@ -17,6 +17,9 @@ struct CpCmdParams {
   bool conic = false;  // CONIC segments (opcode 0x5) taken; refused as BAD_OPCODE otherwise
   bool feed = false;    // CONFIG field 9 (the feed ramp's tick) taken; refused otherwise
   bool inputs = false;  // CONFIG field 10 (the seek) taken; refused otherwise (and above 10)
+  // Segments timed by the phase timer: no chunks, a length per move after their
+  // words; PHASE commands (opcode 0x6) into the chunk queue as the timer's words.
+  bool ptimer = false;
 };
 
 struct CpCmdIn {
@@ -37,7 +40,7 @@ struct CpCmdOut {
   bool seg_wr = false, seg_commit = false, seg_rollback = false;
   uint64_t seg_data = 0;  // 30 + N bits; with conic 32 + N
   bool ch_wr = false, ch_commit = false, ch_rollback = false;
-  FifoWord ch_data{};     // 81 bits: {last, add2, count, add, interval}
+  FifoWord ch_data{};     // 81 bits: {last, add2, count, add, interval}; ptimer: {sel, data}
   bool start = false, abort = false, clear = false, drivers_on = false, drivers_off = false;
   bool cfg_write = false;
   bool fault = false;
@@ -72,7 +75,10 @@ class CpCmd {
 
  private:
   enum class Parse {
-    command, seg_h1, seg_v, chunk_interval, chunk_count, chunk_add2, chunk_check, reply, conic_words
+    command, seg_h1, seg_v, chunk_interval, chunk_count, chunk_add2, chunk_check, reply, conic_words,
+    seg_length,   // ptimer: the segment's length per move, then its commit
+    phase_words,  // ptimer: a PHASE's words after H0 (v_index: the next one's sel)
+    phase_w0      // ptimer: its W0 (interval) into the chunk queue, and the commit
   };
   struct Regs {
     // Reset.

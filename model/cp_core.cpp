@@ -10,16 +10,19 @@ namespace cpstep::model {
 
 CpCore::CpCore(Params p)
     : p_(p),
-      cmd_({p.n, p.umax, p.kmax, p.caw, p.tw, p.conic, p.feed, p.inputs}),
-      build_({p.n, p.w, p.umax, p.saw, p.conic}),
-      run_({p.n, p.w, p.conic, p.ciw}),
+      cmd_({p.n, p.umax, p.kmax, p.caw, p.tw, p.conic, p.feed, p.inputs, p.ptimer}),
+      build_({p.n, p.w, p.umax, p.saw, p.conic, p.ptimer}),
+      run_({p.n, p.w, p.conic, p.ciw, p.ptimer}),
       status_({p.n, p.w, p.umax, p.kmax, p.caw, p.saw, p.tw, p.pw, p.step_high_reset, p.step_low_reset,
                p.dir_setup_reset, p.dir_hold_reset, p.step_pol_reset, p.dir_pol_reset, p.cbuf_aw,
-               p.clock_hz, p.build_id, p.conic, p.ciw, p.inputs, p.feed}),
+               p.clock_hz, p.build_id, p.conic, p.ciw, p.inputs, p.feed, p.ptimer}),
       inputs_(p.n),
-      seg_fifo_({p.conic ? 32 + p.n : 30 + p.n, p.saw + bits::clog2(p.n + 1)}),
-      chunk_fifo_({81, p.caw}),
-      run_fifo_({3 + 2 * p.n + (p.conic ? 7 : 0), 1}) {
+      // (ptimer: a segment's length word, 32 bits; N + 2 words a segment; the run
+      // queue's L, k, U above its fields; the chunk queue the timer's {sel, data}.)
+      seg_fifo_({std::max(p.conic ? 32 + p.n : 30 + p.n, p.ptimer ? 32u : 0u),
+                 p.saw + bits::clog2(p.n + 1 + (p.ptimer ? 1 : 0))}),
+      chunk_fifo_({p.ptimer ? 35u : 81u, p.caw}),
+      run_fifo_({run_fields() + (p.ptimer ? 60 : 0), 1}) {
   if (p_.n < 1 || p_.n > kCoreMaxAxes) throw std::invalid_argument("cp_core: N must be 1 to 8");
   if (p_.umax < p_.w || p_.umax > 16777214)
     throw std::invalid_argument("cp_core: UMAX must be W to 2^24-2");
@@ -140,7 +143,9 @@ CpCore::Wires CpCore::settle() const {
   r.ch_valid = w.chunk.out_valid;
   r.ch_head = w.chunk.out_data;
   r.run_valid = w.run.out_valid;
-  r.run_head = w.run.out_data[0];
+  r.run_head = w.run.out_data[0] & bits::mask64(run_fields());
+  if (p_.ptimer)   // {L, k, U} above the fields
+    r.run_head_pt = (w.run.out_data[0] >> run_fields() | w.run.out_data[1] << (64 - run_fields())) & bits::mask64(60);
   r.run_level = w.run.level;
   r.segq_empty = build_.segq() == 0;
   r.build_busy = build_.busy();
@@ -297,7 +302,9 @@ CpFifoIn CpCore::chunk_in(const Wires& w) const {
   return fifo_in(in.rst, w.st.flush || in.ctl_flush, w.cmd.ch_wr, w.cmd.ch_data, w.cmd.ch_commit, w.cmd.ch_rollback, w.r.ch_pop);
 }
 CpFifoIn CpCore::run_in(const Wires& w) const {
-  return fifo_in(in.rst, w.st.flush || in.ctl_flush, w.b.run_wr, {w.b.run_data, 0, 0, 0}, true, false, w.r.run_pop);
+  const unsigned f = run_fields();
+  return fifo_in(in.rst, w.st.flush || in.ctl_flush, w.b.run_wr,
+                 {w.b.run_data | w.b.run_data_pt << f, w.b.run_data_pt >> (64 - f), 0, 0}, true, false, w.r.run_pop);
 }
 
 uint64_t CpCore::quiet_for(uint64_t limit) const {

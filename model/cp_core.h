@@ -97,6 +97,9 @@ class CpCore {
   CpPulseIn pulse_in(unsigned axis, bool step) const;
   // The move timer's scale now (cp_feed's register; 1 without FEED), Q2.16.
   uint32_t scale() const { return p_.feed ? feed_.outputs().scale : 0x10000; }
+  // The run queue word's fields below the phase timer's L, k, U: {[conic, u, v,]
+  // out, lane, end, moving[N], dir[N]}.
+  unsigned run_fields() const { return 3 + 2 * p_.n + (p_.conic ? 7 : 0); }
   // The three queues' inputs this clock.
   CpFifoIn seg_in(const Wires& w) const;
   CpFifoIn chunk_in(const Wires& w) const;

@@ -33,6 +33,9 @@ struct CpCoreParams {
   unsigned cbuf_aw = 0;
   uint32_t clock_hz = 48000000;
   uint32_t build_id = 0;
+  // Moves timed by the phase timer from PHASE commands instead of chunks, each
+  // segment carrying its length per move (docs/PROTOCOL.md "Toward a compact wire").
+  bool ptimer = false;
 };
 
 struct CpCoreIn {
@@ -94,6 +97,7 @@ enum class CoreError : uint32_t {
   conic_cont = 18,  // a CONIC continuing a walk (H0[18]) that does not follow a CONIC on its axes, its way
   watchdog = 19,    // no frame for the watchdog's timeout (CONFIG field 5)
   limit = 20,       // the segment under way moved toward an active limit switch
+  seg_length = 21,  // (PTIMER builds) a segment's length per move L = 0
 };
 
 }  // namespace cpstep::model

@@ -32,7 +32,7 @@ cp_i128 CpPtimer::threshold() const {
 
 CpPtimerOut CpPtimer::outputs() const {
   Out o;
-  o.due = r_.tdue || (!r_.timed && !r_.fresh && r_.r >= 0);
+  o.due = r_.tdue || (!r_.timed && !r_.owe && r_.r >= 0);
   o.active = r_.active;
   o.ready = !r_.nvalid;
   o.starved = r_.starved;
@@ -47,7 +47,7 @@ void CpPtimer::tick() {
   }
   const Regs o = r_;
   Regs n = r_;
-  const bool due = o.tdue || (!o.timed && !o.fresh && o.r >= 0);
+  const bool due = o.tdue || (!o.timed && !o.owe && o.r >= 0);
   // The next phase's buffer: written while free, W0 last.
   if (in.wr && !o.nvalid) {
     switch (in.sel & 7) {
@@ -66,20 +66,20 @@ void CpPtimer::tick() {
     }
   }
   // The due move fires (a timed one clears its flag): r takes off the length of
-  // the move now pending, the next one.
-  // (The clock after a start from rest takes off the pending move's length.)
+  // the move now pending, the next one, if it is known, else owes it. (A length
+  // owed, after a start from rest or such a fire, is taken off when known.)
   cp_i128 r = o.r;
-  n.fresh = false;
-  if ((in.fire && due) || o.fresh) {
-    if (in.fire && due && o.tdue) n.tdue = false;
-    r -= threshold();
-  }
+  if (in.fire && due && o.tdue) n.tdue = false;
+  const bool take = (in.fire && due) || o.owe;
+  n.owe = take && !in.len_valid;
+  if (take && in.len_valid) r -= threshold();
   bool phase_end = false;
   if (o.active && in.adv) {
     if (o.timed) {
       if (o.tleft == 1) {
         n.tdue = true;
         r = 0;   // p = 0, the timed move's fire takes off the next one's length
+        n.owe = false;
         phase_end = true;
       } else {
         n.tleft = o.tleft - 1;
@@ -106,10 +106,10 @@ void CpPtimer::tick() {
       n.u = u;
       n.tleft = o.nticks == 0 ? 1 : o.nticks;
       n.tcnt = 0;
-      if (o.nkind & 4) {   // from rest: p = 0, r = 0 until the pending move's length is taken off
+      if (o.nkind & 4) {   // from rest: p = 0, r = 0, the pending move's length owed
         n.step = n.h = 0;
         r = 0;
-        n.fresh = !n.tdue;   // next clock (a timed move still to fire takes off the next's)
+        n.owe = !n.tdue;   // (a timed move still to fire takes off the next's)
       }
       if (o.nkind & 8) {   // load S and H
         n.step = sx(int64_t(o.ns), p_.vw);
@@ -117,7 +117,7 @@ void CpPtimer::tick() {
       }
       if (o.nkind & 1) {   // load r (its top 64 bits)
         r = cp_i128(int64_t(o.np)) << (rw() - 64);
-        n.fresh = false;
+        n.owe = false;
       }
     } else {
       n.active = false;

@@ -7,7 +7,9 @@
 //   every clock of a jerk phase (adv):  p += step; the pending move is due while
 //       p >= its length * 2^S. Kept as r = p - that length * 2^S (due: r >= 0);
 //       a fire takes off the next move's length (`len` is the length of the move
-//       pending after this clock: in a clock that fires, the next one's)
+//       pending after this clock: in a clock that fires, the next one's) when
+//       `len_valid`; until then the length is owed (taken off in the first clock
+//       that has it) and no move is due
 //   at the end of each tick (2^S clocks from the phase's start):
 //       step += 2H + 6u, H += 3u
 //   (the step S = V + H + u of the cubic V m + H m^2 + u m^3 over ticks; no V is
@@ -40,6 +42,7 @@ struct CpPtimerIn {
   uint32_t data = 0;
   bool fire = false;       // the due move fires now
   uint64_t len = 0;        // the pending move's length after this clock, 2^-F units (LW bits)
+  bool len_valid = true;   // ... is known (else it is owed)
 };
 
 struct CpPtimerOut {
@@ -77,7 +80,7 @@ class CpPtimer {
  private:
   struct Regs {
     bool active = false, timed = false, tdue = false, starved = false;
-    bool fresh = false;   // started from rest last clock: r = 0, the pending length not yet taken off
+    bool owe = false;     // the pending move's length is still to be taken off r (no move due)
     uint32_t kind = 0;
     uint32_t tleft = 0, tcnt = 0;
     int64_t u = 0, h = 0, step = 0;   // u, H, the step S

@@ -8,7 +8,7 @@
 
 namespace cpstep::model {
 
-CpRun::CpRun(Params p) : p_(p), aw_(CpEngineParams{p.w}.aw()), walker_(CpConicSerialParams{16, p.ciw, 24}) {
+CpRun::CpRun(Params p) : p_(p), aw_(CpEngineParams{p.w}.aw()), walker_(CpConicSerialParams{16, p.ciw, 24}), ptimer_() {
   banks_.assign(p_.n, std::vector<uint8_t>(std::size_t(2) << aw_, 0));
 }
 
@@ -21,7 +21,8 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   // steps in it is ready; E-stop and abort stop it in the same cycle. A move is
   // counted late once: in the first cycle it is due and does not fire, or when it
   // fires after its time without having waited due (its chunk came late).
-  const bool due = q.chunk_loaded && q.elapsed >= q.delay;
+  const CpPtimerOut pt = p_.ptimer ? ptimer_.outputs() : CpPtimerOut{};
+  const bool due = p_.ptimer ? pt.due : q.chunk_loaded && q.elapsed >= q.delay;
   // In a conic, the plane axes step by the walker's presented move, in its directions;
   // its end mark must agree with the segment's last move.
   const CpConicSerialOut wo = p_.conic ? walker_.outputs() : CpConicSerialOut{};
@@ -35,7 +36,7 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   o.lim_hit = q.running && q.cur_valid && (toward & bits::mask(n)) != 0;
   const bool stopping = i.estop || i.abort || i.stop || o.lim_hit;
   const uint32_t move_steps = lane_move | plane_step;
-  const bool seg_last = q.moves_left == 1 && q.timer_last;
+  const bool seg_last = p_.ptimer ? q.mleft == 1 : q.moves_left == 1 && q.timer_last;
   const bool conic_ok = !conic_on || (wo.move_valid && wo.move_end == seg_last);
   o.walker_free = !wo.busy && !wo.move_valid;
   o.fire = q.running && q.cur_valid && !stopping && due && q.rp_valid && conic_ok &&
@@ -44,7 +45,8 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
                   wo.move_end != seg_last;
   o.fault = o.fault_conic;
   // On time: elapsed passed delay by less than the last clock's increment (at scale 1: equal).
-  const bool on_time = q.elapsed - q.delay < q.inc;
+  // (ptimer: a move fires in the clock it falls due or is counted late while it waits.)
+  const bool on_time = p_.ptimer || q.elapsed - q.delay < q.inc;
   o.stretch = q.running && due && !q.late && !stopping && (!o.fire || !on_time);
   o.seg_done = o.fire && seg_last;
   o.seg_active = q.running && q.cur_valid && !o.seg_done;
@@ -73,18 +75,24 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
     d.timer_add2 = uint32_t(head[1]) & 0xFFFF;
     d.timer_last = (head[1] >> 16 & 1) != 0;
   };
-  if (!q.chunk_loaded && i.ch_valid) {
+  // The phase timer's words come from the chunk queue while its buffer is free; its
+  // time advances on the carry of half clocks of scaled time, from START.
+  const uint32_t pa_sum = q.pa + (i.scale & 0x3FFFF);
+  d.pa = p_.ptimer ? pa_sum & 0x1FFFF : 0;
+  if (p_.ptimer) o.ch_pop = i.ch_valid && pt.ready;
+  if (!p_.ptimer && !q.chunk_loaded && i.ch_valid) {
     load_chunk();
     d.chunk_loaded = true;
   }
   if (o.fire) {
     d.elapsed = inc;
+    d.mleft = (q.mleft - 1) & bits::mask64(34);
     d.dir = (q.dir & ~plane_step) | (plane_dir & plane_step);  // a plane axis keeps its direction
     if (q.moves_left != 1) {
       d.moves_left = (q.moves_left - 1) & 0xFFFF;
       d.delay = q.delay + q.timer_inc;
       d.timer_inc = q.timer_inc + uint32_t(bits::sext16(q.timer_add2));
-    } else if (i.ch_valid) {
+    } else if (i.ch_valid && !p_.ptimer) {
       load_chunk();
     } else {
       d.chunk_loaded = false;
@@ -102,6 +110,11 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
     d.running = false;
     d.cur_valid = false;
     d.rp_valid = false;
+  }
+  // ptimer: the timer ran out of phases while the pending move is not due: an underrun.
+  if (p_.ptimer && q.running && q.cur_valid && pt.starved && !pt.due) {
+    d.running = false;
+    o.fault = true;
   }
   if (o.seg_done) {
     d.cur_valid = false;
@@ -127,6 +140,9 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
     d.cur_av = uint32_t(i.run_head >> (2 * n + 3)) & 7;
     d.dir = (d.dir & ~moving) | (dir & moving);
     d.moving = moving;
+    // ptimer: the segment's moves U*2^k and its length per move.
+    d.mleft = (i.run_head_pt & 0xFFFFFF) << (i.run_head_pt >> 24 & 15);
+    d.cur_len = uint32_t(i.run_head_pt >> 28);
     // The replay registers fetch each pattern's first move.
     rp.re = true;
     rp.lane = d.cur_lane;
@@ -136,6 +152,7 @@ CpRun::Out CpRun::eval(const In& i, Regs& d, Replay& rp) const {
   if (i.start && !i.fault && !q.running) {
     d.running = true;
     d.elapsed = inc;
+    d.pa = 0;
   }
   // STOP: the run is off; what is loaded and queued stays (a START goes on, the
   // pending move timed from it).
@@ -187,6 +204,8 @@ CpRun::Out CpRun::eval_outputs(const In& i) const {
 
 uint64_t CpRun::quiet_for(const In& i) const {
   if (i.rst || i.bank_we || i.len_we) return 0;
+  // The phase timer sums bit-serially every clock of its ticks: clocked always.
+  if (p_.ptimer) return 0;
   // The conic walker turns its passes every clock: clocked while a pass runs or
   // starts; between its passes (a move presented and the next decided, waiting for
   // the run to take it) it holds still, and the span to the move's due time skips.
@@ -249,6 +268,21 @@ void CpRun::tick() {
     walker_.in.move_ready = r_.cur_conic && o.fire;
     walker_.tick();
   }
+  if (p_.ptimer) {
+    const CpPtimerOut pt = ptimer_.outputs();
+    CpPtimerIn& pi = ptimer_.in;
+    pi.rst = in.rst;
+    pi.clear = in.flush;
+    pi.adv = r_.running && ((r_.pa + (in.scale & 0x3FFFF)) >> 17 & 1) != 0;
+    pi.wr = in.ch_valid && pt.ready;
+    pi.sel = uint32_t(in.ch_head[0] >> 32) & 7;
+    pi.data = uint32_t(in.ch_head[0]);
+    pi.fire = o.fire;
+    // The length of the move pending after this clock: the segment loaded after it.
+    pi.len = uint64_t(d.cur_len) << 30;
+    pi.len_valid = d.cur_valid;
+    ptimer_.tick();
+  }
   if (in.rst) {
     d.running = d.cur_valid = false;
     d.cur_lane = 0;
@@ -258,6 +292,7 @@ void CpRun::tick() {
     d.out = d.torch = false;
     d.ph = 0;
     d.inc = 1;
+    d.pa = 0;
   }
   r_ = d;
 }

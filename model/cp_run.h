@@ -13,6 +13,7 @@
 #include "model/cp_conic_serial.h"
 #include "model/cp_core_ports.h"
 #include "model/cp_fifo.h"
+#include "model/cp_ptimer.h"
 
 namespace cpstep::model {
 
@@ -20,6 +21,9 @@ struct CpRunParams {
   unsigned n = 4, w = 1024;
   bool conic = false;  // the conic walker, for CONIC segments (docs/CORE.md)
   unsigned ciw = 40;   // its internal width
+  // Moves timed by the phase timer (rtl/cp_ptimer.v) instead of chunks: the chunk
+  // queue carries its words, the run queue each segment's moves and length per move.
+  bool ptimer = false;
 };
 
 struct CpRunIn {
@@ -29,6 +33,7 @@ struct CpRunIn {
   FifoWord ch_head{};      // 81 bits: {last, add2, count, add, interval}
   bool run_valid = false;
   uint64_t run_head = 0;   // {[conic, u, v,] out, lane, end, moving[N], dir[N]}
+  uint64_t run_head_pt = 0;  // ptimer: the fields above those, {L[31:0], k[3:0], U[23:0]}
   uint32_t run_level = 0;  // 2 bits
   bool segq_empty = false, build_busy = false;
   // The banks' write port (cp_build).
@@ -41,6 +46,7 @@ struct CpRunIn {
   // Active limit switches (cp_inputs), bit a: axis a.
   uint32_t lim_min = 0, lim_max = 0;
   // The timer's scale, Q2.16 (cp_feed; 0x10000 = 1): the scaled time each clock adds.
+  // (ptimer: the timer advances on the carry of a 17-bit fraction taking it each clock.)
   uint32_t scale = 0x10000;
   // The conic walker's word port (cp_build).
   bool cw_wr = false;
@@ -120,6 +126,11 @@ class CpRun {
     std::array<std::array<uint32_t, kCoreMaxAxes>, 2> lm1{};
     bool cur_conic = false;  // reset: the loaded segment is a conic, and its plane axes
     uint32_t cur_au = 0, cur_av = 0;
+    // ptimer: the loaded segment's moves still to fire (34 bits), its length per
+    // move (Q2.30), and the fraction of half clocks of scaled time (17 bits, reset).
+    uint64_t mleft = 0;
+    uint32_t cur_len = 0;
+    uint32_t pa = 0;
     bool operator==(const Regs&) const = default;
   };
   // The replay's read of the banks this cycle.
@@ -138,6 +149,7 @@ class CpRun {
   std::vector<std::vector<uint8_t>> banks_;
   uint32_t rbits_ = 0;
   CpConicSerial walker_;
+  CpPtimer ptimer_;
   Regs r_;
 };
 

@@ -44,7 +44,7 @@ CpStatus::Regs CpStatus::reset_state() const {
 uint32_t CpStatus::status_word(const In& i) const {
   const Regs& q = r_;
   const uint32_t chunks = std::min<uint32_t>(i.ch_level & bits::mask(p_.caw + 1), 255);
-  const unsigned sqw = p_.saw + bits::clog2(p_.n + 1);
+  const unsigned sqw = p_.saw + bits::clog2(p_.n + 1 + (p_.ptimer ? 1 : 0));
   const uint32_t segments =
       ((i.segq & bits::mask(sqw + 1)) + uint32_t(i.build_busy) + (i.run_level & 3) + uint32_t(i.cur_valid)) &
       0xFF;
@@ -66,7 +66,7 @@ uint32_t CpStatus::read(const In& i, uint32_t reg) const {
                       (p_.n & 0xFF);
     case 0x21: return p_.w;
     case 0x22: return p_.umax;
-    case 0x23: return uint32_t(p_.feed) << 25 | uint32_t(p_.inputs) << 24 | kProtocolVersion << 16 | (p_.cbuf_aw & 0xFF) << 8 | (p_.pw & 0xFF);
+    case 0x23: return uint32_t(p_.ptimer) << 26 | uint32_t(p_.feed) << 25 | uint32_t(p_.inputs) << 24 | kProtocolVersion << 16 | (p_.cbuf_aw & 0xFF) << 8 | (p_.pw & 0xFF);
     case 0x24: return p_.clock_hz;
     case 0x25: return p_.build_id;
     case 0x26: return p_.conic ? p_.ciw : 0;

@@ -24,6 +24,7 @@ struct CpStatusParams {
   unsigned ciw = 40;
   bool inputs = false;  // reported only (READ 0x23 [24]): limit and probe inputs
   bool feed = false;    // reported only (READ 0x23 [25]): feed hold and override
+  bool ptimer = false;  // READ 0x23 [26]; its segments' length word widens the segment queue
 };
 
 struct CpStatusIn {

@@ -16,6 +16,10 @@
 // walker, one a clock, the last with the walker's start, and the segment goes into
 // the run queue with its plane axes.
 //
+// With PTIMER = 1 (the phase timer's build) a segment's last word is its length per
+// move L: the segment goes into the run queue with it, its k and its U (the run
+// counts its moves U*2^k itself), after its last axis (or its conic's words).
+//
 // Part of cp_core (docs/CORE.md "Structure"); model twin model/cp_build.*, bench
 // tb/core/test_core_parts.cpp.
 `resetall
@@ -27,7 +31,8 @@ module cp_build #(
     parameter integer W = 1024,
     parameter integer UMAX = 1048575,
     parameter integer SAW = 2,
-    parameter integer CONIC = 0
+    parameter integer CONIC = 0,
+    parameter integer PTIMER = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -44,7 +49,7 @@ module cp_build #(
     input  wire [1:0]    run_level_i,
     input  wire          cur_valid_i,
     output reg           run_wr_o,
-    output reg  [RDW-1:0] run_wdata_o,     // {[conic, u, v,] out, lane, end, moving[N], dir[N]}
+    output reg  [RDW-1:0] run_wdata_o,     // {[L, k, U,] [conic, u, v,] out, lane, end, moving[N], dir[N]}
 
     // Write port of the pattern banks (cp_run): axis, address, bit, in the build
     // lane; and the pattern's length - 1 when an axis is done.
@@ -71,16 +76,20 @@ module cp_build #(
 
 localparam integer UW = $clog2(UMAX + 2);           // engine u/v width
 localparam integer AW = (W > 2) ? $clog2(W) : 1;
-localparam integer SQW = SAW + $clog2(N + 1);
-localparam integer SWW = (CONIC == 0) ? 30 + N : 32 + N;
-localparam integer RDW = 3 + 2 * N + ((CONIC == 0) ? 0 : 7);
+localparam integer SQW = SAW + $clog2(N + 1 + ((PTIMER != 0) ? 1 : 0));
+localparam integer SWW0 = (CONIC == 0) ? 30 + N : 32 + N;
+localparam integer SWW = (PTIMER != 0 && SWW0 < 32) ? 32 : SWW0;   // (a PTIMER segment's L: 32 bits)
+localparam integer RCW = 3 + 2 * N + ((CONIC == 0) ? 0 : 7);
+localparam integer RDW = RCW + ((PTIMER == 0) ? 0 : 60);
 
-localparam [1:0] B_IDLE = 2'd0;   // waiting for a committed segment and a free lane
-localparam [1:0] B_V    = 2'd1;   // next axis: its v_i at the segment queue's head
-localparam [1:0] B_CAP  = 2'd2;   // the engine's first period into the bank
-localparam [1:0] B_K    = 2'd3;   // a conic's seven words into the walker
+localparam [2:0] B_IDLE = 3'd0;   // waiting for a committed segment and a free lane
+localparam [2:0] B_V    = 3'd1;   // next axis: its v_i at the segment queue's head
+localparam [2:0] B_CAP  = 3'd2;   // the engine's first period into the bank
+localparam [2:0] B_K    = 3'd3;   // a conic's seven words into the walker
+localparam [2:0] B_L    = 3'd4;   // PTIMER: the length per move, and the run queue
 
-reg [1:0]    b_state_q, b_state_d;       // reset
+reg [2:0]    b_state_q, b_state_d;       // reset
+reg [3:0]    b_k_q, b_k_d;               // PTIMER: the segment's k
 reg          build_lane_q, build_lane_d; // reset
 reg [SQW:0]  segq_q, segq_d;             // reset
 reg [2:0]    b_axis_q, b_axis_d;
@@ -129,18 +138,24 @@ wire unused = &{1'b0, dbg_we1, dbg_wbit1, dbg_we2, dbg_wbit2, dbg_iter,
                 dbg_m1_len, dbg_m2_lo, dbg_m2_len, dbg_x, dbg_y, eng_err_code, eng_move_last};
 
 // ---------------------------------------------------------------- next state
-// A run queue word with the conic fields, before it is cut to RDW bits (and one
-// spare bit, so that the part a build without conics drops is never empty).
+// A run queue word with the conic fields, before it is cut to RCW bits (and one
+// spare bit, so that the part a build without conics drops is never empty); with
+// PTIMER the fields {L, k, U} above them.
 localparam integer RFW = 10 + 2 * N;
 reg [RFW:0] run_wide;
-wire unused_run = &{1'b0, run_wide[RFW:RDW]};
+wire unused_run = &{1'b0, run_wide[RFW:RCW]};
+reg [RCW+60:0] run_x;     // the word written: run_wide's fields, then L, k, U
+wire [24:0] b_u25 = {{(25-UW){1'b0}}, b_u_q};
+wire unused_x = &{1'b0, b_u25[24], run_x};   // (the bits past RDW)
 always @* begin
     run_wide = {(RFW+1){1'b0}};
+    run_x = {(RCW+61){1'b0}};
     b_state_d = b_state_q;  build_lane_d = build_lane_q;
     segq_d = segq_q + {{SQW{1'b0}}, seg_commit_i};
     b_axis_d = b_axis_q;  b_u_d = b_u_q;  b_end_d = b_end_q;  b_out_d = b_out_q;
     b_dir_d = b_dir_q;  b_moving_d = b_moving_q;  cap_addr_d = cap_addr_q;
     b_conic_d = b_conic_q;  b_cont_d = b_cont_q;  b_au_d = b_au_q;  b_av_d = b_av_q;  k_idx_d = k_idx_q;
+    b_k_d = b_k_q;
     seg_pop_o = 1'b0;  run_wr_o = 1'b0;  run_wdata_o = {RDW{1'b0}};
     cw_wr_o = 1'b0;  cw_sel_o = k_idx_q;  cw_data_o = head_wide[31:0];  cw_start_o = 1'b0;
     cw_cont_o = 1'b0;
@@ -158,6 +173,7 @@ always @* begin
         b_out_d    = head_out;
         b_conic_d  = head_conic;
         b_cont_d   = head_cont;
+        b_k_d      = seg_head_i[24 + N +: 4];
         b_axis_d   = 3'd0;
         b_moving_d = {N{1'b0}};
         b_state_d  = B_V;
@@ -204,12 +220,23 @@ always @* begin
         if (k_idx_q == 3'd6) begin
             cw_start_o   = 1'b1;
             cw_cont_o    = b_cont_q;
-            run_wr_o     = 1'b1;
-            run_wide     = {2'b01, b_au_q, b_av_q, b_out_q, build_lane_q, b_end_q, b_moving_q, b_dir_q};
-            run_wdata_o  = run_wide[RDW-1:0];
-            build_lane_d = !build_lane_q;
-            b_state_d    = B_IDLE;
+            if (PTIMER != 0) begin
+                b_state_d    = B_L;
+            end else begin
+                run_wr_o     = 1'b1;
+                run_wide     = {2'b01, b_au_q, b_av_q, b_out_q, build_lane_q, b_end_q, b_moving_q, b_dir_q};
+                build_lane_d = !build_lane_q;
+                b_state_d    = B_IDLE;
+            end
         end
+    end
+    // PTIMER: the segment's last word, its length per move, goes with it into the run queue.
+    B_L: if (PTIMER != 0 && seg_valid_i) begin
+        seg_pop_o    = 1'b1;
+        run_wr_o     = 1'b1;
+        run_wide     = {1'b0, b_conic_q, b_au_q, b_av_q, b_out_q, build_lane_q, b_end_q, b_moving_q, b_dir_q};
+        build_lane_d = !build_lane_q;
+        b_state_d    = B_IDLE;
     end
     default: b_state_d = B_IDLE;
     endcase
@@ -217,10 +244,11 @@ always @* begin
         if ({29'd0, b_axis_q} == N - 1 && CONIC != 0 && b_conic_q) begin
             k_idx_d   = b_cont_q ? 3'd5 : 3'd0;
             b_state_d = B_K;
+        end else if ({29'd0, b_axis_q} == N - 1 && PTIMER != 0) begin
+            b_state_d    = B_L;
         end else if ({29'd0, b_axis_q} == N - 1) begin
             run_wr_o     = 1'b1;
             run_wide     = {8'd0, b_out_q, build_lane_q, b_end_q, b_moving_d, b_dir_q};
-            run_wdata_o  = run_wide[RDW-1:0];
             build_lane_d = !build_lane_q;
             b_state_d    = B_IDLE;
         end else begin
@@ -234,6 +262,8 @@ always @* begin
         segq_d       = {(SQW+1){1'b0}};
     end
     len_we_o = cap_done;
+    run_x = {1'b0, head_wide[31:0], b_k_q, b_u25[23:0], run_wide[RCW-1:0]};
+    if (run_wr_o) run_wdata_o = run_x[RDW-1:0];
 end
 
 // The engine is reset when a pattern's first period is in its bank, and by a flush.
@@ -253,6 +283,7 @@ always @(posedge clk) begin
     b_axis_q <= b_axis_d;  b_u_q <= b_u_d;  b_end_q <= b_end_d;  b_out_q <= b_out_d;
     b_dir_q <= b_dir_d;  b_moving_q <= b_moving_d;  cap_addr_q <= cap_addr_d;
     b_conic_q <= b_conic_d;  b_cont_q <= b_cont_d;  b_au_q <= b_au_d;  b_av_q <= b_av_d;  k_idx_q <= k_idx_d;
+    b_k_q <= b_k_d;
 end
 
 // ---------------------------------------------------------------- outputs

@@ -12,6 +12,13 @@
 // requests to cp_status and cp_run; a refusal is a fault request with its code
 // (cp_status decides).
 //
+// With PTIMER = 1 (the phase timer's build, docs/PROTOCOL.md "Toward a compact
+// wire") segments carry no chunks (H0[15:0] = 0) but, after their v_i (and a
+// conic's words), their length per move L (a word, not 0: SEG_LENGTH), and are
+// committed with it; PHASE commands (opcode 0x6: {kind[3:0], ticks[23:0]} in H0,
+// then u, r's two words if kind[0], S's and H's four if kind[3]) go to the chunk
+// queue as the phase timer's words {sel, data}, W0 last, committed whole.
+//
 // Part of cp_core (docs/CORE.md "Structure"); model twin model/cp_cmd.*, bench
 // tb/core/test_core_parts.cpp.
 `resetall
@@ -29,7 +36,9 @@ module cp_cmd #(
     // 1: CONFIG field 9 (the feed ramp's tick, cp_feed) is taken; 0: refused.
     parameter integer FEED = 0,
     // 1: CONFIG field 10 (the seek, cp_inputs) is taken; 0: refused. Fields above 10: refused.
-    parameter integer INPUTS = 0
+    parameter integer INPUTS = 0,
+    // 1: segments timed by the phase timer and PHASE commands (above); 0: chunks.
+    parameter integer PTIMER = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -76,12 +85,14 @@ module cp_cmd #(
 // Segment queue words: {out, end, k, dir[N], value[23:0]} (out: the torch output
 // while the segment runs, H0[16]), with CONIC the conic flag and the continuation flag
 // above them, and a conic's seven words of 32 bits (two, K5 and K6, for a continuation).
-localparam integer SWW = (CONIC == 0) ? 30 + N : 32 + N;
+localparam integer SWW0 = (CONIC == 0) ? 30 + N : 32 + N;
+localparam integer SWW = (PTIMER != 0 && SWW0 < 32) ? 32 : SWW0;   // (a PTIMER segment's L: 32 bits)
 localparam [3:0] OP_SEGMENT = 4'h1;
 localparam [3:0] OP_CONFIG  = 4'h2;
 localparam [3:0] OP_CONTROL = 4'h3;
 localparam [3:0] OP_READ    = 4'h4;
 localparam [3:0] OP_CONIC   = 4'h5;
+localparam [3:0] OP_PHASE   = 4'h6;
 
 localparam [7:0] E_NONE           = 8'd0;
 localparam [7:0] E_SEG_U          = 8'd1;
@@ -97,6 +108,7 @@ localparam [7:0] E_CONFIG_VALUE   = 8'd14;
 localparam [7:0] E_SEG_ADD2       = 8'd15;
 localparam [7:0] E_CONIC_AXES     = 8'd16;
 localparam [7:0] E_CONIC_CONT     = 8'd18;
+localparam [7:0] E_SEG_LENGTH     = 8'd21;
 // The bits of a 16-bit CONFIG value that a TW-bit timing field holds.
 localparam [15:0] TMASK = (TW >= 16) ? 16'hFFFF : ((16'd1 << TW) - 16'd1);
 
@@ -109,6 +121,9 @@ localparam [3:0] P_CHK  = 4'd5;   // chunk: checking its last increment and last
 localparam [3:0] P_RSP  = 4'd6;   // a reply waits to be taken
 localparam [3:0] P_C2   = 4'd7;   // chunk: add2 (segments whose chunks carry it)
 localparam [3:0] P_K    = 4'd8;   // conic: its seven words
+localparam [3:0] P_L    = 4'd9;   // PTIMER segment: its length per move, then the commit
+localparam [3:0] P_PH   = 4'd10;  // PHASE: its words (v_idx_q: the next one's sel)
+localparam [3:0] P_PW0  = 4'd11;  // PHASE: W0 (interval_q) to the chunk queue, and the commit
 // The check's clocks: bit i of every serial value in clock i = 0 .. 50. The values
 // are exact in 50-bit two's complement (|(count-1)*(add + last increment)| < 2^47),
 // and bits past that are the sign's copies.
@@ -207,8 +222,20 @@ wire [5:0]  ck_uk    = ck_i_q - {2'd0, hdr_k_q};
 wire        ck_moves = ck_i_q < 6'd34 && ck_i_q >= {2'd0, hdr_k_q} && ck_uk < 6'd24 && seg_u_q[ck_uk[4:0]];
 wire        ck_sum   = ck_i_q < 6'd34 && sum_q[ck_i_q];
 
-// The chunk queue word: last chunk of its segment, add2, count, add, interval.
-assign ch_wdata_o = {nchunks_q == 16'd1, add2_d, count_d, add_d, interval_q};
+// The chunk queue word: last chunk of its segment, add2, count, add, interval; with
+// PTIMER the phase timer's word {sel, data} (W0: sel 0, the PHASE header kept).
+wire        pw0      = p_state_q == P_PW0;
+wire [2:0]  pw_sel   = pw0 ? 3'd0 : v_idx_q;
+wire [31:0] pw_data  = pw0 ? interval_q : cmd_data_i;
+assign ch_wdata_o = (PTIMER != 0) ? {46'd0, pw_sel, pw_data}
+                                  : {nchunks_q == 16'd1, add2_d, count_d, add_d, interval_q};
+// The PHASE word after the one with sel s: u (1), r (2, 3) if kind[0], S and H (4 .. 7)
+// if kind[3], then W0 (0).
+wire        ph_load_r  = interval_q[28];   // kind[0]: load r
+wire        ph_load_sh = interval_q[31];   // kind[3]: load S and H
+wire [2:0]  ph_next  = (v_idx_q == 3'd1) ? (ph_load_r ? 3'd2 : ph_load_sh ? 3'd4 : 3'd0)
+                     : (v_idx_q == 3'd3) ? (ph_load_sh ? 3'd4 : 3'd0)
+                     : (v_idx_q == 3'd7) ? 3'd0 : v_idx_q + 1'b1;
 
 // ---------------------------------------------------------------- next state
 reg refuse;          // a refusal of the parser's own this cycle
@@ -241,7 +268,7 @@ always @* begin
     dl_nz_d = dl_nz_q || (ck_jv && ck_j < 6'd32 && ck_dl);
     dl_hi_d = dl_hi_q || (ck_i_q > 6'd33 && ck_dl);
     sum_ne_d = sum_ne_q || ck_sum != ck_moves;
-    if (p_state_q != P_CHK) begin
+    if (PTIMER != 0 || p_state_q != P_CHK) begin
         ck_i_d = 6'd0;  acc1_d = 16'd0;  acc2_d = 16'd0;
         c1_d = 1'b0;  c2_d = 1'b0;  c3_d = 1'b0;  b_d = 1'b0;  li_sign_d = 1'b0;
         li_nz_d = 1'b0;  dl_nz_d = 1'b0;  dl_hi_d = 1'b0;  sum_ne_d = 1'b0;
@@ -273,7 +300,8 @@ always @* begin
             if (!fault_i) begin
                 if ({28'd0, hdr_k_d} > KMAX) begin
                     refuse = 1'b1;  refuse_code = E_SEG_K;  discard_d = 1'b1;
-                end else if (cmd_data_i[15:0] == 16'd0 || {16'd0, cmd_data_i[15:0]} > (32'd1 << CAW)) begin
+                end else if ((PTIMER == 0 && (cmd_data_i[15:0] == 16'd0 || {16'd0, cmd_data_i[15:0]} > (32'd1 << CAW))) ||
+                             (PTIMER != 0 && cmd_data_i[15:0] != 16'd0)) begin
                     refuse = 1'b1;  refuse_code = E_SEG_CHUNKS;  discard_d = 1'b1;
                 end else if (hdr_conic_d && (hdr_au_d == hdr_av_d || {29'd0, hdr_au_d} >= N ||
                                              {29'd0, hdr_av_d} >= N)) begin
@@ -284,6 +312,15 @@ always @* begin
                 end
             end
             p_state_d = P_H1;
+        end else begin
+            refuse = 1'b1;  refuse_code = E_BAD_OPCODE;
+        end
+        OP_PHASE: if (PTIMER != 0) begin
+            // W0 = {kind, 4'b0, ticks} kept for the end; u next.
+            interval_d = {cmd_data_i[27:24], 4'd0, cmd_data_i[23:0]};
+            v_idx_d    = 3'd1;
+            discard_d  = fault_i;
+            p_state_d  = P_PH;
         end else begin
             refuse = 1'b1;  refuse_code = E_BAD_OPCODE;
         end
@@ -347,7 +384,8 @@ always @* begin
         // A segment announced with no chunk was refused at its header; it ends here.
         if ({29'd0, v_idx_q} == N - 1) begin
             v_idx_d   = hdr_cont_q ? 3'd5 : 3'd0;   // a continuation has K5, K6 only
-            p_state_d = (CONIC != 0 && hdr_conic_q) ? P_K : (nchunks_q == 16'd0) ? P_CMD : P_C0;
+            p_state_d = (CONIC != 0 && hdr_conic_q) ? P_K : (PTIMER != 0) ? P_L :
+                        (nchunks_q == 16'd0) ? P_CMD : P_C0;
         end
     end
 
@@ -360,15 +398,49 @@ always @* begin
         if (v_idx_q == 3'd5 && hdr_cont_q) seg_wide[31:24] = {hdr_cw_q, hdr_au_q, hdr_av_q, 1'b0};
         seg_wdata_o = seg_wide[SWW-1:0];
         v_idx_d = v_idx_q + 1'b1;
-        if (v_idx_q == 3'd6) p_state_d = (nchunks_q == 16'd0) ? P_CMD : P_C0;
+        if (v_idx_q == 3'd6) p_state_d = (PTIMER != 0) ? P_L : (nchunks_q == 16'd0) ? P_CMD : P_C0;
     end
 
-    P_C0: if (take) begin
+    // A PTIMER segment's length per move, its last word: committed, or rolled back.
+    P_L: if (PTIMER != 0 && take) begin
+        seg_wr_o  = keep;
+        seg_wide  = {9'd0, cmd_data_i};
+        seg_wdata_o = seg_wide[SWW-1:0];
+        p_state_d = P_CMD;
+        if (keep && cmd_data_i == 32'd0) begin
+            refuse = 1'b1;  refuse_code = E_SEG_LENGTH;  discard_d = 1'b1;
+        end
+        if (!keep || refuse) begin
+            seg_rollback_o = 1'b1;
+        end else begin
+            seg_commit_o = 1'b1;
+            lc_valid_d   = hdr_conic_q;
+            lc_au_d      = hdr_au_q;
+            lc_av_d      = hdr_av_q;
+            lc_cw_d      = hdr_cw_q;
+        end
+    end
+
+    // A PHASE's words after H0, as the phase timer's; then W0 and the commit.
+    P_PH: if (PTIMER != 0 && take) begin
+        ch_wr_o = keep;
+        v_idx_d = ph_next;
+        if (ph_next == 3'd0) p_state_d = P_PW0;
+    end
+    P_PW0: if (PTIMER != 0 && (!keep || !ch_full_i)) begin
+        ch_wr_o       = keep;
+        ch_commit_o   = keep;
+        ch_rollback_o = !keep;
+        p_state_d     = P_CMD;
+    end
+
+    // (The chunk states: never reached in PTIMER builds, so their logic is not built.)
+    P_C0: if (PTIMER == 0 && take) begin
         interval_d = cmd_data_i;
         p_state_d  = P_C1;
     end
 
-    P_C1: if (take) begin
+    P_C1: if (PTIMER == 0 && take) begin
         count_d = c1_count;
         add_d   = c1_add;
         sum_d   = sum_q + {18'd0, c1_count};
@@ -385,13 +457,13 @@ always @* begin
         end
     end
 
-    P_C2: if (take) begin
+    P_C2: if (PTIMER == 0 && take) begin
         add2_d  = c2_add2;
         ch_wr_o = keep;
         p_state_d = P_CHK;
     end
 
-    P_CHK: begin
+    P_CHK: if (PTIMER == 0) begin
         // The last clock of the check: the last increment must not have the
         // opposite sign of add; the last delay must be 1 .. 2^32-1. Then, after the
         // segment's last chunk, the count sum and the commit.
@@ -474,10 +546,12 @@ end
 
 // ---------------------------------------------------------------- outputs
 assign cmd_ready_o = (p_state_q == P_CMD) ||
-                     ((p_state_q == P_H1 || p_state_q == P_V || p_state_q == P_K) && (!keep || !seg_full_i)) ||
-                     (p_state_q == P_C0) ||
-                     (p_state_q == P_C1 && (seg_add2_q || !keep || !ch_full_i)) ||
-                     (p_state_q == P_C2 && (!keep || !ch_full_i));
+                     ((p_state_q == P_H1 || p_state_q == P_V || p_state_q == P_K || p_state_q == P_L) &&
+                      (!keep || !seg_full_i)) ||
+                     (p_state_q == P_PH && (!keep || !ch_full_i)) ||
+                     (PTIMER == 0 && p_state_q == P_C0) ||
+                     (PTIMER == 0 && p_state_q == P_C1 && (seg_add2_q || !keep || !ch_full_i)) ||
+                     (PTIMER == 0 && p_state_q == P_C2 && (!keep || !ch_full_i));
 assign rsp_valid_o = rsp_valid_q;
 assign rsp_data_o  = rsp_valid_q ? rsp_data_q : 32'd0;
 assign rsp_addr_o  = rsp_valid_q ? rsp_addr_q : 8'd0;

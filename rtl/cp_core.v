@@ -55,7 +55,11 @@ module cp_core #(
     // Feed hold, resume and override on scaled time (cp_feed; docs/CORE.md "Feed hold
     // and override"); 0: the timer runs at scale 1, the URGENT feed bits are ignored,
     // CONFIG field 9 refused, READ 0x29/0x2A read 0.
-    parameter integer FEED = 0
+    parameter integer FEED = 0,
+    // 1: moves timed by the phase timer (rtl/cp_ptimer.v) from PHASE commands
+    // instead of chunks, each segment carrying its length per move (docs/PROTOCOL.md
+    // "Toward a compact wire"); READ 0x23 [26].
+    parameter integer PTIMER = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -125,14 +129,19 @@ module cp_core #(
 
 // ---------------------------------------------------------------- constants
 localparam integer AW = (W > 2) ? $clog2(W) : 1;    // pattern bank address width
-// Segment queue word: the header {end, k, dir[N], U} or a v_i in [23:0].
-localparam integer SWW = (CONIC == 0) ? 30 + N : 32 + N;
-// Segment queue address width: 2^SAW segments of N + 1 words each, at least.
-localparam integer SQW = SAW + $clog2(N + 1);
-// A built segment, waiting in the run queue: lane, end, moving[N], dir[N].
-localparam integer RDW = 3 + 2 * N + ((CONIC == 0) ? 0 : 7);
-// Chunk queue word: last chunk of its segment, add2, count, add, interval.
-localparam integer CDW = 81;
+// Segment queue word: the header {end, k, dir[N], U} or a v_i in [23:0] (PTIMER: its
+// length per move, 32 bits).
+localparam integer SWW0 = (CONIC == 0) ? 30 + N : 32 + N;
+localparam integer SWW = (PTIMER != 0 && SWW0 < 32) ? 32 : SWW0;
+// Segment queue address width: 2^SAW segments of N + 1 words each (N + 2 with
+// PTIMER), at least.
+localparam integer SQW = SAW + $clog2(N + 1 + ((PTIMER != 0) ? 1 : 0));
+// A built segment, waiting in the run queue: lane, end, moving[N], dir[N] (PTIMER:
+// and its L, k, U).
+localparam integer RDW = 3 + 2 * N + ((CONIC == 0) ? 0 : 7) + ((PTIMER == 0) ? 0 : 60);
+// Chunk queue word: last chunk of its segment, add2, count, add, interval (PTIMER:
+// the phase timer's words, {sel, data}).
+localparam integer CDW = (PTIMER == 0) ? 81 : 35;
 
 generate
     if (N < 1 || N > 8) begin : g_check_n
@@ -190,7 +199,9 @@ wire          seg_wr, seg_commit, seg_rollback, seg_pop, seg_full, seg_head_vali
 wire [SWW-1:0] seg_wdata, seg_head;
 wire [SQW:0]  seg_used, seg_level;
 wire          ch_wr, ch_commit, ch_rollback, ch_pop, ch_full, ch_head_valid;
-wire [CDW-1:0] ch_wdata, ch_head;
+wire [80:0]   ch_wdata;
+wire [CDW-1:0] ch_head;
+wire [81:0]   ch_head_x = {{(82-CDW){1'b0}}, ch_head};   // as cp_run takes it
 wire [CAW:0]  ch_used, ch_level;
 wire          run_wr, run_pop, run_full, run_head_valid;
 wire [RDW-1:0] run_wdata, run_head;
@@ -208,11 +219,11 @@ wire [2:0]    cw_sel;
 wire [31:0]   cw_data;
 wire [N-1:0]  pulse_step, run_dir, pulse_ready, pulse_busy;
 wire [PW-1:0] pulse_pos [0:N-1];
-wire unused = &{1'b0, seg_used, seg_level, ch_used, run_used, run_full};
+wire unused = &{1'b0, seg_used, seg_level, ch_used, run_used, run_full, ch_wdata, ch_head_x[81]};
 
 // ---------------------------------------------------------------- parts
 cp_cmd #(.N(N), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .TW(TW), .CONIC(CONIC), .FEED(FEED),
-         .INPUTS(INPUTS)) u_cmd (
+         .INPUTS(INPUTS), .PTIMER(PTIMER)) u_cmd (
     .clk(clk), .rst(rst), .flush_i(ctl_flush_i),
     .cmd_valid_i(cmd_valid_i), .cmd_ready_o(cmd_ready_o), .cmd_data_i(cmd_data_i),
     .rsp_valid_o(rsp_valid_o), .rsp_ready_i(rsp_ready_i), .rsp_data_o(rsp_data_o),
@@ -234,11 +245,11 @@ cp_fifo #(.DW(SWW), .AW(SQW)) u_seg_fifo (
 
 cp_fifo #(.DW(CDW), .AW(CAW)) u_chunk_fifo (
     .clk(clk), .rst(rst), .clear_i(flush_all),
-    .wr_i(ch_wr), .wr_data_i(ch_wdata), .commit_i(ch_commit), .rollback_i(ch_rollback),
+    .wr_i(ch_wr), .wr_data_i(ch_wdata[CDW-1:0]), .commit_i(ch_commit), .rollback_i(ch_rollback),
     .full_o(ch_full), .used_o(ch_used), .level_o(ch_level),
     .out_valid_o(ch_head_valid), .out_ready_i(ch_pop), .out_data_o(ch_head));
 
-cp_build #(.N(N), .W(W), .UMAX(UMAX), .SAW(SAW), .CONIC(CONIC)) u_build (
+cp_build #(.N(N), .W(W), .UMAX(UMAX), .SAW(SAW), .CONIC(CONIC), .PTIMER(PTIMER)) u_build (
     .clk(clk), .rst(rst), .flush_i(flush_all), .fault_i(fault),
     .seg_valid_i(seg_head_valid), .seg_head_i(seg_head), .seg_pop_o(seg_pop),
     .seg_commit_i(seg_commit),
@@ -256,10 +267,10 @@ cp_fifo #(.DW(RDW), .AW(1)) u_run_fifo (
     .full_o(run_full), .used_o(run_used), .level_o(run_level),
     .out_valid_o(run_head_valid), .out_ready_i(run_pop), .out_data_o(run_head));
 
-cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW), .FEED(FEED)) u_run (
+cp_run #(.N(N), .W(W), .CONIC(CONIC), .CIW(CIW), .FEED(FEED), .PTIMER(PTIMER)) u_run (
     .clk(clk), .rst(rst), .flush_i(flush_all), .estop_i(estop_i),
     .start_i(start_req || ctl_start_i), .stop_i(ctl_stop_i || wd_trip || seek_stop), .abort_i(abort_req), .fault_i(fault),
-    .ch_valid_i(ch_head_valid), .ch_head_i(ch_head), .ch_pop_o(ch_pop),
+    .ch_valid_i(ch_head_valid), .ch_head_i(ch_head_x[80:0]), .ch_pop_o(ch_pop),
     .run_valid_i(run_head_valid), .run_head_i(run_head), .run_level_i(run_level),
     .run_pop_o(run_pop),
     .segq_empty_i(segq == {(SQW+1){1'b0}}), .build_busy_i(build_busy),
@@ -277,7 +288,7 @@ cp_status #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW
             .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
             .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET),
             .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC),
-            .CIW(CIW), .INPUTS(INPUTS), .FEED(FEED)) u_status (
+            .CIW(CIW), .INPUTS(INPUTS), .FEED(FEED), .PTIMER(PTIMER)) u_status (
     .clk(clk), .rst(rst), .estop_i(estop_i),
     .abort_i(abort_req), .clear_i(clear_req), .ack_i(ctl_ack_i), .kick_i(kick_i), .drivers_on_i(drivers_on_req),
     .drivers_off_i(drivers_off_req), .cfg_write_i(cfg_write), .cfg_word_i(cmd_data_i),

@@ -7,7 +7,10 @@
 //       while p >= its length * 2^S, kept as r = p - that length * 2^S (due: r's
 //       sign clear); a fire (fire_i) takes off the next move's length: len_i is
 //       the length of the move pending after this clock (in a clock that fires,
-//       the next one's)
+//       the next one's), when len_valid_i says it is known; until it is (the
+//       next segment not loaded yet, a conic move's length still being divided)
+//       the length is owed, taken off in the first clock that has it, and no
+//       move is due
 //   at the end of each tick (2^S clocks from the phase's start):
 //       step += 2H + 6u, H += 3u
 //       summed bit-serially over the tick's clocks (below), the same bits
@@ -52,6 +55,7 @@ module cp_ptimer #(
     input  wire [31:0]   data_i,
     input  wire          fire_i,        // the due move fires now
     input  wire [LW-1:0] len_i,         // the pending move's length after this clock
+    input  wire          len_valid_i,   // ... is known (else it is owed)
     output wire          due_o,
     output wire          active_o,
     output wire          ready_o,
@@ -63,7 +67,7 @@ localparam integer RW = F + S + 3;      // r (signed)
 localparam integer TW = 24;             // ticks
 
 reg           active_q, timed_q, tdue_q, starved_q, nvalid_q;
-reg           fresh_q;        // started from rest last clock: r = 0, the pending length still to take off
+reg           owe_q;          // the pending move's length is still to be taken off r (no move due)
 reg  [3:0]    kind_q, nkind_q;
 reg  [TW-1:0] tleft_q, nticks_q;
 reg  [S-1:0]  tcnt_q;
@@ -81,7 +85,7 @@ reg           up_q, hp_q, tp_q;   // u's, H's and 3u's bit before (for 2u, 2H, 6
 reg           hs_q;           // the tick's H's sign (its bits past HW)
 
 wire [RW-1:0] thresh = {{(RW-LW-S){1'b0}}, len_i, {S{1'b0}}};
-wire          due = tdue_q || (!timed_q && !fresh_q && !r_q[RW-1]);
+wire          due = tdue_q || (!timed_q && !owe_q && !r_q[RW-1]);
 assign due_o     = due;
 assign active_o  = active_q;
 assign ready_o   = !nvalid_q;
@@ -125,11 +129,13 @@ wire          load      = phase_end || (!active_q && nvalid_q);
 wire signed [VW-1:0] step_ld = nkind_q[3] ? ns_q : nkind_q[2] ? {VW{1'b0}} : sn_q;
 wire signed [HW-1:0] h_ld    = nkind_q[3] ? nh_q : nkind_q[2] ? {HW{1'b0}} : h_q;
 
-// r: this clock's fire (or the clock after a start from rest, p = 0) takes off the
-// pending move's length; then the step.
+// r: this clock's fire (or a length owed: after a start from rest, p = 0, or a
+// fire whose next length was not known) takes off the pending move's length if
+// len_valid_i, else owes it; then the step.
 wire          tdue_n  = (tdue_q && !(fire_i && due)) || (running && timed_q && phase_end);
+wire          take    = (fire_i && due) || owe_q;
 wire [RW-1:0] step_r  = {{(RW-VW){step_q[VW-1]}}, step_q};
-wire [RW-1:0] r_fired = ((fire_i && due) || fresh_q) ? r_q - thresh : r_q;
+wire [RW-1:0] r_fired = (take && len_valid_i) ? r_q - thresh : r_q;
 wire [RW-1:0] r_run   = (running && !timed_q) ? r_fired + step_r
                       : (running && timed_q && phase_end) ? {RW{1'b0}} : r_fired;
 
@@ -149,7 +155,7 @@ always @(posedge clk) begin
         h_q       <= {HW{1'b0}};
         step_q    <= {VW{1'b0}};
         r_q       <= {RW{1'b1}};   // -1: nothing due until a phase from rest or loading r
-        fresh_q   <= 1'b0;
+        owe_q     <= 1'b0;
         nu_q      <= {UW{1'b0}};
         np_q      <= 64'd0;
         ns_q      <= {VW{1'b0}};
@@ -195,8 +201,10 @@ always @(posedge clk) begin
                 if (!phase_end) tleft_q <= tleft_q - 1'b1;
             end
         end
-        r_q     <= r_run;
-        fresh_q <= 1'b0;
+        r_q   <= r_run;
+        owe_q <= take && !len_valid_i;
+        // A timed move's end: p = 0, whatever was owed (its fire takes off the next's).
+        if (running && timed_q && phase_end) owe_q <= 1'b0;
         if (load) begin
             if (nvalid_q) begin
                 nvalid_q  <= 1'b0;
@@ -210,13 +218,17 @@ always @(posedge clk) begin
                 h_q       <= h_ld;
                 step_q    <= step_ld;
                 sn_q      <= step_ld;
-                // p = 0: r = 0, the pending move's length taken off the next clock
-                // (a timed move still to fire takes off the next one's itself).
+                // p = 0: r = 0, the pending move's length owed, taken off from the
+                // next clock (a timed move still to fire takes off the next one's
+                // itself); a loaded r has it taken off.
                 if (nkind_q[2]) begin
-                    r_q     <= {RW{1'b0}};
-                    fresh_q <= !tdue_n && !nkind_q[0];
+                    r_q   <= {RW{1'b0}};
+                    owe_q <= !tdue_n;
                 end
-                if (nkind_q[0]) r_q <= {np_q, {(RW-64){1'b0}}};
+                if (nkind_q[0]) begin
+                    r_q   <= {np_q, {(RW-64){1'b0}}};
+                    owe_q <= 1'b0;
+                end
             end else begin
                 active_q  <= 1'b0;
                 starved_q <= 1'b1;

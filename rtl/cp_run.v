@@ -21,6 +21,19 @@
 // holds the out bit of the last segment loaded; it drops when the run stops, at
 // E-stop and at abort.
 //
+// With PTIMER = 1 (a build toward the compact wire, docs/PROTOCOL.md "Toward a
+// compact wire") the moves are timed by the phase timer (rtl/cp_ptimer.v) instead
+// of chunks: the chunk queue carries its words ({sel, data} in the head's low 35
+// bits, taken one a clock while its buffer is free), each segment's run queue word
+// its move count U*2^k and its length per move L (Q2.30, in the phases' path
+// units), and the timer counts half clocks of scaled time: each clock adds scale_i
+// to a 17-bit fraction and the timer advances on its carry (0 or 1: at scale 1
+// every other clock, at 2 every clock), from the run's START. A move is due when
+// the timer says; its fire hands the timer the length of the move pending after
+// it (the next segment's first when this one ends: owed while no segment is
+// loaded). A timer that ran out of phases while a move waits undue stops the run
+// as an underrun.
+//
 // With CONIC = 1 it holds the conic walker (rtl/cp_conic_serial.v), which cp_build
 // loads: in a conic segment the plane axes u, v step by the walker's moves (each
 // move's direction on their DIR, and in the move's own directions), the others by
@@ -42,7 +55,9 @@ module cp_run #(
     parameter integer CIW = 40,
     // 1: the timer runs on scale_i (cp_feed); 0: scale_i is not looked at, the timer
     // counts clocks (its scale is 1 and synthesis keeps no fraction register).
-    parameter integer FEED = 0
+    parameter integer FEED = 0,
+    // 1: moves timed by the phase timer (above); 0: by chunks.
+    parameter integer PTIMER = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -63,7 +78,8 @@ module cp_run #(
     input  wire          ch_valid_i,
     input  wire [80:0]   ch_head_i,
     output reg           ch_pop_o,
-    // Run queue head: {[conic, u, v,] out, lane, end, moving[N], dir[N]}.
+    // Run queue head: {[L, k, U,] [conic, u, v,] out, lane, end, moving[N], dir[N]}
+    // (L, k, U: PTIMER builds).
     input  wire          run_valid_i,
     input  wire [RDW-1:0] run_head_i,
     input  wire [1:0]    run_level_i,
@@ -109,7 +125,8 @@ module cp_run #(
 );
 
 localparam integer AW = (W > 2) ? $clog2(W) : 1;
-localparam integer RDW = 3 + 2 * N + ((CONIC == 0) ? 0 : 7);
+localparam integer RCW = 3 + 2 * N + ((CONIC == 0) ? 0 : 7);   // below the PTIMER fields
+localparam integer RDW = RCW + ((PTIMER == 0) ? 0 : 60);
 
 reg          running_q, running_d;       // reset
 reg          cur_valid_q, cur_valid_d;   // reset: a segment is loaded for running
@@ -133,6 +150,11 @@ reg          tlast_q, tlast_d;           // the timer's chunk is its segment's l
 reg          due_q, due_d;               // reset: ch_loaded_q && elapsed_q >= delay_q
 reg          cur_conic_q, cur_conic_d;   // the loaded segment is a conic, its plane axes:
 reg [2:0]    cur_au_q, cur_au_d, cur_av_q, cur_av_d;
+// PTIMER: the loaded segment's moves still to fire and its length per move, the
+// phase timer's fraction of half clocks of scaled time.
+reg [33:0]   mleft_q, mleft_d;
+reg [31:0]   cur_len_q, cur_len_d;
+reg [16:0]   pa_q;                       // reset
 
 genvar ga;
 
@@ -181,6 +203,34 @@ generate
 endgenerate
 assign walker_free_o = !wk_busy && !wk_valid;
 
+// ---------------------------------------------------------------- the phase timer (PTIMER)
+// Half clocks of scaled time: the fraction pa_q takes scale_i (at most 2) each clock
+// and the timer advances on its carry. Its words come from the chunk queue while its
+// buffer is free; a fire hands it the length of the move pending after this clock
+// (cur_len_d), known while a segment is loaded after it (cur_valid_d).
+wire        pt_due, pt_ready, pt_starved;
+wire [17:0] pa_scale = (FEED != 0) ? scale_i : 18'h10000;
+wire [17:0] pa_sum   = {1'b0, pa_q} + pa_scale;
+wire        pt_adv   = running_q && pa_sum[17];
+wire        pt_wr    = ch_valid_i && pt_ready;
+generate
+    if (PTIMER != 0) begin : g_ptimer
+        wire       pt_active;
+        wire [3:0] pt_kind;
+        cp_ptimer u_ptimer (
+            .clk(clk), .rst(rst), .clear_i(flush_i), .adv_i(pt_adv),
+            .wr_i(pt_wr), .sel_i(ch_head_i[34:32]), .data_i(ch_head_i[31:0]),
+            .fire_i(fire_o), .len_i({cur_len_d, 30'd0}), .len_valid_i(cur_valid_d),
+            .due_o(pt_due), .active_o(pt_active), .ready_o(pt_ready), .starved_o(pt_starved), .kind_o(pt_kind));
+        wire unused_pt = &{1'b0, pt_active, pt_kind};
+    end else begin : g_no_ptimer
+        assign pt_due     = 1'b0;
+        assign pt_ready   = 1'b0;
+        assign pt_starved = 1'b0;
+        wire unused_pt = &{1'b0, pt_adv, pt_wr};
+    end
+endgenerate
+
 // The plane axes' steps and directions in the presented move (none outside a conic).
 wire          conic_on = CONIC != 0 && cur_conic_q;
 wire [N-1:0]  u_bit = {{(N-1){1'b0}}, 1'b1} << cur_au_q;
@@ -190,7 +240,7 @@ wire [N-1:0]  plane_step = (conic_on && wk_valid) ? ((wk_dx[0] ? u_bit : {N{1'b0
 // Positive: 01; negative: 11. A plane axis that steps shows the move's direction.
 wire [N-1:0]  plane_dir = (wk_dx[1] ? {N{1'b0}} : u_bit) | (wk_dy[1] ? {N{1'b0}} : v_bit);
 wire [N-1:0]  move_steps = lane_move | plane_step;
-wire          seg_last = left_q == 16'd1 && tlast_q;
+wire          seg_last = (PTIMER != 0) ? mleft_q == 34'd1 : (left_q == 16'd1 && tlast_q);
 // A conic move's end mark must agree with the segment's last move.
 wire          conic_ok = !conic_on || (wk_valid && wk_end == seg_last);
 
@@ -201,7 +251,9 @@ wire          conic_ok = !conic_on || (wk_valid && wk_end == seg_last);
 // fires after its time without having waited due (its chunk came late).
 // due is ch_loaded_q && elapsed_q >= delay_q, registered: its next value is compared
 // beside the fire decision (below), not after it.
-wire due = due_q;
+wire due = (PTIMER != 0) ? pt_due : due_q;
+// PTIMER: the timer ran out of phases while the pending move is not due: an underrun.
+wire pt_stall = PTIMER != 0 && running_q && cur_valid_q && pt_starved && !pt_due;
 // A limit hit: the segment under way moves an axis toward its active limit (a
 // plane axis of a conic: the presented move steps it toward it). The run stops in
 // this cycle as with STOP, and cp_status latches LIMIT.
@@ -224,6 +276,9 @@ integer i;
 localparam integer RFW = 10 + 2 * N;
 reg [RFW:0] run_wide;
 wire unused_run = &{1'b0, run_wide[RFW]};
+reg [59:0]  run_pt;   // the PTIMER fields (0 in other builds)
+wire [RCW+60:0] run_head_x = {{(RCW+61-RDW){1'b0}}, run_head_i};
+wire unused_head_x = &{1'b0, run_head_x[RCW+60]};
 
 // The timer's next values, whatever fires: the count one on (saturating), the next
 // interval of the running chunk, the head chunk's first.
@@ -244,7 +299,8 @@ wire        le1_sum      = delay_sum <= inc_word;
 // The pending move is on time when it fires in the clock its scaled time reached it:
 // elapsed passed delay by less than the last clock's increment (at scale 1: equal).
 wire [31:0] past_due     = elapsed_q - delay_q;
-wire        on_time      = past_due < {30'd0, inc_q};
+// (PTIMER: a move fires in the clock it falls due or is counted late while it waits.)
+wire        on_time      = PTIMER != 0 || past_due < {30'd0, inc_q};
 
 always @* begin
     running_d = running_q;  cur_valid_d = cur_valid_q;  cur_lane_d = cur_lane_q;
@@ -253,9 +309,11 @@ always @* begin
     cur_end_d = cur_end_q;  out_d = out_q;  delay_d = delay_q;  left_d = left_q;  tinc_d = tinc_q;
     tadd2_d = tadd2_q;  tlast_d = tlast_q;
     cur_conic_d = cur_conic_q;  cur_au_d = cur_au_q;  cur_av_d = cur_av_q;
+    mleft_d = mleft_q;  cur_len_d = cur_len_q;
     elapsed_d = elapsed_inc;
     ch_pop_o = 1'b0;  run_pop_o = 1'b0;  step_o = {N{1'b0}};  fault_o = fault_conic_o;
     run_wide = {(RFW+1){1'b0}};
+    run_pt   = 60'd0;
     bank_re = 1'b0;  rp_lane = cur_lane_q;
     for (i = 0; i < N; i = i + 1) rp_next[i] = rp_ptr_q[i];
 
@@ -264,7 +322,9 @@ always @* begin
 
     // The timer takes the chunk queue's head when it holds none, and when the move
     // that fires is its chunk's last (never both: a move fires only with a chunk).
-    if (ch_valid_i && (!ch_loaded_q || (fire_o && left_q == 16'd1))) begin
+    // (PTIMER: the phase timer takes the queue's words instead.)
+    if (PTIMER != 0) ch_pop_o = pt_wr;
+    if (PTIMER == 0 && ch_valid_i && (!ch_loaded_q || (fire_o && left_q == 16'd1))) begin
         ch_pop_o    = 1'b1;
         ch_loaded_d = 1'b1;
         delay_d     = ch_head_i[31:0];
@@ -276,6 +336,7 @@ always @* begin
     if (fire_o) begin
         step_o    = move_steps;
         elapsed_d = inc_word;
+        mleft_d   = mleft_q - 1'b1;
         // A plane axis that steps keeps the direction it stepped in.
         for (i = 0; i < N; i = i + 1)
             if (plane_step[i]) dir_d[i] = plane_dir[i];
@@ -300,6 +361,10 @@ always @* begin
         cur_valid_d = 1'b0;
         rp_valid_d  = 1'b0;
     end
+    if (pt_stall) begin
+        running_d = 1'b0;
+        fault_o   = 1'b1;
+    end
     if (seg_done_o) begin
         cur_valid_d = 1'b0;
         rp_valid_d  = 1'b0;
@@ -317,11 +382,15 @@ always @* begin
         cur_lane_d  = run_head_i[1+2*N];
         cur_end_d   = run_head_i[2*N];
         out_d       = run_head_i[2+2*N];
-        run_wide    = {{(RFW+1-RDW){1'b0}}, run_head_i};
+        run_wide    = {{(RFW+1-RCW){1'b0}}, run_head_i[RCW-1:0]};
         cur_conic_d = CONIC != 0 && run_wide[RFW-1];
         cur_au_d    = run_wide[RFW-2 -: 3];
         cur_av_d    = run_wide[RFW-5 -: 3];
         moving_d    = run_head_i[2*N-1:N];
+        // (PTIMER: the segment's moves U*2^k and its length per move.)
+        run_pt      = run_head_x[RCW +: 60];
+        mleft_d     = {10'd0, run_pt[23:0]} << run_pt[27:24];
+        cur_len_d   = run_pt[59:28];
         for (i = 0; i < N; i = i + 1)
             if (run_head_i[N + i]) dir_d[i] = run_head_i[i];
         // The replay registers fetch each pattern's first move.
@@ -381,6 +450,7 @@ always @(posedge clk) begin
         out_q       <= 1'b0;
         torch_q     <= 1'b0;
         ph_q        <= 16'd0;
+        pa_q        <= 17'd0;
         inc_q       <= 2'd1;
     end else begin
         running_q   <= running_d;
@@ -396,11 +466,13 @@ always @(posedge clk) begin
         out_q       <= out_d;
         torch_q     <= torch_d;
         ph_q        <= (FEED != 0) ? ph_sum[15:0] : 16'd0;
+        pa_q        <= (PTIMER == 0 || start_now) ? 17'd0 : pa_sum[16:0];
         inc_q       <= inc;
     end
     cur_au_q <= cur_au_d;  cur_av_q <= cur_av_d;
     cur_end_q <= cur_end_d;  delay_q <= delay_d;  left_q <= left_d;  tinc_q <= tinc_d;
     tadd2_q <= tadd2_d;  tlast_q <= tlast_d;  elapsed_q <= elapsed_d;
+    mleft_q <= mleft_d;  cur_len_q <= cur_len_d;
     for (a = 0; a < N; a = a + 1) if (bank_re) rp_ptr_q[a] <= rp_next[a];
     // Only an axis that exists (the entries of others are never read: none are kept).
     if (len_we_i && {29'd0, bank_axis_i} < N) lm1_q[{bank_lane_i, bank_axis_i}] <= len_m1_i;

@@ -43,7 +43,10 @@ module cp_status #(
     // Reported only (READ 0x23 [24]): limit and probe inputs (cp_inputs).
     parameter integer INPUTS = 0,
     // Reported only (READ 0x23 [25]): feed hold and override (cp_feed).
-    parameter integer FEED = 0
+    parameter integer FEED = 0,
+    // Moves timed by the phase timer (READ 0x23 [26]); its segments' length word
+    // widens the segment queue (SQW).
+    parameter integer PTIMER = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -118,7 +121,7 @@ module cp_status #(
     output wire          wd_trip_o
 );
 
-localparam integer SQW = SAW + $clog2(N + 1);
+localparam integer SQW = SAW + $clog2(N + 1 + ((PTIMER != 0) ? 1 : 0));
 
 localparam [7:0] E_NONE        = 8'd0;
 localparam [7:0] E_SEG_PATTERN = 8'd8;
@@ -289,7 +292,8 @@ localparam [31:0] UMAX_WORD = UMAX;
 localparam [7:0] PROTOCOL_VERSION = 8'd2;
 localparam [0:0] INPUTS_BIT = INPUTS != 0;
 localparam [0:0] FEED_BIT = FEED != 0;
-localparam [31:0] CAPS2 = {6'd0, FEED_BIT, INPUTS_BIT, PROTOCOL_VERSION, CBUF_AW[7:0], PW[7:0]};
+localparam [0:0] PTIMER_BIT = PTIMER != 0;
+localparam [31:0] CAPS2 = {5'd0, PTIMER_BIT, FEED_BIT, INPUTS_BIT, PROTOCOL_VERSION, CBUF_AW[7:0], PW[7:0]};
 localparam [31:0] CLK_WORD = CLK_HZ;
 localparam [31:0] CONIC_WORD = (CONIC == 0) ? 32'd0 : CIW;
 

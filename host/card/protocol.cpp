@@ -12,13 +12,15 @@ namespace cpstep::card {
 void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
   bool add2 = false;
   for (const WireChunk& c : s.chunks) add2 = add2 || c.add2 != 0;
+  if (s.length) add2 = false;
+  const uint32_t nchunks = s.length ? 0 : uint32_t(s.chunks.size() & 0xFFFF);
   if (s.conic)
     out.push_back(0x5u << 28 | uint32_t(s.end) << 27 | uint32_t(s.conic->cw) << 26 | (s.conic->axis_u & 7u) << 23 |
                   uint32_t(add2) << 22 | (s.conic->axis_v & 7u) << 19 | uint32_t(s.conic->cont) << 18 |
-                  uint32_t(s.torch) << 16 | uint32_t(s.chunks.size() & 0xFFFF));
+                  uint32_t(s.torch) << 16 | nchunks);
   else
     out.push_back(0x1u << 28 | uint32_t(s.end) << 27 | (s.k & 0xFu) << 23 | uint32_t(add2) << 22 |
-                  uint32_t(s.torch) << 16 | uint32_t(s.chunks.size() & 0xFFFF));
+                  uint32_t(s.torch) << 16 | nchunks);
   uint32_t dirs = 0;
   for (size_t a = 0; a < s.dir_positive.size(); ++a) dirs |= uint32_t(s.dir_positive[a]) << a;
   out.push_back(dirs << 24 | (s.u & 0xFFFFFF));
@@ -26,6 +28,10 @@ void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
   if (s.conic)
     for (size_t i = s.conic->cont ? 5 : 0; i < 7; ++i)
       out.push_back(i == 1 ? s.conic->words[1] & 0xFFFF : s.conic->words[i]);
+  if (s.length) {
+    out.push_back(*s.length);
+    return;
+  }
   for (const WireChunk& c : s.chunks) {
     out.push_back(c.interval);
     out.push_back(uint32_t(uint16_t(c.add)) << 16 | c.count);
@@ -56,6 +62,21 @@ void encode_conic(const WireConic& s, std::vector<uint32_t>& out) {
     out.push_back(c.interval);
     out.push_back(uint32_t(uint16_t(c.add)) << 16 | c.count);
     if (add2) out.push_back(uint16_t(c.add2));
+  }
+}
+
+void encode_phase(const WirePhase& p, std::vector<uint32_t>& out) {
+  out.push_back(0x6u << 28 | (p.kind & 0xFu) << 24 | (p.ticks & 0xFFFFFF));
+  out.push_back(uint32_t(p.u));
+  if (p.kind & 1) {
+    out.push_back(uint32_t(p.r_top));
+    out.push_back(uint32_t(p.r_top >> 32));
+  }
+  if (p.kind & 8) {
+    out.push_back(uint32_t(uint64_t(p.s)));
+    out.push_back(uint32_t(uint64_t(p.s) >> 32));
+    out.push_back(uint32_t(uint64_t(p.h)));
+    out.push_back(uint32_t(uint64_t(p.h) >> 32));
   }
 }
 
@@ -126,6 +147,7 @@ ErrorName error_name(uint32_t code) {
       {"CONIC_CONTINUE", "a conic continuing a walk that does not follow a conic on its axes and way"},
       {"WATCHDOG", "no frame from the host for the watchdog's timeout"},
       {"LIMIT", "a segment moved an axis toward its active limit switch"},
+      {"SEG_LENGTH", "a segment's length per move is 0 (phase-timer builds)"},
   };
   if (code < std::size(names)) return names[code];
   return {"UNKNOWN", "an error code this program does not know"};

@@ -41,7 +41,25 @@ struct WireSegment {
     bool cont = false;
   };
   std::optional<Conic> conic;
+  // Set: a segment for a card that times moves by the phase timer (READ 0x23 [26];
+  // docs/PROTOCOL.md "Toward a compact wire"): no chunks (H0[15:0] = 0; `chunks` is
+  // not sent), and after its words its length per move, Q2.30 of the phases' path
+  // unit, not 0.
+  std::optional<uint32_t> length;
 };
+
+// A PHASE command (opcode 6, phase-timer cards): one phase of constant jerk of
+// rtl/cp_ptimer.v. kind: bit 0 load r, 1 a timed move, 2 from rest, 3 load S and
+// H; H0 = {6, kind, ticks}, then u, r's top 64 bits (kind bit 0), S and H (kind
+// bit 3), low words first.
+struct WirePhase {
+  unsigned kind = 0;
+  uint32_t ticks = 0;        // 24 bits: ticks of 2^6 timer clocks (a timed move: clocks); 0 = 1
+  int32_t u = 0;             // a sixth of the jerk (24 bits)
+  uint64_t r_top = 0;
+  int64_t s = 0, h = 0;      // the step (56 bits) and H (40 bits)
+};
+void encode_phase(const WirePhase& p, std::vector<uint32_t>& out);
 
 // A CONIC segment (docs/CORE.md "CONIC"): T moves; axes u and v step by the conic
 // walk from the start node (G and its gradient there, in the curve's step units) to

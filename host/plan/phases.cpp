@@ -75,8 +75,9 @@ bool phase_holds(i128 s0, i128 a0, i128 u, std::int64_t E, const PhaseFormat& f)
 
 i128 move_length(double length_mm, const PhaseFormat& format) {
     if (format.path_unit_mm <= 0) return i128{1} << format.frac_bits;
-    // To 2^-40 of the unit (a card segment's length per move, as the card would hold it).
-    return i128(std::llround(std::ldexp(length_mm / format.path_unit_mm, 40))) << (format.frac_bits - 40);
+    // To 2^-length_bits of the unit (a card segment's length per move, as the card holds it).
+    const unsigned lb = format.length_bits;
+    return i128(std::llround(std::ldexp(length_mm / format.path_unit_mm, int(lb)))) << (format.frac_bits - lb);
 }
 
 PhaseFitter::PhaseFitter(PhaseFormat format, double tolerance_cycles) : fmt_(format), tol_(tolerance_cycles) {

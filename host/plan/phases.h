@@ -70,6 +70,9 @@ struct PhaseFormat {
     double clock_hz = 0;       // the card's clock (plan_jerk: the jerk in the timer's units)
     // The card's registers (rtl/cp_ptimer.v): u, S and H signed in these many bits.
     unsigned u_bits = 24, v_bits = 56, h_bits = 40;
+    // A move's length as the card holds it: fractional bits of path_unit_mm (a
+    // phase-timer card's segment word L is Q2.30: 30).
+    unsigned length_bits = 40;
 };
 
 struct TimerPhase {

@@ -11,9 +11,12 @@
 #include "Vcp_part_build.h"
 #include "Vcp_part_cmd.h"
 #include "Vcp_part_cmd_conic.h"
+#include "Vcp_part_cmd_ptimer.h"
+#include "Vcp_part_build_ptimer.h"
 #include "Vcp_part_build_conic.h"
 #include "Vcp_part_run_conic.h"
 #include "Vcp_part_run.h"
+#include "Vcp_part_run_ptimer.h"
 #include "Vcp_part_feed.h"
 #include "Vcp_part_inputs.h"
 #include "Vcp_part_status.h"
@@ -32,13 +35,14 @@ namespace cpstep::tb {
 
 #define CPSTEP_FIELD(name, expr) {name, [](const Out& o) { return uint64_t(expr); }}
 
-template <class V, bool Conic = false>
+// Pt: the phase timer's build (PTIMER = 1, with CONIC and FEED).
+template <class V, bool Conic = false, bool Pt = false>
 struct CmdPortT {
   using Rtl = AfterOneResetEdge<V>;
   using Model = model::CpCmd;
   using In = model::CpCmdIn;
   using Out = model::CpCmdOut;
-  static Model::Params model_params() { return {3, 4095, 3, 3, 8, Conic, Conic}; }
+  static Model::Params model_params() { return {3, 4095, 3, 3, 8, Conic, Conic, false, Pt}; }
   static void drive(Rtl& r, const In& i) {
     r.rst = i.rst;
     r.cmd_valid_i = i.cmd_valid;
@@ -95,14 +99,16 @@ struct CmdPortT {
 };
 using CmdPort = CmdPortT<Vcp_part_cmd>;
 using CmdConicPort = CmdPortT<Vcp_part_cmd_conic, true>;
+using CmdPtimerPort = CmdPortT<Vcp_part_cmd_ptimer, true, true>;
 
-template <class V, bool Conic = false>
+// Pt: the phase timer's build (PTIMER = 1): the run queue word's L, k, U above its fields.
+template <class V, bool Conic = false, bool Pt = false>
 struct BuildPortT {
   using Rtl = AfterOneResetEdge<V>;
   using Model = model::CpBuild;
   using In = model::CpBuildIn;
   using Out = model::CpBuildOut;
-  static Model::Params model_params() { return {3, 32, 200, 1, Conic}; }
+  static Model::Params model_params() { return {3, 32, 200, 1, Conic, Pt}; }
   static void drive(Rtl& r, const In& i) {
     r.rst = i.rst;
     r.walker_free_i = i.walker_free;
@@ -118,7 +124,14 @@ struct BuildPortT {
     Out o;
     o.seg_pop = r.seg_pop_o;
     o.run_wr = r.run_wr_o;
-    o.run_data = r.run_wdata_o;
+    if constexpr (Pt) {
+      constexpr unsigned rcw = 9 + (Conic ? 7 : 0);
+      const model::FifoWord w = sim::get_word(r.run_wdata_o);
+      o.run_data = w[0] & model::bits::mask64(rcw);
+      o.run_data_pt = (w[0] >> rcw | w[1] << (64 - rcw)) & model::bits::mask64(60);
+    } else {
+      o.run_data = r.run_wdata_o;
+    }
     o.bank_we = r.bank_we_o;
     o.bank_axis = r.bank_axis_o;
     o.bank_waddr = r.bank_waddr_o;
@@ -138,7 +151,8 @@ struct BuildPortT {
   static const std::vector<sim::Field<Out>>& fields() {
     static const std::vector<sim::Field<Out>> f = {
         CPSTEP_FIELD("seg_pop_o", o.seg_pop),       CPSTEP_FIELD("run_wr_o", o.run_wr),
-        CPSTEP_FIELD("run_wdata_o", o.run_data),    CPSTEP_FIELD("bank_we_o", o.bank_we),
+        CPSTEP_FIELD("run_wdata_o", o.run_data),    CPSTEP_FIELD("run_wdata_o[L,k,U]", o.run_data_pt),
+        CPSTEP_FIELD("bank_we_o", o.bank_we),
         CPSTEP_FIELD("bank_axis_o", o.bank_axis),   CPSTEP_FIELD("bank_waddr_o", o.bank_waddr),
         CPSTEP_FIELD("bank_wbit_o", o.bank_wbit),   CPSTEP_FIELD("build_lane_o", o.build_lane),
         CPSTEP_FIELD("len_we_o", o.len_we),         CPSTEP_FIELD("len_m1_o", o.len_m1),
@@ -152,15 +166,16 @@ struct BuildPortT {
 };
 using BuildPort = BuildPortT<Vcp_part_build>;
 using BuildConicPort = BuildPortT<Vcp_part_build_conic, true>;
+using BuildPtimerPort = BuildPortT<Vcp_part_build_ptimer, true, true>;
 
-// The conic runner's walker: IW = 36.
-template <class V, bool Conic = false>
+// The conic runner's walker: IW = 36. Pt: timed by the phase timer (PTIMER = 1).
+template <class V, bool Conic = false, bool Pt = false>
 struct RunPortT {
   using Rtl = AfterOneResetEdge<V>;
   using Model = model::CpRun;
   using In = model::CpRunIn;
   using Out = model::CpRunOut;
-  static Model::Params model_params() { return {3, 32, Conic, 36}; }
+  static Model::Params model_params() { return {3, 32, Conic, 36, Pt}; }
   static void drive(Rtl& r, const In& i) {
     r.rst = i.rst;
     r.cw_wr_i = i.cw_wr;
@@ -176,7 +191,13 @@ struct RunPortT {
     r.ch_valid_i = i.ch_valid;
     sim::put_word(r.ch_head_i, i.ch_head);
     r.run_valid_i = i.run_valid;
-    r.run_head_i = i.run_head;
+    if constexpr (Pt) {
+      // {L, k, U} above the other fields (9 bits with N = 3, 16 with the conic's).
+      constexpr unsigned rcw = 9 + (Conic ? 7 : 0);
+      sim::put_word(r.run_head_i, model::FifoWord{i.run_head | i.run_head_pt << rcw, i.run_head_pt >> (64 - rcw), 0, 0});
+    } else {
+      r.run_head_i = i.run_head;
+    }
     r.run_level_i = i.run_level;
     r.segq_empty_i = i.segq_empty;
     r.build_busy_i = i.build_busy;
@@ -227,6 +248,7 @@ struct RunPortT {
 };
 using RunPort = RunPortT<Vcp_part_run>;
 using RunConicPort = RunPortT<Vcp_part_run_conic, true>;
+using RunPtimerPort = RunPortT<Vcp_part_run_ptimer, false, true>;
 
 struct StatusPort {
   using Rtl = AfterOneResetEdge<Vcp_part_status>;

@@ -16,6 +16,7 @@
 
 #include "common/lockstep.h"
 #include "core/core_parts_ports.h"
+#include "core/ptimer_words.h"
 
 namespace cpstep::tb {
 namespace {
@@ -181,6 +182,94 @@ TEST(CorePartCmd, RandomWordsMatchTheModel) { cmd_traffic<CmdPort>(11, 300000); 
 // the header's plane axes and direction, CONIC_AXES among the refusals.
 TEST(CorePartCmd, ConicSegmentsMatchTheModel) { cmd_traffic<CmdConicPort>(12, 300000, true); }
 
+// The phase timer's build (PTIMER = 1, with CONIC): segments with no chunks and their
+// length per move last (a line's or a conic's; legal, or with one field broken:
+// U, a v, k, H0[15:0] not 0, L = 0), and PHASE commands of every kind (its words
+// as the timer's {sel, data} into the chunk queue, W0 last, committed whole).
+std::vector<uint32_t> pt_segment_words(Rng& rng, bool legal) {
+  const bool conic = chance(rng, 30);
+  const uint32_t k = conic ? 0 : pick(rng, 0, 3), u = pick(rng, 1, 4095);
+  const uint32_t au = pick(rng, 0, 2), av = (au + pick(rng, 1, 2)) % 3;
+  std::vector<uint32_t> w;
+  w.push_back((conic ? 0x5u : 0x1u) << 28 | uint32_t(chance(rng, 20)) << 27 |
+              (conic ? uint32_t(chance(rng, 50)) << 26 | au << 23 | av << 19 : k << 23) |
+              uint32_t(chance(rng, 20)) << 16);
+  w.push_back(pick(rng, 0, 7) << 24 | u);
+  for (uint32_t a = 0; a < 3; ++a)
+    w.push_back(conic && (a == au || a == av) ? 0 : chance(rng, 20) ? 0 : chance(rng, 20) ? u : pick(rng, 0, u));
+  if (conic)
+    for (int i = 0; i < 7; ++i) w.push_back(uint32_t(rng()));
+  w.push_back(chance(rng, 5) ? uint32_t(rng()) : pick(rng, 1u << 20, 1u << 31));   // L
+  if (!legal) {
+    switch (pick(rng, 0, 4)) {
+      case 0: w[1] = (w[1] & 0xFF000000) | (chance(rng, 50) ? 0 : pick(rng, 4096, 0xFFFFFF)); break;
+      case 1: w[2 + (conic ? au : 0)] = conic ? pick(rng, 1, u) : u + 1; break;   // CONIC_AXES, SEG_V_GT_U
+      case 2: if (!conic) w[0] = (w[0] & ~(0xFu << 23)) | pick(rng, 4, 15) << 23; break;
+      case 3: w[0] |= pick(rng, 1, 0xFFFF); break;
+      default: w.back() = 0; break;
+    }
+  }
+  return w;
+}
+
+std::vector<uint32_t> pt_phase_cmd(Rng& rng) {
+  const uint32_t kind = pick(rng, 0, 15);
+  std::vector<uint32_t> w{0x6u << 28 | kind << 24 | pick(rng, 0, 0xFFFFFF)};
+  for (int i = 0; i < 1 + (kind & 1 ? 2 : 0) + (kind & 8 ? 4 : 0); ++i) w.push_back(uint32_t(rng()));
+  return w;
+}
+
+TEST(CorePartCmd, PhaseTimerBuildMatchesTheModel) {
+  Rng rng(13);
+  Lockstep<CmdPtimerPort> ls;
+  ls.reset();
+  std::deque<uint32_t> words;
+  model::CpCmdIn in;
+  uint64_t commits = 0, rollbacks = 0, phases = 0, phase_drops = 0, phase_words = 0;
+  std::set<uint32_t> codes;
+  for (int c = 0; c < 300000; ++c) {
+    if (words.empty()) {
+      const uint32_t kind = pick(rng, 0, 99);
+      const std::vector<uint32_t> w = kind < 35   ? pt_segment_words(rng, true)
+                                      : kind < 50 ? pt_segment_words(rng, false)
+                                      : kind < 85 ? pt_phase_cmd(rng)
+                                                  : std::vector<uint32_t>{other_word(rng)};
+      words.insert(words.end(), w.begin(), w.end());
+    }
+    in.rst = pick(rng, 0, 9999) == 0;
+    in.cmd_valid = chance(rng, 80);
+    in.cmd_data = words.front();
+    in.rsp_ready = chance(rng, 50);
+    in.read_data = uint32_t(rng());
+    if (pick(rng, 0, 999) < (in.fault ? 20u : 2u)) in.fault = !in.fault;
+    in.running = chance(rng, 10);
+    in.pulse_busy = chance(rng, 10);
+    in.seg_full = chance(rng, 10);
+    in.ch_full = chance(rng, 10);
+    in.flush = pick(rng, 0, 999) < 2;
+    const model::CpCmdOut o = ls.step(in);
+    if (in.cmd_valid && o.cmd_ready) words.pop_front();
+    commits += o.seg_commit;
+    rollbacks += o.seg_rollback;
+    phases += o.ch_commit;
+    phase_drops += o.ch_rollback;
+    phase_words += o.ch_wr;
+    if (o.fault) codes.insert(o.fault_code);
+  }
+  std::printf("segments committed %llu, rolled back %llu; phases committed %llu, dropped %llu, words %llu\n",
+              (unsigned long long)commits, (unsigned long long)rollbacks, (unsigned long long)phases,
+              (unsigned long long)phase_drops, (unsigned long long)phase_words);
+  EXPECT_GT(commits, 100u);
+  EXPECT_GT(rollbacks, 100u);
+  EXPECT_GT(phases, 1000u);
+  EXPECT_GT(phase_drops, 10u) << "phases read while a fault is latched are dropped whole";
+  EXPECT_GT(phase_words, 3 * phases) << "phases of more than u and W0";
+  // Its refusals: 1..4 (4: a segment with chunks), 12..14, 16, 18, 21 (L = 0); no chunk checks.
+  for (uint32_t code : {1u, 2u, 3u, 4u, 12u, 13u, 14u, 16u, 21u})
+    EXPECT_TRUE(codes.count(code)) << "refusal code " << code << " never raised";
+  for (uint32_t code : {5u, 6u, 7u, 15u}) EXPECT_FALSE(codes.count(code)) << "chunk refusal " << code;
+}
+
 // ---------------------------------------------------------------- cp_build
 // Segment queue words as the parser commits them (N = 3): header {out, end, k, dir, U},
 // then v_0..v_2, 1 <= U <= UMAX = 200 and v <= U (cp_build's contract: its engine
@@ -189,7 +278,8 @@ TEST(CorePartCmd, ConicSegmentsMatchTheModel) { cmd_traffic<CmdConicPort>(12, 30
 // With conic: CONIC segments too, as the parser writes them (docs/CORE.md): the
 // header with the conic flag (bit 30 + N = 33), k = 0, v = 0 on the plane axes, then
 // K0 .. K6 with K1 = {cw, u, v, 9 zeros, C}.
-std::vector<uint64_t> build_words(Rng& rng, bool conic = false) {
+// With ptimer: each segment's length per move (any bits) as its last word.
+std::vector<uint64_t> build_words(Rng& rng, bool conic = false, bool ptimer = false) {
   const uint32_t u = chance(rng, 30) ? pick(rng, 1, 8) : pick(rng, 1, 200);
   const bool is_conic = conic && chance(rng, 35);
   const uint32_t au = pick(rng, 0, 2), av = (au + pick(rng, 1, 2)) % 3;
@@ -205,20 +295,21 @@ std::vector<uint64_t> build_words(Rng& rng, bool conic = false) {
       w.push_back(k == 1 ? uint64_t(pick(rng, 0, 1)) << 31 | uint64_t(au) << 28 | uint64_t(av) << 25 |
                                pick(rng, 0, 0xFFFF)
                          : uint64_t(uint32_t(rng())));
+  if (ptimer) w.push_back(uint32_t(rng()));
   return w;
 }
 
 template <class P>
-void build_traffic(uint64_t seed, bool conic) {
+void build_traffic(uint64_t seed, bool conic, bool ptimer = false) {
   Rng rng(seed);
   Lockstep<P> ls;
   ls.reset();
   std::deque<uint64_t> words;
   model::CpBuildIn in;
-  uint64_t built = 0, refused = 0, engine_moves = 0, conic_built = 0;
+  uint64_t built = 0, refused = 0, engine_moves = 0, conic_built = 0, pt_words = 0;
   for (int c = 0; c < 300000; ++c) {
     if (words.empty())
-      for (uint64_t w : build_words(rng, conic)) words.push_back(w);
+      for (uint64_t w : build_words(rng, conic, ptimer)) words.push_back(w);
     in.rst = pick(rng, 0, 9999) == 0;
     in.flush = pick(rng, 0, 999) < 3;
     if (chance(rng, 1)) in.fault = !in.fault;
@@ -230,7 +321,8 @@ void build_traffic(uint64_t seed, bool conic) {
     in.walker_free = chance(rng, 70);
     const model::CpBuildOut o = ls.step(in);
     if (o.seg_pop) words.pop_front();
-    conic_built += o.cw_start && o.run_wr;
+    conic_built += ptimer ? o.run_wr && (o.run_data >> 15 & 1) : o.cw_start && o.run_wr;
+    pt_words += o.run_wr && o.run_data_pt != 0;
     // A flush or reset empties the segment queue: the next word is a header again.
     // So does a refused pattern in the core (its fault latches and flushes).
     if (in.flush || in.rst || o.fault) words.clear();
@@ -241,6 +333,7 @@ void build_traffic(uint64_t seed, bool conic) {
   EXPECT_GT(built, 500u);
   EXPECT_GT(refused, 10u);
   EXPECT_GT(engine_moves, 10000u);
+  EXPECT_EQ(pt_words > built / 2, ptimer) << "the run queue words' L, k, U";
   if (conic) {
     EXPECT_GT(conic_built, 100u) << "conics into the walker and the run queue";
   } else {
@@ -251,21 +344,30 @@ void build_traffic(uint64_t seed, bool conic) {
 TEST(CorePartBuild, RandomSegmentsMatchTheModel) { build_traffic<BuildPort>(21, false); }
 // With CONIC segments: their words into the walker once it is free (docs/CORE.md).
 TEST(CorePartBuild, ConicSegmentsMatchTheModel) { build_traffic<BuildConicPort>(22, true); }
+// The phase timer's build (with CONIC): each segment's length word into the run queue
+// with its k and U, after its axes or its conic's words.
+TEST(CorePartBuild, PhaseTimerBuildMatchesTheModel) { build_traffic<BuildPtimerPort>(23, true, true); }
 
 // ---------------------------------------------------------------- cp_run
 // With conic: conic run entries (bit 2N + 9, plane axes, some not axes), and the
 // walker loaded with words of any bits (its walks are junk, so conic moves often meet
 // a wrong end mark: CONIC_END). Whole conics that end right: the core's benches.
+// With ptimer: the chunk queue carries the phase timer's words (random phases of
+// every kind, now and then a random word), each run entry its moves U*2^k and its
+// length per move.
 template <class P>
-void run_traffic(uint64_t seed, bool conic) {
+void run_traffic(uint64_t seed, bool conic, bool ptimer = false) {
   Rng rng(seed);
   Lockstep<P> ls;
   ls.reset();
   model::CpRunIn in;
+  std::deque<std::pair<uint32_t, uint32_t>> words;
   uint64_t fires = 0, seg_done = 0, stretches = 0, underruns = 0, conic_faults = 0;
   uint64_t torch_edges = 0, lim_hits = 0, scaled_fires = 0;
   bool torch = false;
-  for (int c = 0; c < 500000; ++c) {
+  // (The phase timer: twice the cycles, its moves being rarer: a clear leaves it
+  // waiting for a phase from rest or one that loads r.)
+  for (int c = 0; c < (ptimer ? 1000000 : 500000); ++c) {
     // The timer's scale (cp_feed): mostly 1, now and then held (0), slowed, sped up
     // to 2, or any value, for a while.
     if (pick(rng, 0, 1999) == 0) {
@@ -288,6 +390,26 @@ void run_traffic(uint64_t seed, bool conic) {
     const uint32_t add = chance(rng, 50) ? pick(rng, 0, 3) : uint32_t(-int32_t(pick(rng, 0, 3)));
     in.ch_head = {uint64_t(pick(rng, 1, 6)) << 48 | uint64_t(add & 0xFFFF) << 32 | pick(rng, 1, 12),
                   uint64_t(chance(rng, 30)) << 16 | (chance(rng, 70) ? 0 : pick(rng, 0, 0xFFFF)), 0, 0};
+    if (ptimer) {
+      // Phases as in the timer's own bench (tb/core/test_ptimer.cpp), shorter: steps of
+      // about 2^50..2^54 against lengths of 2^42..2^50 (moves a clock to some tens apart).
+      if (words.empty() && chance(rng, 20)) {
+        const uint32_t kind = chance(rng, 50) ? 0 : uint32_t(pick(rng, 1, 15));
+        const uint32_t ticks = chance(rng, 80) ? uint32_t(pick(rng, 1, 6)) : uint32_t(pick(rng, 7, 300));
+        const int64_t u = int64_t(pick(rng, 0, 1u << 20)) - (1 << 19);
+        const int64_t s = int64_t(rng() >> 10);
+        const int64_t h = int64_t(rng() >> 28) - (int64_t{1} << 35);
+        const uint64_t r_top = chance(rng, 80) ? uint64_t(-int64_t(rng() >> 5)) : rng();
+        for (auto& w : phase_words(kind, ticks, u, r_top, s, h)) words.push_back(w);
+      }
+      in.ch_valid = !words.empty() && chance(rng, 90);
+      const auto w = words.empty() || chance(rng, 1) ? std::pair<uint32_t, uint32_t>{pick(rng, 0, 7), uint32_t(rng())}
+                                                      : words.front();
+      in.ch_head = {uint64_t(w.first) << 32 | w.second | (rng() & ~uint64_t{0} << 35), rng(), 0, 0};
+      // {L (Q2.30; 2^12 .. 2^20 mostly), k, U}
+      const uint64_t len = chance(rng, 95) ? pick(rng, 1u << 12, 1u << 20) : uint64_t(uint32_t(rng()));
+      in.run_head_pt = len << 28 | uint64_t(pick(rng, 0, 1)) << 24 | pick(rng, 1, 12);
+    }
     in.run_valid = chance(rng, 60);
     in.run_head = pick(rng, 0, 511);  // {out, lane, end, moving, dir}
     in.run_level = pick(rng, 0, 2);
@@ -311,6 +433,7 @@ void run_traffic(uint64_t seed, bool conic) {
       in.cw_start = pick(rng, 0, 999) < 15;
     }
     const model::CpRunOut o = ls.step(in);
+    if (ptimer && o.ch_pop && !words.empty()) words.pop_front();
     scaled_fires += o.fire && in.scale != 0x10000;
     conic_faults += o.fault_conic;
     fires += o.fire;
@@ -330,6 +453,8 @@ void run_traffic(uint64_t seed, bool conic) {
   EXPECT_GT(torch_edges, 1000u) << "the torch output should follow the segments' out bits";
   EXPECT_GT(seg_done, conic ? 200u : 500u);
   EXPECT_GT(stretches, 1000u);
+  std::printf("fires %llu, segments done %llu, stretched %llu, underruns %llu\n", (unsigned long long)fires,
+              (unsigned long long)seg_done, (unsigned long long)stretches, (unsigned long long)underruns);
   EXPECT_GT(underruns, 10u);
   EXPECT_EQ(conic_faults > 0, conic) << conic_faults << " CONIC_END faults";
 }
@@ -337,6 +462,8 @@ void run_traffic(uint64_t seed, bool conic) {
 TEST(CorePartRun, RandomChunksAndSegmentsMatchTheModel) { run_traffic<RunPort>(31, false); }
 // With the conic walker (IW = 36) and conic segments (docs/CORE.md "CONIC").
 TEST(CorePartRun, ConicWalkerMatchesTheModel) { run_traffic<RunConicPort>(32, true); }
+// Timed by the phase timer (PTIMER = 1; docs/PROTOCOL.md "Toward a compact wire").
+TEST(CorePartRun, PhaseTimerMatchesTheModel) { run_traffic<RunPtimerPort>(33, false, true); }
 
 // ---------------------------------------------------------------- cp_status
 TEST(CorePartStatus, RandomRequestsMatchTheModel) {
