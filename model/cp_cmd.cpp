@@ -210,15 +210,8 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
         refuse(CoreError::seg_length);
         d.discard = true;
       }
-      if (!keep || o.fault) {
-        o.seg_rollback = true;
-      } else {
-        o.seg_commit = true;
-        d.lc_valid = q.hdr_conic;
-        d.lc_au = q.hdr_au;
-        d.lc_av = q.hdr_av;
-        d.lc_cw = q.hdr_cw;
-      }
+      o.seg_rollback = !keep || o.fault;
+      o.seg_commit = !o.seg_rollback;
       break;
     case Parse::phase_words: {
       // u (sel 1), r (2, 3) if kind[0], S and H (4 .. 7) if kind[3], then W0.
@@ -301,16 +294,19 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
         // The whole segment passed: its words and its chunks appear together.
         o.seg_commit = o.ch_commit = true;
         d.parse = Parse::command;
-        d.lc_valid = q.hdr_conic;
-        d.lc_au = q.hdr_au;
-        d.lc_av = q.hdr_av;
-        d.lc_cw = q.hdr_cw;
       }
       break;
     }
     case Parse::reply:
       if (!q.rsp_valid || i.rsp_ready) d.parse = Parse::command;
       break;
+  }
+  // A segment committed: what a continuation may follow (a conic, its axes and way).
+  if (o.seg_commit) {
+    d.lc_valid = q.hdr_conic;
+    d.lc_au = q.hdr_au;
+    d.lc_av = q.hdr_av;
+    d.lc_cw = q.hdr_cw;
   }
   // A fault (E-stop among them) or an ABORT flushes the walk a continuation would go on from.
   if (i.fault || o.fault || o.abort) d.lc_valid = false;

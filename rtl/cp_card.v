@@ -43,7 +43,9 @@ module cp_card #(
     // Limit switches and the probe (docs/CORE.md "Inputs").
     parameter integer INPUTS = 0,
     // Feed hold, resume and override (docs/CORE.md "Feed hold and override").
-    parameter integer FEED = 0
+    parameter integer FEED = 0,
+    // Moves timed by the phase timer (docs/CORE.md "Phase-timer builds").
+    parameter integer PTIMER = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -114,7 +116,7 @@ cp_spi #(.N(N), .CBUF_AW(CBUF_AW), .CONIC(CONIC)) u_spi (
 
 cp_core #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW), .PW(32),
           .CBUF_AW(CBUF_AW), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW),
-          .INPUTS(INPUTS), .FEED(FEED), .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
+          .INPUTS(INPUTS), .FEED(FEED), .PTIMER(PTIMER), .STEP_HIGH_RESET(STEP_HIGH_RESET), .STEP_LOW_RESET(STEP_LOW_RESET),
           .DIR_SETUP_RESET(DIR_SETUP_RESET), .DIR_HOLD_RESET(DIR_HOLD_RESET),
           .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET)) u_core (
     .clk(clk), .rst(rst),

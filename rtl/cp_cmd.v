@@ -410,15 +410,8 @@ always @* begin
         if (keep && cmd_data_i == 32'd0) begin
             refuse = 1'b1;  refuse_code = E_SEG_LENGTH;  discard_d = 1'b1;
         end
-        if (!keep || refuse) begin
-            seg_rollback_o = 1'b1;
-        end else begin
-            seg_commit_o = 1'b1;
-            lc_valid_d   = hdr_conic_q;
-            lc_au_d      = hdr_au_q;
-            lc_av_d      = hdr_av_q;
-            lc_cw_d      = hdr_cw_q;
-        end
+        seg_rollback_o = !keep || refuse;
+        seg_commit_o   = keep && !refuse;
     end
 
     // A PHASE's words after H0, as the phase timer's; then W0 and the commit.
@@ -490,10 +483,6 @@ always @* begin
                 seg_commit_o = 1'b1;
                 ch_commit_o  = 1'b1;
                 p_state_d    = P_CMD;
-                lc_valid_d   = hdr_conic_q;
-                lc_au_d      = hdr_au_q;
-                lc_av_d      = hdr_av_q;
-                lc_cw_d      = hdr_cw_q;
             end
         end
     end
@@ -505,6 +494,13 @@ always @* begin
 
     // A fault (E-stop among them) or an ABORT flushes the walk a continuation would
     // go on from.
+    // A segment committed: what a continuation may follow (a conic, its axes and way).
+    if (seg_commit_o) begin
+        lc_valid_d = hdr_conic_q;
+        lc_au_d    = hdr_au_q;
+        lc_av_d    = hdr_av_q;
+        lc_cw_d    = hdr_cw_q;
+    end
     if (fault_i || refuse || abort_o) lc_valid_d = 1'b0;
     fault_o      = refuse;
     fault_code_o = refuse_code;

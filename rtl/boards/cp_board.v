@@ -40,6 +40,7 @@ module cp_board #(
     parameter integer CIW = 40,
     parameter integer INPUTS = 0,
     parameter integer FEED = 0,
+    parameter integer PTIMER = 0,
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
     input  wire         osc_i,          // the 12 MHz oscillator's pin
@@ -142,7 +143,7 @@ wire [N*32-1:0] position;
 cp_card #(.N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW), .SAW(SAW), .TW(TW),
           .CBUF_AW(CBUF_AW), .STEP_POL_RESET(STEP_POL_RESET),
           .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ), .BUILD_ID(BUILD_ID), .CONIC(CONIC),
-          .CIW(CIW), .INPUTS(INPUTS), .FEED(FEED)) u_card (
+          .CIW(CIW), .INPUTS(INPUTS), .FEED(FEED), .PTIMER(PTIMER)) u_card (
     .clk(clk), .rst(rst),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
     .spi_miso_o(miso), .spi_miso_oe_o(miso_oe),

@@ -34,6 +34,8 @@ module cp_hx8k #(
     // Limit switches and the probe (docs/CORE.md "Inputs").
     parameter integer INPUTS = 0,
     parameter integer FEED = 0,
+    // Moves timed by the phase timer (docs/CORE.md "Phase-timer builds"; no board sets it yet).
+    parameter integer PTIMER = 0,
     parameter [0:0] ENABLE_ACTIVE_HIGH = 1'b0
 ) (
     input  wire         CLK,
@@ -81,7 +83,7 @@ cp_board #(.PLL_PAD(1'b0), .PLL_DIVR(PLL_DIVR), .PLL_DIVF(PLL_DIVF), .PLL_DIVQ(P
            .PLL_FILTER(PLL_FILTER), .N(N), .W(W), .UMAX(UMAX), .KMAX(KMAX), .CAW(CAW),
            .SAW(SAW), .TW(TW), .CBUF_AW(CBUF_AW),
            .STEP_POL_RESET(STEP_POL_RESET), .DIR_POL_RESET(DIR_POL_RESET), .CLK_HZ(CLK_HZ),
-           .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW), .INPUTS(INPUTS), .FEED(FEED),
+           .BUILD_ID(BUILD_ID), .CONIC(CONIC), .CIW(CIW), .INPUTS(INPUTS), .FEED(FEED), .PTIMER(PTIMER),
            .ENABLE_ACTIVE_HIGH(ENABLE_ACTIVE_HIGH)) u_board (
     .osc_i(CLK), .btn_n(1'b1),
     .spi_sck_i(SPI_SCK), .spi_cs_n_i(SPI_CS_N), .spi_mosi_i(SPI_MOSI), .spi_miso_io(SPI_MISO),
