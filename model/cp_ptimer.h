@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // cp_ptimer — cycle-accurate, bit-exact model of rtl/cp_ptimer.v: the phase
 // timer, moves timed by phases of constant jerk (issue 13, toward the compact
-// wire; the unit on its own, not yet part of cp_core). The host's side is
+// wire; cp_run's timer in a PTIMER build of cp_core). The host's side is
 // plan/phases.h, whose arithmetic this is, clock by clock:
 //
 //   every clock of a jerk phase (adv):  p += step; the pending move is due while

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // cp_ptimer — the phase timer: moves timed by phases of constant jerk (issue 13,
-// toward the compact wire; the unit on its own, not yet part of cp_core). The
+// toward the compact wire; cp_run's timer in a PTIMER build of cp_core). The
 // host's side is host/plan/phases.h, whose arithmetic this is, clock by clock:
 //
 //   every clock of a jerk phase (adv_i):  p += step; the pending move is due

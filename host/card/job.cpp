@@ -217,6 +217,18 @@ plan::Result<WireJob> to_wire(const plan::PlannedJob& job, const std::string& fi
   return r;
 }
 
+WirePhase wire_phase(const plan::TimerPhase& ph) {
+  WirePhase w;
+  w.kind = unsigned(ph.reload || ph.adjust) << 3 | unsigned(ph.rest) << 2 | unsigned(ph.timed) << 1 |
+           unsigned(ph.reload);
+  w.ticks = uint32_t(ph.ticks);
+  w.u = int32_t(ph.jerk);
+  w.r_top = uint64_t(ph.r_top);
+  w.s = ph.s;
+  w.h = ph.a;
+  return w;
+}
+
 size_t start_after(std::span<const size_t> chunks, const CardLimits& card) {
   // START once the first segments are queued, before they could fill the card.
   size_t n = 0, queued = 0;

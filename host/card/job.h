@@ -75,6 +75,10 @@ std::optional<plan::Diagnostic> to_wire_segment(const plan::CardSegment& seg, bo
 // segment_queue + 1 wire segments (or all there are).
 size_t start_after(std::span<const size_t> chunks, const CardLimits& card);
 
+// One of the fitter's phases (plan/phases.h) as a PHASE command's values (a
+// phase-timer card, docs/CORE.md "Phase-timer builds").
+WirePhase wire_phase(const plan::TimerPhase& ph);
+
 // Configuration of every present axis, the segments (the last one ends the run)
 // and START where the first segments fit the card's queues.
 std::vector<uint32_t> encode_job(const plan::Machine& machine, const WireJob& job);

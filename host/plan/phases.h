@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Move events timed by phases of constant jerk (issue 13, toward a compact
-// wire; the card's unit is rtl/cp_ptimer.v, its twin model/cp_ptimer.h, not yet
-// part of the core: docs/PROTOCOL.md "Toward a compact wire"). The card would keep the path
+// wire; the card's unit is rtl/cp_ptimer.v, its twin model/cp_ptimer.h, the timer of
+// cp_core's PTIMER build: docs/PROTOCOL.md "Toward a compact wire"). The card keeps the path
 // position as a sum, exactly, in integers, with the state at tick boundaries
 // being the cubic's own derivatives (so that a phase's jerk can change
 // without the position, velocity or acceleration jumping):

@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "card/job.h"
 #include "plan/phases.h"
 
 namespace cpstep::tb {
@@ -32,9 +33,8 @@ inline std::vector<std::pair<uint32_t, uint32_t>> phase_words(uint32_t kind, uin
 
 // The card's words for one of the host's phases.
 inline std::vector<std::pair<uint32_t, uint32_t>> host_phase_words(const plan::TimerPhase& ph) {
-  const uint32_t kind = uint32_t(ph.reload || ph.adjust) << 3 | uint32_t(ph.rest) << 2 | uint32_t(ph.timed) << 1 |
-                        uint32_t(ph.reload);
-  return phase_words(kind, uint32_t(ph.ticks), ph.jerk, uint64_t(ph.r_top), ph.s, ph.a);
+  const card::WirePhase w = card::wire_phase(ph);
+  return phase_words(w.kind, w.ticks, w.u, w.r_top, w.s, w.h);
 }
 
 }  // namespace cpstep::tb

@@ -41,19 +41,6 @@ struct CorePtimer : sim::CorePortBase<Vcp_core_ptimer, 4> {
   }
 };
 
-// The card's phase word for one of the fitter's phases.
-card::WirePhase wire_phase(const plan::TimerPhase& ph) {
-  card::WirePhase w;
-  w.kind = unsigned(ph.reload || ph.adjust) << 3 | unsigned(ph.rest) << 2 | unsigned(ph.timed) << 1 |
-           unsigned(ph.reload);
-  w.ticks = uint32_t(ph.ticks);
-  w.u = int32_t(ph.jerk);
-  w.r_top = uint64_t(ph.r_top);
-  w.s = ph.s;
-  w.h = ph.a;
-  return w;
-}
-
 // A phase's length in the timer's half clocks (2^6 of them a tick; a timed move's in clocks).
 int64_t phase_clocks(const plan::TimerPhase& ph) {
   const int64_t t = ph.ticks == 0 ? 1 : int64_t(ph.ticks);
@@ -140,7 +127,7 @@ PtimerJob plan_ptimer_job(const std::string& gcode) {
   int64_t t = 0;
   for (const plan::TimerPhase& ph : fitter.phases()) {
     std::vector<uint32_t> w;
-    card::encode_phase(wire_phase(ph), w);
+    card::encode_phase(card::wire_phase(ph), w);
     timed.push_back({2 * t, std::move(w)});
     t += phase_clocks(ph);
     ++out.phases;
