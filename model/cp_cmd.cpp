@@ -21,13 +21,28 @@ FifoWord chunk_word(uint32_t interval, uint32_t add, uint32_t count, uint32_t ad
 
 CpCmd::CpCmd(Params p) : p_(p), mask_tw_(bits::mask(p.tw)) {}
 
+// A ptimer segment's axis form H0[15:0]: 0 (every axis's v sent), or {1, 000,
+// major valid, major, sent[7:0]} naming only axes below N, the major one not sent.
+bool CpCmd::form_ok(uint32_t form) const {
+  if (form == 0) return true;
+  const uint32_t sent = form & 0xFF, major = form >> 8 & 7;
+  const bool has_major = (form >> 11 & 1) != 0;
+  return (form >> 15 & 1) && (form >> 12 & 7) == 0 && (sent >> p_.n) == 0 &&
+         !(has_major && (major >= p_.n || (sent >> major & 1)));
+}
+
+// In seg_v: whether this axis's v comes as a word (always, but in the compact form).
+bool CpCmd::v_sent() const {
+  return !(p_.ptimer && (r_.chunks_left >> 15 & 1)) || (r_.chunks_left >> r_.v_index & 1);
+}
+
 bool CpCmd::ready(const In& i) const {
   const bool keep = !r_.discard && !i.fault;
   switch (r_.parse) {
     case Parse::command:
     case Parse::chunk_interval: return true;
+    case Parse::seg_v: return v_sent() && (!keep || !i.seg_full);
     case Parse::seg_h1:
-    case Parse::seg_v:
     case Parse::conic_words:
     case Parse::seg_length: return !keep || !i.seg_full;
     case Parse::phase_words: return !keep || !i.ch_full;
@@ -96,8 +111,11 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
             if (d.hdr_k > p_.kmax) {
               refuse(CoreError::seg_k);
               d.discard = true;
-            } else if (p_.ptimer ? d.chunks_left != 0 : (d.chunks_left == 0 || d.chunks_left > (1u << p_.caw))) {
+            } else if (!p_.ptimer && (d.chunks_left == 0 || d.chunks_left > (1u << p_.caw))) {
               refuse(CoreError::seg_chunks);
+              d.discard = true;
+            } else if (p_.ptimer && !form_ok(d.chunks_left)) {
+              refuse(CoreError::seg_form);
               d.discard = true;
             } else if (d.hdr_conic && (d.hdr_au == d.hdr_av || d.hdr_au >= p_.n || d.hdr_av >= p_.n)) {
               refuse(CoreError::conic_axes);
@@ -164,15 +182,20 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
       d.v_index = 0;
       d.parse = Parse::seg_v;
       break;
-    case Parse::seg_v:
-      if (!take) break;
+    case Parse::seg_v: {
+      // An axis the compact form does not send: its v (U on the major axis, else 0)
+      // written without taking a word, when the queue has room.
+      const bool sent = v_sent();
+      if (sent ? !take : keep && i.seg_full) break;
+      const uint32_t form = q.chunks_left;
+      const uint32_t v = sent ? word & 0xFFFFFF : (form >> 11 & 1) && (form >> 8 & 7) == q.v_index ? q.seg_u : 0;
       o.seg_wr = keep;
-      o.seg_data = word & 0xFFFFFF;
+      o.seg_data = v;
       // A conic's plane axes step by the conic engine: their v must be 0.
-      if (keep && q.hdr_conic && (q.v_index == q.hdr_au || q.v_index == q.hdr_av) && (word & 0xFFFFFF) != 0) {
+      if (keep && q.hdr_conic && (q.v_index == q.hdr_au || q.v_index == q.hdr_av) && v != 0) {
         refuse(CoreError::conic_axes);
         d.discard = true;
-      } else if (keep && (word & 0xFFFFFF) > q.seg_u) {
+      } else if (keep && v > q.seg_u) {
         refuse(CoreError::seg_v_gt_u);
         d.discard = true;
       }
@@ -186,6 +209,7 @@ CpCmd::Out CpCmd::eval(const In& i, Regs& d) const {
                                        : Parse::chunk_interval;
       }
       break;
+    }
     case Parse::conic_words:
       // K0 .. K6 as they come but K1: the header's plane axes and direction go with C
       // to the builder, {cw, u, v, 9 zeros, C}; a continuation's K5 .. K6, its K5 with

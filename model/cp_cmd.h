@@ -99,7 +99,7 @@ class CpCmd {
     bool lc_valid = false;
     uint32_t lc_au = 0, lc_av = 0;
     bool lc_cw = false;
-    uint32_t chunks_left = 0, v_index = 0;
+    uint32_t chunks_left = 0, v_index = 0;  // chunks_left: ptimer, H0[15:0] (the axis form)
     uint32_t interval = 0, count = 0, add = 0, add2 = 0;
     uint64_t count_sum = 0;
     uint32_t check_clock = 0;  // the chunk check's clock, 0 .. kCheckClocks-1
@@ -109,6 +109,8 @@ class CpCmd {
   Out eval(const In& i, Regs& d) const;
   static CoreError chunk_verdict(const Regs& q);
   bool ready(const In& i) const;
+  bool form_ok(uint32_t form) const;
+  bool v_sent() const;
 
   Params p_;
   uint32_t mask_tw_;

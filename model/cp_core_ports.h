@@ -98,6 +98,7 @@ enum class CoreError : uint32_t {
   watchdog = 19,    // no frame for the watchdog's timeout (CONFIG field 5)
   limit = 20,       // the segment under way moved toward an active limit switch
   seg_length = 21,  // (PTIMER builds) a segment's length per move L = 0
+  seg_form = 22,    // (PTIMER builds) a segment's axis form H0[15:0] bad
 };
 
 }  // namespace cpstep::model

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "model/cp_ptimer.h"
 
+#include <algorithm>
+
 #include "model/bits.h"
 
 namespace cpstep::model {
@@ -100,6 +102,7 @@ void CpPtimer::tick() {
       const int64_t u = sx(o.nu, p_.uw);
       n.nvalid = false;
       n.active = true;
+      ++loads_;
       n.starved = false;
       n.kind = o.nkind;
       n.timed = (o.nkind & 2) != 0;
@@ -126,6 +129,65 @@ void CpPtimer::tick() {
   }
   n.r = sx128(r, rw());
   r_ = n;
+}
+
+std::optional<uint64_t> CpPtimer::quiet_advs(bool len_valid, uint64_t limit) const {
+  const Regs& q = r_;
+  if (q.tdue || (!q.timed && !q.owe && q.r >= 0)) return std::nullopt;   // due now
+  if (q.owe && len_valid) return std::nullopt;                          // taken off now
+  if (!q.active) {
+    if (q.nvalid) return std::nullopt;                                  // loads now
+    return kForever;
+  }
+  if (q.timed) return std::min<uint64_t>(limit, q.tleft - 1);          // its last clock is due
+  // A jerk phase: r rises by the step each advancing clock, the step and H change at
+  // each tick's end; the phase's last clock ends it. Due when r >= 0 (not while owed).
+  const uint64_t tick = uint64_t(1) << p_.s;
+  const cp_i128 lo = -(cp_i128(1) << (rw() - 1)), hi = (cp_i128(1) << (rw() - 1)) - 1;
+  cp_i128 r = q.r;
+  int64_t step = q.step, h = q.h;
+  uint64_t tleft = q.tleft, tcnt = q.tcnt, n = 0;
+  while (n < limit) {
+    const uint64_t rest = tick - tcnt;                  // clocks to the tick's end
+    const bool last = tleft == 1;
+    const uint64_t quiet = std::min<uint64_t>(last ? rest - 1 : rest, limit - n);
+    if (!q.owe && step > 0) {
+      const cp_i128 need = (-r + step - 1) / step;      // the first clock after which r >= 0
+      if (need <= cp_i128(quiet)) return n + uint64_t(need) - 1;
+    }
+    const cp_i128 end = r + cp_i128(quiet) * step;
+    if (end < lo || end > hi) return n;                 // (r would wrap: clocked one by one)
+    n += quiet;
+    if (last || quiet < rest) return n;
+    r = end;
+    step = sx(step + 2 * h + 6 * q.u, p_.vw);
+    h = sx(h + 3 * q.u, p_.hw);
+    --tleft;
+    tcnt = 0;
+  }
+  return n;
+}
+
+void CpPtimer::skip_advs(uint64_t n) {
+  if (!r_.active || n == 0) return;
+  if (r_.timed) {
+    r_.tleft -= uint32_t(n);
+    return;
+  }
+  const uint64_t tick = uint64_t(1) << p_.s;
+  while (n > 0) {
+    const uint64_t k = std::min<uint64_t>(n, tick - r_.tcnt);
+    r_.r = sx128(r_.r + cp_i128(k) * r_.step, rw());
+    n -= k;
+    if (r_.tcnt + k == tick) {
+      r_.tcnt = 0;
+      r_.step = sx(r_.step + 2 * r_.h + 6 * r_.u, p_.vw);
+      r_.h = sx(r_.h + 3 * r_.u, p_.hw);
+      --r_.tleft;
+    } else {
+      r_.tcnt = uint32_t(r_.tcnt + k);
+    }
+  }
 }
 
 }  // namespace cpstep::model

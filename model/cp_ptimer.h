@@ -28,6 +28,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 
 namespace cpstep::model {
 
@@ -71,11 +72,25 @@ class CpPtimer {
   Out outputs() const;
   void tick();
 
+  // Event skipping (CpRun::quiet_for, docs/SIM.md "The fast engine"): with no word
+  // written, no fire and no clear, and `len_valid` as it is, how many of the coming
+  // clocks that advance (adv) leave everything but r, the tick's count, the step, H
+  // and the timed count as they were — no move due after any of them, no phase
+  // ending — at most `limit`; kForever while no phase runs (nothing advances);
+  // nullopt: something changes in the next clock whether it advances or not (a move
+  // due now, an owed length taken off, a phase loading).
+  static constexpr uint64_t kForever = ~uint64_t(0);
+  std::optional<uint64_t> quiet_advs(bool len_valid, uint64_t limit) const;
+  // Applies n such advancing clocks at once (n <= quiet_advs()): exactly the state
+  // n tick()s with adv would leave.
+  void skip_advs(uint64_t n);
+
   // For the benches.
   cp_i128 r() const { return r_.r; }
   int64_t step() const { return r_.step; }
   int64_t h() const { return r_.h; }
   unsigned rw() const { return p_.f + p_.s + 3; }
+  uint64_t loads() const { return loads_; }   // phases loaded since construction
 
  private:
   struct Regs {
@@ -95,6 +110,7 @@ class CpPtimer {
   cp_i128 threshold() const;
   Params p_;
   Regs r_;
+  uint64_t loads_ = 0;
 };
 
 }  // namespace cpstep::model

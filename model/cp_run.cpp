@@ -204,8 +204,6 @@ CpRun::Out CpRun::eval_outputs(const In& i) const {
 
 uint64_t CpRun::quiet_for(const In& i) const {
   if (i.rst || i.bank_we || i.len_we) return 0;
-  // The phase timer sums bit-serially every clock of its ticks: clocked always.
-  if (p_.ptimer) return 0;
   // The conic walker turns its passes every clock: clocked while a pass runs or
   // starts; between its passes (a move presented and the next decided, waiting for
   // the run to take it) it holds still, and the span to the move's due time skips.
@@ -217,7 +215,9 @@ uint64_t CpRun::quiet_for(const In& i) const {
   d.elapsed = r_.elapsed;
   d.ph = r_.ph;
   d.inc = r_.inc;
+  d.pa = r_.pa;
   if (!(d == r_)) return 0;
+  if (p_.ptimer) return ptimer_quiet_for(i);
   // elapsed counts up by the scaled time (saturating); the next thing it can change
   // is the pending move falling due at elapsed >= delay: after c clocks with
   // ph + c·scale >= (delay - elapsed)·2^16. At scale 0 it never does.
@@ -230,8 +230,30 @@ uint64_t CpRun::quiet_for(const In& i) const {
   return kForever;
 }
 
+// The phase timer's share (ptimer builds): no word for it now, no clear, and it
+// advances on the carry of the fraction pa taking the scale each clock (the carry
+// of half clocks, at most one a clock while the scale is at most 2): quiet up to
+// the clock of its first advance that is not (CpPtimer::quiet_advs).
+uint64_t CpRun::ptimer_quiet_for(const In& i) const {
+  if (i.flush || (i.ch_valid && ptimer_.outputs().ready)) return 0;
+  const uint64_t sc = i.scale & 0x3FFFF;
+  const std::optional<uint64_t> advs = ptimer_.quiet_advs(r_.cur_valid, uint64_t(1) << 40);
+  if (!advs) return 0;
+  if (!r_.running || sc == 0 || *advs == CpPtimer::kForever) return kForever;
+  if (sc > (1u << 17)) return 0;   // (two carries' worth a clock: clocked one by one)
+  // Clock c advances the timer for the j-th time when pa + (c+1)·sc first reaches
+  // j·2^17: the advance after the quiet ones comes in clock ceil(((advs+1)·2^17 - pa) / sc) - 1.
+  const unsigned __int128 need = ((unsigned __int128)(*advs + 1) << 17) - r_.pa;
+  return uint64_t((need + sc - 1) / sc) - 1;
+}
+
 void CpRun::skip(uint64_t cycles, uint32_t scale) {
   if (cycles == 0) return;
+  if (p_.ptimer) {
+    const unsigned __int128 pa = r_.pa + (unsigned __int128)(scale & 0x3FFFF) * cycles;
+    if (r_.running) ptimer_.skip_advs(uint64_t(pa >> 17));
+    r_.pa = uint32_t(pa & 0x1FFFF);
+  }
   const unsigned __int128 sc = scale & 0x3FFFF;
   const unsigned __int128 total = r_.ph + sc * cycles;
   const unsigned __int128 before_last = r_.ph + sc * (cycles - 1);

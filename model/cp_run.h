@@ -83,7 +83,8 @@ class CpRun {
   // Event skipping (CpCore::quiet_for): how many clocks with inputs `i` change
   // nothing but the move timer's elapsed count — no move fires or is counted
   // late, no queue is popped, no bank is written — before the pending move falls
-  // due. 0: clock it normally; kForever: nothing here ends the quiet.
+  // due (ptimer: before the phase timer's pending move falls due or its phase ends,
+  // CpPtimer::quiet_advs). 0: clock it normally; kForever: nothing here ends the quiet.
   static constexpr uint64_t kForever = ~uint64_t(0);
   uint64_t quiet_for(const In& i) const;
   // Advances that many quiet clocks at once, at the timer's scale `scale` (Q2.16).
@@ -140,6 +141,7 @@ class CpRun {
     std::array<uint32_t, kCoreMaxAxes> next{};
   };
   Out eval(const In& i, Regs& d, Replay& rp) const;
+  uint64_t ptimer_quiet_for(const In& i) const;
   void plane(uint32_t& step, uint32_t& dir) const;
 
   Params p_;

@@ -13,9 +13,13 @@
 // (cp_status decides).
 //
 // With PTIMER = 1 (the phase timer's build, docs/PROTOCOL.md "Toward a compact
-// wire") segments carry no chunks (H0[15:0] = 0) but, after their v_i (and a
-// conic's words), their length per move L (a word, not 0: SEG_LENGTH), and are
-// committed with it; PHASE commands (opcode 0x6: {kind[3:0], ticks[23:0]} in H0,
+// wire") segments carry no chunks but, after their v_i (and a conic's words), their
+// length per move L (a word, not 0: SEG_LENGTH), and are committed with it. Their
+// H0[15:0] is the axis form: 0, every axis's v_i sent; or the compact form
+// {1, 3'b0, major valid, major[2:0], sent[7:0]}: only the axes of `sent` have a v_i
+// word (in axis order), the major axis's v_i is U, every other axis's 0 (the parser
+// writes those into the segment queue itself, a clock each); anything else, or an
+// axis past N named, or the major axis also sent, is refused whole (SEG_FORM); PHASE commands (opcode 0x6: {kind[3:0], ticks[23:0]} in H0,
 // then u, r's two words if kind[0], S's and H's four if kind[3]) go to the chunk
 // queue as the phase timer's words {sel, data}, W0 last, committed whole.
 //
@@ -109,6 +113,7 @@ localparam [7:0] E_SEG_ADD2       = 8'd15;
 localparam [7:0] E_CONIC_AXES     = 8'd16;
 localparam [7:0] E_CONIC_CONT     = 8'd18;
 localparam [7:0] E_SEG_LENGTH     = 8'd21;
+localparam [7:0] E_SEG_FORM       = 8'd22;
 // The bits of a 16-bit CONFIG value that a TW-bit timing field holds.
 localparam [15:0] TMASK = (TW >= 16) ? 16'hFFFF : ((16'd1 << TW) - 16'd1);
 
@@ -147,7 +152,7 @@ reg          hdr_cont_q, hdr_cont_d;     // a CONIC that continues the last walk
 reg          lc_valid_q, lc_valid_d;
 reg [2:0]    lc_au_q, lc_au_d, lc_av_q, lc_av_d;
 reg          lc_cw_q, lc_cw_d;
-reg [15:0]   nchunks_q, nchunks_d;       // chunks still to read
+reg [15:0]   nchunks_q, nchunks_d;       // chunks still to read (PTIMER: H0[15:0], the axis form)
 reg [2:0]    v_idx_q, v_idx_d;
 reg [31:0]   interval_q, interval_d;
 reg [15:0]   count_q, count_d;
@@ -183,6 +188,21 @@ wire [15:0] c1_count  = cmd_data_i[15:0];
 wire [15:0] c1_add    = cmd_data_i[31:16];
 wire [15:0] c2_add2   = cmd_data_i[15:0];
 wire        keep      = !discard_q && !fault_i;   // the segment being read is still good
+// A PTIMER segment's axis form (H0[15:0], kept in nchunks_q): the compact form sends
+// v_i only for the axes in [7:0]; the major axis ([11] valid, [10:8]) has v_i = U.
+wire [7:0]  axes_all  = (N >= 8) ? 8'hFF : ((8'd1 << N) - 8'd1);
+wire [15:0] h0_form   = cmd_data_i[15:0];
+wire [7:0]  h0_sent   = h0_form[7:0];
+wire [7:0]  v_sent_m  = nchunks_q[7:0];    // the axes whose v_i is sent
+wire        form_ok   = h0_form == 16'd0 ||
+                        (h0_form[15] && h0_form[14:12] == 3'd0 && (h0_form[7:0] & ~axes_all) == 8'd0 &&
+                         (!h0_form[11] || ({29'd0, h0_form[10:8]} < N && !h0_sent[h0_form[10:8]])));
+wire        v_compact = PTIMER != 0 && nchunks_q[15];
+wire        v_sent    = !v_compact || v_sent_m[v_idx_q];
+wire        v_major   = v_compact && nchunks_q[11] && nchunks_q[10:8] == v_idx_q;
+// The v_i of this clock: the word taken, or (not sent) U or 0.
+wire [23:0] v_value   = v_sent ? cmd_data_i[23:0] : v_major ? seg_u_q : 24'd0;
+wire        v_step    = v_sent ? take : (!keep || !seg_full_i);
 // ---------------------------------------------------------------- the serial check
 // A serial adder's next carry.
 function carry;
@@ -300,9 +320,10 @@ always @* begin
             if (!fault_i) begin
                 if ({28'd0, hdr_k_d} > KMAX) begin
                     refuse = 1'b1;  refuse_code = E_SEG_K;  discard_d = 1'b1;
-                end else if ((PTIMER == 0 && (cmd_data_i[15:0] == 16'd0 || {16'd0, cmd_data_i[15:0]} > (32'd1 << CAW))) ||
-                             (PTIMER != 0 && cmd_data_i[15:0] != 16'd0)) begin
+                end else if (PTIMER == 0 && (cmd_data_i[15:0] == 16'd0 || {16'd0, cmd_data_i[15:0]} > (32'd1 << CAW))) begin
                     refuse = 1'b1;  refuse_code = E_SEG_CHUNKS;  discard_d = 1'b1;
+                end else if (PTIMER != 0 && !form_ok) begin
+                    refuse = 1'b1;  refuse_code = E_SEG_FORM;  discard_d = 1'b1;
                 end else if (hdr_conic_d && (hdr_au_d == hdr_av_d || {29'd0, hdr_au_d} >= N ||
                                              {29'd0, hdr_av_d} >= N)) begin
                     refuse = 1'b1;  refuse_code = E_CONIC_AXES;  discard_d = 1'b1;
@@ -370,14 +391,15 @@ always @* begin
         p_state_d = P_V;
     end
 
-    P_V: if (take) begin
+    // (An axis the compact form does not send: its v_i written without a word taken.)
+    P_V: if (v_step) begin
         seg_wr_o    = keep;
-        seg_wdata_o = {{(SWW-24){1'b0}}, cmd_data_i[23:0]};
+        seg_wdata_o = {{(SWW-24){1'b0}}, v_value};
         // A conic's plane axes step by the conic engine: their v must be 0.
         if (keep && CONIC != 0 && hdr_conic_q && (v_idx_q == hdr_au_q || v_idx_q == hdr_av_q) &&
-            cmd_data_i[23:0] != 24'd0) begin
+            v_value != 24'd0) begin
             refuse = 1'b1;  refuse_code = E_CONIC_AXES;  discard_d = 1'b1;
-        end else if (keep && cmd_data_i[23:0] > seg_u_q) begin
+        end else if (keep && v_value > seg_u_q) begin
             refuse = 1'b1;  refuse_code = E_SEG_V_GT_U;  discard_d = 1'b1;
         end
         v_idx_d = v_idx_q + 1'b1;
@@ -542,7 +564,7 @@ end
 
 // ---------------------------------------------------------------- outputs
 assign cmd_ready_o = (p_state_q == P_CMD) ||
-                     ((p_state_q == P_H1 || p_state_q == P_V || p_state_q == P_K || p_state_q == P_L) &&
+                     ((p_state_q == P_H1 || (p_state_q == P_V && v_sent) || p_state_q == P_K || p_state_q == P_L) &&
                       (!keep || !seg_full_i)) ||
                      (p_state_q == P_PH && (!keep || !ch_full_i)) ||
                      (PTIMER == 0 && p_state_q == P_C0) ||

@@ -61,6 +61,12 @@ generate
     end
 endgenerate
 
+// A fetch never reads the word written in the same clock: the addresses meet only
+// when wptr - rptr is 0 (then cptr = rptr: nothing to fetch) or 2^AW (full: no
+// write). So no_rw_check: yosys needs no bypass registers to give a collision's
+// old data, and ram_style puts even a shallow queue (the run queue: 2 words of
+// 78 bits in a phase-timer build) into block RAM rather than flip-flops.
+(* no_rw_check, ram_style = "block" *)
 reg [DW-1:0] mem [0:(1<<AW)-1];
 reg [DW-1:0] rdata_q;
 

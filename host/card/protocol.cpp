@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "card/protocol.h"
 
+#include <bit>
 #include <cmath>
 #include <iterator>
 #include <stdexcept>
@@ -9,11 +10,22 @@
 
 namespace cpstep::card {
 
-void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
+uint32_t axis_form(const WireSegment& s) {
+  uint32_t sent = 0, major = 0;
+  for (size_t a = 0; a < s.v.size() && a < 8; ++a) {
+    if (s.v[a] == 0) continue;
+    if (major == 0 && s.v[a] == s.u) major = 0x8u | uint32_t(a);
+    else sent |= 1u << a;
+  }
+  return 0x8000u | major << 8 | sent;
+}
+
+void encode_segment(const WireSegment& s, std::vector<uint32_t>& out, bool every_axis) {
   bool add2 = false;
   for (const WireChunk& c : s.chunks) add2 = add2 || c.add2 != 0;
   if (s.length) add2 = false;
-  const uint32_t nchunks = s.length ? 0 : uint32_t(s.chunks.size() & 0xFFFF);
+  const uint32_t form = s.length && !every_axis ? axis_form(s) : 0;
+  const uint32_t nchunks = s.length ? form : uint32_t(s.chunks.size() & 0xFFFF);
   if (s.conic)
     out.push_back(0x5u << 28 | uint32_t(s.end) << 27 | uint32_t(s.conic->cw) << 26 | (s.conic->axis_u & 7u) << 23 |
                   uint32_t(add2) << 22 | (s.conic->axis_v & 7u) << 19 | uint32_t(s.conic->cont) << 18 |
@@ -24,7 +36,8 @@ void encode_segment(const WireSegment& s, std::vector<uint32_t>& out) {
   uint32_t dirs = 0;
   for (size_t a = 0; a < s.dir_positive.size(); ++a) dirs |= uint32_t(s.dir_positive[a]) << a;
   out.push_back(dirs << 24 | (s.u & 0xFFFFFF));
-  for (uint32_t v : s.v) out.push_back(v & 0xFFFFFF);
+  for (size_t a = 0; a < s.v.size(); ++a)
+    if (form == 0 || (a < 8 && (form >> a & 1))) out.push_back(s.v[a] & 0xFFFFFF);
   if (s.conic)
     for (size_t i = s.conic->cont ? 5 : 0; i < 7; ++i)
       out.push_back(i == 1 ? s.conic->words[1] & 0xFFFF : s.conic->words[i]);
@@ -111,10 +124,16 @@ void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out) {
   out.push_back(0x4u << 28 | (reg & 0xFF));
 }
 
-size_t command_words(uint32_t first, unsigned axes) {
+size_t command_words(uint32_t first, unsigned axes, bool ptimer) {
   const uint32_t op = first >> 28;
+  if (ptimer && op == 0x6) return 2 + ((first >> 24 & 1) ? 2 : 0) + ((first >> 27 & 1) ? 4 : 0);
   if (op != 0x1 && op != 0x5) return 1;
   const size_t k_words = op != 0x5 ? 0 : (first >> 18 & 1) ? 2 : 7;   // a continuation: K5, K6
+  if (ptimer) {
+    // The axis form: every axis's v, or (H0[15]) those of the mask H0[7:0]; then L.
+    const size_t v_words = (first >> 15 & 1) ? size_t(std::popcount(first & 0xFFu)) : axes;
+    return 2 + v_words + k_words + 1;
+  }
   return 2 + axes + k_words + ((first >> 22 & 1) ? 3 : 2) * size_t(first & 0xFFFF);
 }
 
@@ -148,6 +167,8 @@ ErrorName error_name(uint32_t code) {
       {"WATCHDOG", "no frame from the host for the watchdog's timeout"},
       {"LIMIT", "a segment moved an axis toward its active limit switch"},
       {"SEG_LENGTH", "a segment's length per move is 0 (phase-timer builds)"},
+      {"SEG_FORM", "a segment's axis form H0[15:0] is neither 0 nor a compact form of axes the card has, "
+                   "or sends the major axis (phase-timer builds)"},
   };
   if (code < std::size(names)) return names[code];
   return {"UNKNOWN", "an error code this program does not know"};

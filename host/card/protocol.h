@@ -42,9 +42,10 @@ struct WireSegment {
   };
   std::optional<Conic> conic;
   // Set: a segment for a card that times moves by the phase timer (READ 0x23 [26];
-  // docs/PROTOCOL.md "Toward a compact wire"): no chunks (H0[15:0] = 0; `chunks` is
-  // not sent), and after its words its length per move, Q2.30 of the phases' path
-  // unit, not 0.
+  // docs/PROTOCOL.md "Toward a compact wire"): no chunks (`chunks` is not sent),
+  // H0[15:0] its axis form (axis_form: v words only for the axes that move but the
+  // first whose v = U), and after its words its length per move, Q2.30 of the
+  // phases' path unit, not 0.
   std::optional<uint32_t> length;
 };
 
@@ -139,9 +140,17 @@ enum class Register : uint32_t {
 };
 constexpr uint32_t kCardId = 0x43505331;  // "CPS1"
 
+// A phase-timer segment's compact axis form, H0[15:0] = {1, 000, major valid,
+// major[2:0], sent[7:0]}: the first axis whose v = U (not 0) is the major one, its v
+// not sent (the card takes it as U); the other axes that move are sent, in axis
+// order; an axis in neither has v = 0.
+uint32_t axis_form(const WireSegment& s);
+
 // Appends the words of each command to `out`. A segment's chunks are two words
-// each, or three (with add2, header bit 22) when some chunk has add2 != 0.
-void encode_segment(const WireSegment& s, std::vector<uint32_t>& out);
+// each, or three (with add2, header bit 22) when some chunk has add2 != 0. A
+// phase-timer segment (`length` set) in its compact axis form, or with every
+// axis's v (H0[15:0] = 0) if `every_axis`.
+void encode_segment(const WireSegment& s, std::vector<uint32_t>& out, bool every_axis = false);
 void encode_conic(const WireConic& s, std::vector<uint32_t>& out);
 void encode_config(unsigned axis, ConfigField field, uint32_t value, std::vector<uint32_t>& out);
 // The watchdog field's value for a timeout of `seconds` on a card clocked at
@@ -157,8 +166,9 @@ void encode_read(Register r, unsigned axis, std::vector<uint32_t>& out);
 
 // How many words the command whose first word is `first` has, on a card of
 // `axes` axes (a SEGMENT: 2 + axes + 2 or 3 words per chunk; a CONIC 7 more; others
-// one).
-size_t command_words(uint32_t first, unsigned axes);
+// one). On a phase-timer card (`ptimer`): a segment has no chunks but its L, and v
+// words as its axis form says; a PHASE 2 to 8 words.
+size_t command_words(uint32_t first, unsigned axes, bool ptimer = false);
 
 // Status word fields.
 struct Status {

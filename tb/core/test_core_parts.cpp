@@ -184,9 +184,44 @@ TEST(CorePartCmd, ConicSegmentsMatchTheModel) { cmd_traffic<CmdConicPort>(12, 30
 
 // The phase timer's build (PTIMER = 1, with CONIC): segments with no chunks and their
 // length per move last (a line's or a conic's; legal, or with one field broken:
-// U, a v, k, H0[15:0] not 0, L = 0), and PHASE commands of every kind (its words
-// as the timer's {sel, data} into the chunk queue, W0 last, committed whole).
-std::vector<uint32_t> pt_segment_words(Rng& rng, bool legal) {
+// U, a v, k, a bad axis form, L = 0), every axis's v sent or in the compact axis
+// form, and PHASE commands of every kind (its words as the timer's {sel, data} into
+// the chunk queue, W0 last, committed whole).
+
+// A long-form segment's words (H0[15:0] = 0, N = 3) in the compact axis form
+// (docs/CORE.md "Phase-timer builds"): some axis whose v = U (not 0) as the major one,
+// its v not sent; the others that move sent, and now and then one that does not.
+std::vector<uint32_t> pt_compact(Rng& rng, const std::vector<uint32_t>& w) {
+  const uint32_t u = w[1] & 0xFFFFFF;
+  uint32_t major = 0, sent = 0;
+  for (uint32_t a = 0; a < 3; ++a) {
+    const uint32_t v = w[2 + a] & 0xFFFFFF;
+    if (major == 0 && v == u && v != 0 && chance(rng, 80)) major = 8 | a;
+    else if (v != 0 || chance(rng, 25)) sent |= 1u << a;
+  }
+  std::vector<uint32_t> c{w[0] | 0x8000u | major << 8 | sent, w[1]};
+  for (uint32_t a = 0; a < 3; ++a)
+    if (sent >> a & 1) c.push_back(w[2 + a]);
+  c.insert(c.end(), w.begin() + 5, w.end());
+  return c;
+}
+
+// An axis form the card refuses (SEG_FORM): not 0 with [15] clear, [14:12] set, an
+// axis past N = 3 sent or major, or the major axis sent too.
+uint32_t pt_bad_form(Rng& rng) {
+  switch (pick(rng, 0, 4)) {
+    case 0: return pick(rng, 1, 0x7FFF);
+    case 1: return 0x8000u | pick(rng, 1, 7) << 12 | pick(rng, 0, 0xFFF);
+    case 2: return 0x8000u | pick(rng, 0, 15) << 8 | pick(rng, 8, 255);
+    case 3: return 0x8000u | (8 | pick(rng, 3, 7)) << 8 | pick(rng, 0, 7);
+    default: {
+      const uint32_t m = pick(rng, 0, 2);
+      return 0x8000u | (8 | m) << 8 | 1u << m | pick(rng, 0, 7);
+    }
+  }
+}
+
+std::vector<uint32_t> pt_segment_words(Rng& rng, bool legal, bool bad_form_ok = true) {
   const bool conic = chance(rng, 30);
   const uint32_t k = conic ? 0 : pick(rng, 0, 3), u = pick(rng, 1, 4095);
   const uint32_t au = pick(rng, 0, 2), av = (au + pick(rng, 1, 2)) % 3;
@@ -201,15 +236,15 @@ std::vector<uint32_t> pt_segment_words(Rng& rng, bool legal) {
     for (int i = 0; i < 7; ++i) w.push_back(uint32_t(rng()));
   w.push_back(chance(rng, 5) ? uint32_t(rng()) : pick(rng, 1u << 20, 1u << 31));   // L
   if (!legal) {
-    switch (pick(rng, 0, 4)) {
-      case 0: w[1] = (w[1] & 0xFF000000) | (chance(rng, 50) ? 0 : pick(rng, 4096, 0xFFFFFF)); break;
-      case 1: w[2 + (conic ? au : 0)] = conic ? pick(rng, 1, u) : u + 1; break;   // CONIC_AXES, SEG_V_GT_U
-      case 2: if (!conic) w[0] = (w[0] & ~(0xFu << 23)) | pick(rng, 4, 15) << 23; break;
-      case 3: w[0] |= pick(rng, 1, 0xFFFF); break;
+    switch (pick(rng, bad_form_ok ? 0 : 1, 4)) {
+      case 0: w[0] |= pt_bad_form(rng); return w;
+      case 1: w[1] = (w[1] & 0xFF000000) | (chance(rng, 50) ? 0 : pick(rng, 4096, 0xFFFFFF)); break;
+      case 2: w[2 + (conic ? au : 0)] = conic ? pick(rng, 1, u) : u + 1; break;   // CONIC_AXES, SEG_V_GT_U
+      case 3: if (!conic) w[0] = (w[0] & ~(0xFu << 23)) | pick(rng, 4, 15) << 23; break;
       default: w.back() = 0; break;
     }
   }
-  return w;
+  return chance(rng, 50) ? pt_compact(rng, w) : w;
 }
 
 std::vector<uint32_t> pt_phase_cmd(Rng& rng) {
@@ -264,10 +299,69 @@ TEST(CorePartCmd, PhaseTimerBuildMatchesTheModel) {
   EXPECT_GT(phases, 1000u);
   EXPECT_GT(phase_drops, 10u) << "phases read while a fault is latched are dropped whole";
   EXPECT_GT(phase_words, 3 * phases) << "phases of more than u and W0";
-  // Its refusals: 1..4 (4: a segment with chunks), 12..14, 16, 18, 21 (L = 0); no chunk checks.
-  for (uint32_t code : {1u, 2u, 3u, 4u, 12u, 13u, 14u, 16u, 21u})
+  // Its refusals: 1..3, 12..14, 16, 21 (L = 0), 22 (a bad axis form); no chunk checks.
+  for (uint32_t code : {1u, 2u, 3u, 12u, 13u, 14u, 16u, 21u, 22u})
     EXPECT_TRUE(codes.count(code)) << "refusal code " << code << " never raised";
-  for (uint32_t code : {5u, 6u, 7u, 15u}) EXPECT_FALSE(codes.count(code)) << "chunk refusal " << code;
+  for (uint32_t code : {4u, 5u, 6u, 7u, 15u}) EXPECT_FALSE(codes.count(code)) << "chunk refusal " << code;
+}
+
+// The compact axis form against every axis sent: the same segments (legal and broken,
+// lines and conics), each stream through its own parser
+// (RTL and model in lockstep), must write the same segment queue words and commit,
+// roll back and refuse alike; the compact stream's words are fewer.
+TEST(CorePartCmd, CompactAxisFormWritesWhatEveryAxisSentDoes) {
+  Rng rng(14);
+  std::vector<uint32_t> every, compact;
+  for (int n = 0; n < 3000; ++n) {
+    const std::vector<uint32_t> w = pt_segment_words(rng, chance(rng, 70), false);
+    const bool is_compact = (w[0] >> 15 & 1) != 0;
+    // Back to every axis sent if the generator made it compact, and the other way.
+    std::vector<uint32_t> long_form = w;
+    if (is_compact) {
+      long_form = {w[0] & ~0xFFFFu, w[1]};
+      size_t next = 2;
+      for (uint32_t a = 0; a < 3; ++a) {
+        const bool sent = w[0] >> a & 1, major = (w[0] >> 11 & 1) && (w[0] >> 8 & 7) == a;
+        long_form.push_back(sent ? w[next++] : major ? w[1] & 0xFFFFFF : 0);
+      }
+      long_form.insert(long_form.end(), w.begin() + next, w.end());
+    }
+    const std::vector<uint32_t> short_form = is_compact ? w : pt_compact(rng, w);
+    every.insert(every.end(), long_form.begin(), long_form.end());
+    compact.insert(compact.end(), short_form.begin(), short_form.end());
+  }
+  const auto run = [&](const std::vector<uint32_t>& words, uint64_t seed) {
+    Rng r(seed);
+    Lockstep<CmdPtimerPort> ls;
+    ls.reset();
+    model::CpCmdIn in;
+    std::vector<uint64_t> events;   // seg_wr data, then 1 << 40 commit, 2 << 40 rollback, 3 << 40 | code
+    size_t next = 0;
+    for (int idle = 0; idle < 20;) {
+      in.cmd_valid = next < words.size() && chance(r, 80);
+      in.cmd_data = next < words.size() ? words[next] : 0;
+      in.seg_full = chance(r, 10);
+      in.ch_full = chance(r, 10);
+      const model::CpCmdOut o = ls.step(in);
+      if (in.cmd_valid && o.cmd_ready) ++next;
+      if (o.seg_wr) events.push_back(o.seg_data);
+      if (o.seg_commit) events.push_back(uint64_t(1) << 40);
+      if (o.seg_rollback) events.push_back(uint64_t(2) << 40);
+      if (o.fault) events.push_back(uint64_t(3) << 40 | o.fault_code);
+      idle += next == words.size();
+    }
+    return events;
+  };
+  const std::vector<uint64_t> a = run(every, 1), b = run(compact, 2);
+  const auto count = [](const std::vector<uint64_t>& e, uint64_t x) { return std::count(e.begin(), e.end(), x); };
+  std::printf("every axis sent: %zu words; compact: %zu words; %td commits, %td rollbacks, %zu queue writes\n",
+              every.size(), compact.size(), count(a, uint64_t(1) << 40), count(a, uint64_t(2) << 40), a.size());
+  EXPECT_LT(compact.size(), every.size());
+  EXPECT_GT(count(a, uint64_t(1) << 40), 1000);
+  EXPECT_GT(count(a, uint64_t(2) << 40), 300);
+  for (uint32_t code : {1u, 2u, 3u, 16u, 21u}) EXPECT_GT(count(a, uint64_t(3) << 40 | code), 0) << "code " << code;
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "event " << i;
 }
 
 // ---------------------------------------------------------------- cp_build

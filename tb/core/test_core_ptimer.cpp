@@ -7,6 +7,8 @@
 // timer's half clocks, the segments without chunks. Every move fires at the clock
 // the fitter computed (twice its half clocks after the first), nothing is late, the
 // run ends with its last segment, and every axis ends where the job's steps put it.
+// The model skips the quiet clocks (sim::Skipping: the phase timer advancing with no
+// move due, CpPtimer::quiet_advs) and is compared with the RTL on every cycle.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -58,6 +60,8 @@ struct PtimerJob {
   std::array<int64_t, 4> end{};     // every axis's position at the end, steps
   uint64_t phases = 0, segments = 0, bytes = 0;
   uint64_t chunked_bytes = 0;       // the same segments with their chunks, as a chunk card takes them
+  uint64_t segment_bytes = 0;       // of `bytes`, the segments'
+  uint64_t every_axis_bytes = 0;    // ... with every axis's v sent (H0[15:0] = 0), not the compact form
 };
 
 PtimerJob plan_ptimer_job(const std::string& gcode) {
@@ -139,6 +143,9 @@ PtimerJob plan_ptimer_job(const std::string& gcode) {
     std::vector<uint32_t> cw;
     card::encode_segment(chunked, cw);
     out.chunked_bytes += 4 * cw.size();
+    std::vector<uint32_t> ew;
+    card::encode_segment(wire->segments[i], ew, true);
+    out.every_axis_bytes += 4 * ew.size();
     card::encode_segment(wire->segments[i], w);
     timed.push_back({2 * out.fire_clocks[first_move[i]] + 1, std::move(w)});
     ++out.segments;
@@ -146,6 +153,9 @@ PtimerJob plan_ptimer_job(const std::string& gcode) {
   std::stable_sort(timed.begin(), timed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   for (auto& [when, w] : timed) {
     out.bytes += 4 * w.size();
+    if ((w[0] >> 28) != 6) out.segment_bytes += 4 * w.size();
+    // The host's count of a command's words, a phase-timer card's: each item is one command.
+    EXPECT_EQ(card::command_words(w[0], 4, true), w.size()) << "command_words of " << std::hex << w[0];
     if (out.start_after == 0 && (w[0] >> 28) != 6) out.start_after = out.items.size() + 1;
     out.items.push_back(std::move(w));
   }
@@ -155,10 +165,11 @@ PtimerJob plan_ptimer_job(const std::string& gcode) {
 TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
   const PtimerJob job = plan_ptimer_job("tab.ngc");
   ASSERT_FALSE(job.items.empty());
-  Lockstep<CorePtimer> ls("core_ptimer_tab");
+  using Port = sim::Skipping<CorePtimer>;
+  Lockstep<Port> ls("core_ptimer_tab");
   std::vector<uint64_t> fires;
   uint32_t moves_seen = 0;
-  sim::CoreDriver<Lockstep<CorePtimer>> drv(ls, [&](uint64_t c, const model::CpCoreIn&, const model::CpCoreOut& o) {
+  sim::CoreDriver<Lockstep<Port>> drv(ls, [&](uint64_t c, const model::CpCoreIn&, const model::CpCoreOut& o) {
     // moves_done counts each move in the cycle after it fires.
     for (; moves_seen < o.moves_done; ++moves_seen) fires.push_back(c);
   });
@@ -175,9 +186,16 @@ TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
   drv.run_until_stopped(uint64_t(4 * job.fire_clocks.back()) + 100000);
   drv.idle(100);
   const model::CpCoreOut& last = drv.last();
-  std::printf("tab.ngc: %llu segments, %llu phases, %llu bytes of segments and phases (with chunks: %llu); %zu moves\n",
+  const uint64_t skipped = ls.model_stepper().skipped(), cycles = ls.model_stepper().cycle();
+  std::printf("tab.ngc: %llu segments, %llu phases, %llu bytes of segments (compact axis form) and phases "
+              "(every axis's v sent: %llu; segments with chunks: %llu); %zu moves; the model skipped %llu of "
+              "%llu clocks\n",
               (unsigned long long)job.segments, (unsigned long long)job.phases, (unsigned long long)job.bytes,
-              (unsigned long long)job.chunked_bytes, fires.size());
+              (unsigned long long)(job.bytes - job.segment_bytes + job.every_axis_bytes),
+              (unsigned long long)job.chunked_bytes, fires.size(), (unsigned long long)skipped,
+              (unsigned long long)cycles);
+  EXPECT_GT(skipped, cycles / 2) << "the model skipped too little to prove its skipping";
+  EXPECT_LT(job.segment_bytes, job.every_axis_bytes) << "the compact form is shorter";
   EXPECT_EQ(last.err_code, 0u);
   EXPECT_FALSE(last.running);
   EXPECT_EQ(last.stretch_count, 0u) << "no move late";

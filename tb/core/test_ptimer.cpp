@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <deque>
+#include <optional>
 #include <random>
 #include <utility>
 
@@ -67,6 +68,22 @@ using unit_random::Rng;
 using unit_random::pick;
 using unit_random::chance;
 
+// A random phase's words, W0 last. Kinds: carry (half the phases), else any
+// combination of the four bits; a few ticks mostly; steps of about 2^50..2^56 against
+// lengths of 2^48..2^56 (2^54..2^62 in r): moves a clock to a few thousand apart.
+std::vector<std::pair<uint32_t, uint32_t>> random_phase(Rng& rng, unsigned long_pct = 20) {
+  const uint32_t kind = chance(rng, 50) ? 0 : uint32_t(pick(rng, 1, 15));
+  const uint32_t ticks = chance(rng, 5)                  ? 0
+                         : chance(rng, 100 - long_pct) ? uint32_t(pick(rng, 1, 6))
+                                                         : uint32_t(pick(rng, 7, 300));
+  const int64_t u = chance(rng, 10) ? int64_t(int32_t(rng())) : int64_t(pick(rng, 0, 1u << 22)) - (1 << 21);
+  const int64_t s = chance(rng, 5) ? int64_t(rng()) : int64_t(pick(rng, 0, uint64_t{1} << 54));
+  const int64_t h = chance(rng, 5) ? int64_t(rng()) : int64_t(pick(rng, 0, uint64_t{1} << 38)) - (int64_t{1} << 37);
+  // r: a fraction of a move to go (r < 0), now and then anything.
+  const uint64_t r_top = chance(rng, 80) ? uint64_t(-int64_t(pick(rng, 0, uint64_t{1} << 59))) : rng();
+  return phase_words(kind, ticks, u, r_top, s, h);
+}
+
 TEST(Ptimer, RandomPhasesMatchTheModel) {
   Rng rng(core_seed(2611));
   Lockstep<PtimerPort> ls("ptimer");
@@ -81,16 +98,7 @@ TEST(Ptimer, RandomPhasesMatchTheModel) {
     in.clear = pick(rng, 0, 199999) == 0;
     in.adv = chance(rng, 92);
     if (words.empty() && chance(rng, 30)) {
-      // Kinds: carry (half the phases), else any combination of the four bits.
-      const uint32_t kind = chance(rng, 50) ? 0 : uint32_t(pick(rng, 1, 15));
-      const uint32_t ticks = chance(rng, 5) ? 0 : chance(rng, 80) ? uint32_t(pick(rng, 1, 6)) : uint32_t(pick(rng, 7, 300));
-      // Steps of about 2^50..2^56 against lengths of 2^48..2^56 (2^54..2^62 in r): moves a clock to a few thousand apart.
-      const int64_t u = chance(rng, 10) ? int64_t(int32_t(rng())) : int64_t(pick(rng, 0, 1u << 22)) - (1 << 21);
-      const int64_t s = chance(rng, 5) ? int64_t(rng()) : int64_t(pick(rng, 0, uint64_t{1} << 54));
-      const int64_t h = chance(rng, 5) ? int64_t(rng()) : int64_t(pick(rng, 0, uint64_t{1} << 38)) - (int64_t{1} << 37);
-      // r: a fraction of a move to go (r < 0), now and then anything.
-      const uint64_t r_top = chance(rng, 80) ? uint64_t(-int64_t(pick(rng, 0, uint64_t{1} << 59))) : rng();
-      auto w = phase_words(kind, ticks, u, r_top, s, h);
+      auto w = random_phase(rng);
       if (chance(rng, 20)) std::shuffle(w.begin(), w.end() - 1, rng);   // W0 stays last
       if (chance(rng, 3)) std::shuffle(w.begin(), w.end(), rng);        // W0 early: later words go elsewhere or nowhere
       for (auto& x : w) words.push_back(x);
@@ -135,6 +143,75 @@ TEST(Ptimer, RandomPhasesMatchTheModel) {
   EXPECT_GT(timed_fired, 50u);
   EXPECT_GT(owed_fires, 1000u);
   for (unsigned k = 0; k < 16; ++k) EXPECT_GT(loads[k], 10u) << "phases of kind " << k;
+}
+
+// Event skipping (CpPtimer::quiet_advs, skip_advs; the fast engine's PTIMER core):
+// a model ticked clock by clock under random phases (fires at once, lengths owed
+// now and then), and at random quiet points a copy that skips. Every clock the
+// ticked one takes in a skipped span must show what the first showed (nothing due,
+// no phase ending), and after the span both must hold the same r, step, H and
+// outputs. And the skips must not be timid: the advance after a whole quiet span
+// mostly brings the event that ended it (a move due, a phase's end).
+TEST(Ptimer, SkippedAdvancesLandWhereClockedOnesDo) {
+  Rng rng(core_seed(2612));
+  model::CpPtimer a;
+  model::CpPtimerIn in;
+  std::deque<std::pair<uint32_t, uint32_t>> words;
+  uint64_t spans = 0, span_clocks = 0, whole = 0, ended = 0, owed_spans = 0, timed_spans = 0;
+  bool unknown = false;
+  for (int c = 0; c < 1000000; ++c) {
+    if (words.empty() && chance(rng, 30))
+      for (auto& x : random_phase(rng, 60)) words.push_back(x);
+    a.in = {};
+    model::CpPtimerOut o = a.outputs();
+    if (chance(rng, 1)) unknown = !unknown;
+    a.in.len_valid = !unknown;
+    a.in.len = pick(rng, uint64_t{1} << 48, uint64_t{1} << 56);
+    a.in.adv = chance(rng, 92);
+    a.in.fire = o.due;
+    if (!words.empty() && o.ready && chance(rng, 85)) {
+      a.in.wr = true;
+      a.in.sel = words.front().first;
+      a.in.data = words.front().second;
+      words.pop_front();
+    }
+    const uint64_t limit = pick(rng, 1, 100000);
+    const std::optional<uint64_t> q = a.quiet_advs(a.in.len_valid, limit);
+    if (!a.in.wr && !o.due && q && *q > 0 && *q != model::CpPtimer::kForever && chance(rng, 20)) {
+      const uint64_t n = chance(rng, 50) ? *q : pick(rng, 1, *q);
+      model::CpPtimer b = a;
+      b.skip_advs(n);
+      a.in.adv = true;
+      for (uint64_t k = 0; k < n; ++k) {
+        a.tick();
+        ASSERT_EQ(a.outputs(), o) << "clock " << c << ": advance " << k + 1 << " of " << n << " quiet ones";
+      }
+      ASSERT_TRUE(a.r() == b.r() && a.step() == b.step() && a.h() == b.h()) << "clock " << c << ", " << n << " skipped";
+      ASSERT_EQ(a.outputs(), b.outputs());
+      ++spans;
+      span_clocks += n;
+      owed_spans += unknown;
+      timed_spans += (o.kind & 2) != 0;
+      if (n == *q && n < limit) {
+        // The advance after the whole span: is it an event (an output changes, or
+        // the phase ends and the next one loads)?
+        model::CpPtimer e = a;
+        e.tick();
+        ++whole;
+        ended += !(e.outputs() == o) || e.loads() != a.loads();
+      }
+      continue;
+    }
+    a.tick();
+  }
+  std::printf("%llu spans skipped, %llu clocks, %llu of them owed, %llu timed; %llu of %llu whole spans ended by "
+              "an event\n",
+              (unsigned long long)spans, (unsigned long long)span_clocks, (unsigned long long)owed_spans,
+              (unsigned long long)timed_spans, (unsigned long long)ended, (unsigned long long)whole);
+  EXPECT_GT(spans, 5000u);
+  EXPECT_GT(owed_spans, 50u);
+  EXPECT_GT(timed_spans, 100u);
+  EXPECT_GT(ended * 10, whole * 9) << "most quiet spans end where an event comes";
 }
 
 // The host's phases written to the timer (RTL and twin in lockstep) as its buffer
