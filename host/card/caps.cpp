@@ -20,6 +20,7 @@ CardCaps decode_caps(const std::array<uint32_t, kCapsRegisters.size()>& v) {
   c.protocol = v[4] >> 16 & 0xFF;
   c.inputs = (v[4] >> 24 & 1) != 0;
   c.feed = (v[4] >> 25 & 1) != 0;
+  c.ptimer = (v[4] >> 26 & 1) != 0;
   c.clock_hz = v[5];
   c.build_id = v[6];
   c.ciw = v[7] & 0xFF;
@@ -80,7 +81,7 @@ std::string describe(const CardCaps& c) {
                      c.command_buffer_words(), c.clock_hz, c.protocol) +
          (c.ciw ? fmt::format(", conic walker {} bits", c.ciw) : std::string()) +
          (c.inputs ? ", limit and probe inputs" : "") +
-         (c.feed ? ", feed hold and override" : "");
+         (c.feed ? ", feed hold and override" : "") + (c.ptimer ? ", moves timed by the phase timer" : "");
 }
 
 std::string unusable(const CardCaps& c, unsigned axes) {
@@ -91,6 +92,10 @@ std::string unusable(const CardCaps& c, unsigned axes) {
     return fmt::format("the card has {} axes; this host's segments carry {} (docs/CORE.md, SEGMENT)", c.n, axes);
   if (c.w < 2 || c.umax < c.w || c.tw < 1 || c.clock_hz == 0)
     return fmt::format("the card reports impossible capabilities ({})", describe(c));
+  if (c.ptimer)
+    return "the card times its moves by the phase timer (READ 0x23 [26], docs/CORE.md \"Phase-timer builds\"): "
+           "its segments carry no chunks, and this host plans chunks (a phase-timer card would refuse them "
+           "with SEG_FORM); drive it with a chunk build";
   return "";
 }
 

@@ -34,6 +34,8 @@ struct CardCaps {
   unsigned ciw = 0;                // 0x26: the conic walker's width; 0: no CONIC segments
   bool inputs = false;             // 0x23 [24]: limit and probe inputs (docs/CORE.md "Inputs")
   bool feed = false;               // 0x23 [25]: feed hold and override (docs/CORE.md "Feed hold and override")
+  bool ptimer = false;             // 0x23 [26]: moves timed by the phase timer, no chunks (docs/CORE.md
+                                   //   "Phase-timer builds"); this host does not plan for it yet
 
   [[nodiscard]] unsigned chunk_queue() const { return 1u << caw; }
   [[nodiscard]] unsigned segment_queue() const { return 1u << saw; }
@@ -61,7 +63,8 @@ std::string board_names();
 // One line: axes, W, UMAX, KMAX, queues, TW, clock.
 std::string describe(const CardCaps& caps);
 // Why the host cannot drive this card ("" when it can): not a cpstep card,
-// another protocol version, another number of axes than the host's segments carry.
+// another protocol version, another number of axes than the host's segments carry,
+// a phase-timer build (its segments carry no chunks; this host plans chunks).
 std::string unusable(const CardCaps& caps, unsigned axes);
 
 }  // namespace cpstep::card

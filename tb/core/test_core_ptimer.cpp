@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <numeric>
 #include <string>
@@ -203,6 +204,33 @@ TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
   for (size_t n = 0; n < fires.size(); ++n)
     ASSERT_EQ(int64_t(fires[n] - fires[0]), 2 * (job.fire_clocks[n] - job.fire_clocks[0])) << "move " << n;
   for (unsigned a = 0; a < 4; ++a) EXPECT_EQ(last.position[a], job.end[a]) << "axis " << a;
+}
+
+// The card says what it is (READ 0x23 [26], through the core's read port, RTL and
+// model in lockstep) and the host, which plans chunks, refuses to drive it.
+TEST(CorePtimer, TheHostSeesAPhaseTimerCardAndRefusesIt) {
+  Lockstep<CorePtimer> ls("core_ptimer_caps");
+  ls.reset();
+  std::array<uint32_t, card::kCapsRegisters.size()> values{};
+  for (size_t r = 0; r < values.size(); ++r) {
+    model::CpCoreIn in;
+    in.rd_addr = uint32_t(card::kCapsRegisters[r]);
+    values[r] = ls.step(in).rd_data;
+  }
+  const card::CardCaps caps = card::decode_caps(values);
+  EXPECT_TRUE(caps.ptimer);
+  EXPECT_EQ(caps.n, 4u);
+  const std::string why = card::unusable(caps, 4);
+  EXPECT_NE(why.find("phase timer"), std::string::npos) << why;
+  EXPECT_NE(card::describe(caps).find("phase timer"), std::string::npos);
+  // The same core's build without the phase timer: usable, and it says so.
+  model::CpCore chunked(model::core_params(builds::hx8k));
+  for (size_t r = 0; r < values.size(); ++r) {
+    chunked.in.rd_addr = uint32_t(card::kCapsRegisters[r]);
+    values[r] = chunked.outputs().rd_data;
+  }
+  EXPECT_FALSE(card::decode_caps(values).ptimer);
+  EXPECT_EQ(card::unusable(card::decode_caps(values), 4), "");
 }
 
 }  // namespace
