@@ -3,8 +3,8 @@
 // compact wire"): the HX8K's core with its moves timed by rtl/cp_ptimer.v from PHASE
 // commands, each segment carrying its length per move. RTL and model in lockstep
 // every cycle, fed a real job as the host would send it: tab.ngc planned for the
-// HX8K (arcs as chords), the feed plan's phases fitted by plan::PhaseFitter in the
-// timer's half clocks, the segments without chunks. Every move fires at the clock
+// HX8K (arcs as chords) by card::plan_phase_timer_job — the feed plan's phases fitted
+// by plan::PhaseFitter in the timer's half clocks, the segments without chunks. Every move fires at the clock
 // the fitter computed (twice its half clocks after the first), nothing is late, the
 // run ends with its last segment, and every axis ends where the job's steps put it.
 // The model skips the quiet clocks (sim::Skipping: the phase timer advancing with no
@@ -22,6 +22,7 @@
 #include "Vcp_core_ptimer.h"
 #include "card/caps.h"
 #include "card/job.h"
+#include "card/ptimer_job.h"
 #include "card/protocol.h"
 #include "common/lockstep.h"
 #include "cpstep/builds.h"
@@ -44,128 +45,31 @@ struct CorePtimer : sim::CorePortBase<Vcp_core_ptimer, 4> {
   }
 };
 
-// A phase's length in the timer's half clocks (2^6 of them a tick; a timed move's in clocks).
-int64_t phase_clocks(const plan::TimerPhase& ph) {
-  const int64_t t = ph.ticks == 0 ? 1 : int64_t(ph.ticks);
-  return ph.timed ? t : t << 6;
-}
-
-struct PtimerJob {
-  std::vector<uint32_t> preamble;
-  // The segments' and the phases' words in the order the card needs them (by the
-  // time each begins: a phase at its start, a segment at its first move); START
-  // goes after the first segment.
-  std::vector<std::vector<uint32_t>> items;
-  size_t start_after = 0;           // items before START
-  std::vector<int64_t> fire_clocks; // the fitter's, half clocks from the first phase's start
-  std::array<int64_t, 4> end{};     // every axis's position at the end, steps
-  uint64_t phases = 0, segments = 0, bytes = 0;
-  uint64_t chunked_bytes = 0;       // the same segments with their chunks, as a chunk card takes them
-  uint64_t segment_bytes = 0;       // of `bytes`, the segments'
-  uint64_t every_axis_bytes = 0;    // ... with every axis's v sent (H0[15:0] = 0), not the compact form
-};
-
-PtimerJob plan_ptimer_job(const std::string& gcode) {
-  PtimerJob out;
+// tab.ngc planned for the HX8K with its arcs as chords, for a phase-timer card
+// (card::plan_phase_timer_job); each command one of the card's (command_words, on a
+// phase-timer card, counts it whole).
+card::PhaseTimerJob plan_tab() {
   auto loaded = plan::load_machine(std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/seed002.toml");
   EXPECT_TRUE(loaded.ok());
   plan::Machine m = *loaded;
   m.planner.arcs = plan::ArcMode::chords;
   const builds::Build& b = builds::hx8k;
   EXPECT_TRUE(plan::bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw}).empty());
-  auto job = plan::load_gcode(std::string(CPSTEP_SOURCE_DIR) + "/examples/jobs/" + gcode);
+  const std::string file = std::string(CPSTEP_SOURCE_DIR) + "/examples/jobs/tab.ngc";
+  auto job = plan::load_gcode(file);
   EXPECT_TRUE(job.ok());
-
-  // The timer counts half clocks (rtl/cp_run.v, PTIMER): every time in them.
-  plan::PhaseFormat fmt{6, 60, true, false, 0.0125};
-  fmt.clock_hz = m.card.clock_hz / 2;
-  fmt.length_bits = 30;   // the segment word L: Q2.30 of the path unit
-  plan::PhaseFitter fitter(fmt, m.chunk_tolerance_cycles() / 2);
-  std::vector<uint32_t> lengths;   // per timed batch (a card segment): its L
-  std::vector<size_t> batch_moves;
   const card::CardLimits limits{b.umax, b.kmax, b.w, 1u << b.caw, 1u << b.saw};
-  plan::PlanOptions o;
-  o.chunk_limits = card::chunk_limits(limits);   // (the chunks are not sent; to_wire checks them)
-  o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at,
-                        std::span<const plan::PlanJerk> changes) {
-    std::vector<double> half(ideal.begin(), ideal.end());
-    for (double& t : half) t /= 2;
-    std::vector<plan::PlanJerk> ch(changes.begin(), changes.end());
-    for (plan::PlanJerk& c : ch) c.at /= 2;
-    const plan::i128 l = plan::move_length(lengths_mm.front(), fmt) >> 30;
-    EXPECT_TRUE(l > 0 && l < (plan::i128(1) << 32)) << "L fits its word";
-    for (double x : lengths_mm) EXPECT_EQ(plan::move_length(x, fmt) >> 30, l) << "a line's moves are one length";
-    lengths.push_back(uint32_t(l));
-    batch_moves.push_back(ideal.size());
-    EXPECT_TRUE(fitter.push(half, lengths_mm, rest_at < 0 ? rest_at : rest_at / 2, ch)) << fitter.error();
-  };
-  auto planned = plan::plan_job(*job, m, o);
-  EXPECT_TRUE(planned.ok());
-  EXPECT_TRUE(fitter.finish()) << fitter.error();
-  out.fire_clocks = fitter.fire_clocks();
-
-  auto wired = card::to_wire(*planned, gcode, limits);
-  EXPECT_TRUE(wired.ok()) << plan::join(wired.errors);
-  card::WireJob wire_job = *wired;
-  card::WireJob* wire = &wire_job;
-  // Each wire segment's length per move is its planned card segment's (a batch each).
-  std::vector<uint64_t> first_move;   // per wire segment: its first move's index
-  uint64_t moves = 0;
-  for (size_t i = 0; i < wire->segments.size(); ++i) {
-    card::WireSegment& s = wire->segments[i];
-    const size_t c = wire->source[i];
-    EXPECT_FALSE(planned->card[c].segment.pause) << "no pause segments in this job";
-    EXPECT_LT(c, lengths.size());
-    s.length = lengths[std::min(c, lengths.size() - 1)];
-    first_move.push_back(moves);
-    moves += uint64_t(s.u) << s.k;
-    for (size_t a = 0; a < 4 && a < s.v.size(); ++a)
-      out.end[a] += (s.dir_positive[a] ? 1 : -1) * int64_t(uint64_t(s.v[a]) << s.k);
-  }
-  EXPECT_EQ(moves, out.fire_clocks.size()) << "every move timed";
-  EXPECT_EQ(std::accumulate(batch_moves.begin(), batch_moves.end(), uint64_t(0)), moves);
-  wire->segments.back().end = true;
-
-  card::encode_preamble(m, 0, out.preamble);
-  // Phases and segments by the time each begins (a phase first at a tie).
-  std::vector<std::pair<int64_t, std::vector<uint32_t>>> timed;
-  int64_t t = 0;
-  for (const plan::TimerPhase& ph : fitter.phases()) {
-    std::vector<uint32_t> w;
-    card::encode_phase(card::wire_phase(ph), w);
-    timed.push_back({2 * t, std::move(w)});
-    t += phase_clocks(ph);
-    ++out.phases;
-  }
-  for (size_t i = 0; i < wire->segments.size(); ++i) {
-    std::vector<uint32_t> w;
-    card::WireSegment chunked = wire->segments[i];
-    chunked.length.reset();
-    std::vector<uint32_t> cw;
-    card::encode_segment(chunked, cw);
-    out.chunked_bytes += 4 * cw.size();
-    std::vector<uint32_t> ew;
-    card::encode_segment(wire->segments[i], ew, true);
-    out.every_axis_bytes += 4 * ew.size();
-    card::encode_segment(wire->segments[i], w);
-    timed.push_back({2 * out.fire_clocks[first_move[i]] + 1, std::move(w)});
-    ++out.segments;
-  }
-  std::stable_sort(timed.begin(), timed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (auto& [when, w] : timed) {
-    out.bytes += 4 * w.size();
-    if ((w[0] >> 28) != 6) out.segment_bytes += 4 * w.size();
-    // The host's count of a command's words, a phase-timer card's: each item is one command.
+  auto planned = card::plan_phase_timer_job(*job, m, limits, file);
+  EXPECT_TRUE(planned.ok()) << plan::join(planned.errors);
+  if (!planned.ok()) return {};
+  for (const auto& w : planned->commands)
     EXPECT_EQ(card::command_words(w[0], 4, true), w.size()) << "command_words of " << std::hex << w[0];
-    if (out.start_after == 0 && (w[0] >> 28) != 6) out.start_after = out.items.size() + 1;
-    out.items.push_back(std::move(w));
-  }
-  return out;
+  return *planned;
 }
 
 TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
-  const PtimerJob job = plan_ptimer_job("tab.ngc");
-  ASSERT_FALSE(job.items.empty());
+  const card::PhaseTimerJob job = plan_tab();
+  ASSERT_FALSE(job.commands.empty());
   using Port = sim::Skipping<CorePtimer>;
   Lockstep<Port> ls("core_ptimer_tab");
   std::vector<uint64_t> fires;
@@ -176,15 +80,15 @@ TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
   });
   drv.reset();
   drv.send(job.preamble);
-  for (size_t i = 0; i < job.items.size(); ++i) {
-    drv.send(job.items[i]);
+  for (size_t i = 0; i < job.commands.size(); ++i) {
+    drv.send(job.commands[i]);
     if (i + 1 == job.start_after) {
       std::vector<uint32_t> start;
       card::encode_control(true, false, false, start);
       drv.send(start);
     }
   }
-  drv.run_until_stopped(uint64_t(4 * job.fire_clocks.back()) + 100000);
+  drv.run_until_stopped(uint64_t(4 * job.fire_half_clocks.back()) + 100000);
   drv.idle(100);
   const model::CpCoreOut& last = drv.last();
   const uint64_t skipped = ls.model_stepper().skipped(), cycles = ls.model_stepper().cycle();
@@ -200,10 +104,35 @@ TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
   EXPECT_EQ(last.err_code, 0u);
   EXPECT_FALSE(last.running);
   EXPECT_EQ(last.stretch_count, 0u) << "no move late";
-  ASSERT_EQ(fires.size(), job.fire_clocks.size());
+  ASSERT_EQ(fires.size(), job.fire_half_clocks.size());
   for (size_t n = 0; n < fires.size(); ++n)
-    ASSERT_EQ(int64_t(fires[n] - fires[0]), 2 * (job.fire_clocks[n] - job.fire_clocks[0])) << "move " << n;
+    ASSERT_EQ(int64_t(fires[n] - fires[0]), 2 * (job.fire_half_clocks[n] - job.fire_half_clocks[0])) << "move " << n;
   for (unsigned a = 0; a < 4; ++a) EXPECT_EQ(last.position[a], job.end[a]) << "axis " << a;
+}
+
+// What a phase-timer card cannot time yet, the host refuses before anything is sent:
+// arcs planned as conics, pauses (a dwell longer than 2^32 - 1 clocks, which the
+// planner times as pause moves).
+TEST(CorePtimer, ThePhaseTimerJobRefusesWhatTheCardCannotTime) {
+  auto loaded = plan::load_machine(std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/seed002.toml");
+  ASSERT_TRUE(loaded.ok());
+  plan::Machine m = *loaded;
+  const builds::Build& b = builds::hx8k;
+  ASSERT_TRUE(plan::bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw}).empty());
+  const card::CardLimits limits{b.umax, b.kmax, b.w, 1u << b.caw, 1u << b.saw};
+  auto arcs = plan::parse_gcode("G21 G90 G17\nG1 X5 F600\nG2 X10 Y5 I0 J5\nM2\n", "arc.ngc");
+  ASSERT_TRUE(arcs.ok()) << plan::join(arcs.errors);
+  m.planner.arcs = plan::ArcMode::conic;
+  auto conic = card::plan_phase_timer_job(*arcs, m, limits, "arc.ngc");
+  ASSERT_FALSE(conic.ok());
+  EXPECT_NE(plan::join(conic.errors).find("chords"), std::string::npos) << plan::join(conic.errors);
+  m.planner.arcs = plan::ArcMode::chords;
+  EXPECT_TRUE(card::plan_phase_timer_job(*arcs, m, limits, "arc.ngc").ok()) << "the same arc as chords";
+  auto dwell = plan::parse_gcode("G21 G90\nG1 X5 F600\nG4 P200\nG1 X10\nM2\n", "dwell.ngc");
+  ASSERT_TRUE(dwell.ok()) << plan::join(dwell.errors);
+  auto paused = card::plan_phase_timer_job(*dwell, m, limits, "dwell.ngc");
+  ASSERT_FALSE(paused.ok());
+  EXPECT_NE(plan::join(paused.errors).find("pauses"), std::string::npos) << plan::join(paused.errors);
 }
 
 // The card says what it is (READ 0x23 [26], through the core's read port, RTL and

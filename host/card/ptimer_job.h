@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: MIT
+// A planned job for a phase-timer card (READ 0x23 [26]; docs/CORE.md "Phase-timer
+// builds", docs/PROTOCOL.md "Toward a compact wire"): the feed plan's phases of
+// constant jerk fitted in the timer's half clocks (plan::PhaseFitter), the card
+// segments without chunks, each with its length per move and in the compact axis
+// form, and every command in the order the card needs it — a phase by the time it
+// begins, a segment by its first move — START after the first segment.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "card/job.h"
+#include "plan/common.h"
+#include "plan/pipeline.h"
+
+namespace cpstep::card {
+
+struct PhaseTimerJob {
+  std::vector<uint32_t> preamble;               // encode_preamble: drivers, axes, inputs, feed
+  std::vector<std::vector<uint32_t>> commands;  // PHASE and SEGMENT commands, in the order to send
+  size_t start_after = 0;                       // commands before START
+  // Each move's due in the timer's half clocks from the first phase (the fitter's;
+  // at scale 1 the card fires move n 2·(fire_half_clocks[n] - fire_half_clocks[0])
+  // clocks after move 0).
+  std::vector<int64_t> fire_half_clocks;
+  std::array<int64_t, plan::kAxes> end{};       // each axis's steps at the end, from 0
+  size_t phases = 0, segments = 0;
+  uint64_t bytes = 0;                           // of `commands`
+  uint64_t segment_bytes = 0;                   // of which the segments'
+  uint64_t every_axis_bytes = 0;                // the segments with every axis's v sent
+  uint64_t chunked_bytes = 0;                   // the segments with their chunks, as a chunk card takes them
+};
+
+// Plans `job` on `machine` (bound to the card: its clock) for a phase-timer card of
+// `limits`. Arcs must be planned as chords (machine.planner.arcs; a phase-timer
+// card does not time a conic's moves yet) and the job must have no pauses (dwells,
+// M0): errors otherwise, as for a line too long for one length word. `file` names
+// the G-code in errors.
+plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const plan::Machine& machine,
+                                                 const CardLimits& limits, const std::string& file);
+
+}  // namespace cpstep::card
