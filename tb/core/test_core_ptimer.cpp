@@ -48,18 +48,25 @@ struct CorePtimer : sim::CorePortBase<Vcp_core_ptimer, 4> {
 // tab.ngc planned for the HX8K with its arcs as chords, for a phase-timer card
 // (card::plan_phase_timer_job); each command one of the card's (command_words, on a
 // phase-timer card, counts it whole).
-card::PhaseTimerJob plan_tab() {
+// seed002.toml bound to the HX8K's card, arcs as chords; and that card's limits.
+plan::Machine hx8k_machine() {
   auto loaded = plan::load_machine(std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/seed002.toml");
-  EXPECT_TRUE(loaded.ok());
+  EXPECT_TRUE(loaded.ok()) << plan::join(loaded.errors);
   plan::Machine m = *loaded;
   m.planner.arcs = plan::ArcMode::chords;
   const builds::Build& b = builds::hx8k;
   EXPECT_TRUE(plan::bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw}).empty());
+  return m;
+}
+const card::CardLimits kHx8kLimits{builds::hx8k.umax, builds::hx8k.kmax, builds::hx8k.w, 1u << builds::hx8k.caw,
+                                   1u << builds::hx8k.saw};
+
+card::PhaseTimerJob plan_tab() {
+  const plan::Machine m = hx8k_machine();
   const std::string file = std::string(CPSTEP_SOURCE_DIR) + "/examples/jobs/tab.ngc";
   auto job = plan::load_gcode(file);
   EXPECT_TRUE(job.ok());
-  const card::CardLimits limits{b.umax, b.kmax, b.w, 1u << b.caw, 1u << b.saw};
-  auto planned = card::plan_phase_timer_job(*job, m, limits, file);
+  auto planned = card::plan_phase_timer_job(*job, m, kHx8kLimits, file);
   EXPECT_TRUE(planned.ok()) << plan::join(planned.errors);
   if (!planned.ok()) return {};
   for (const auto& w : planned->commands)
@@ -67,15 +74,14 @@ card::PhaseTimerJob plan_tab() {
   return *planned;
 }
 
-TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
-  const card::PhaseTimerJob job = plan_tab();
-  ASSERT_FALSE(job.commands.empty());
-  using Port = sim::Skipping<CorePtimer>;
-  Lockstep<Port> ls("core_ptimer_tab");
+// Sends a planned job to a core stepper (the preamble, the commands in their order,
+// START after the first segment) and runs it to its end: the cycle of each move's
+// fire (moves_done counts each move in the cycle after it fires) and the last outputs.
+template <class Stepper>
+std::vector<uint64_t> run_job(Stepper& dut, const card::PhaseTimerJob& job, model::CpCoreOut& last) {
   std::vector<uint64_t> fires;
   uint32_t moves_seen = 0;
-  sim::CoreDriver<Lockstep<Port>> drv(ls, [&](uint64_t c, const model::CpCoreIn&, const model::CpCoreOut& o) {
-    // moves_done counts each move in the cycle after it fires.
+  sim::CoreDriver<Stepper> drv(dut, [&](uint64_t c, const model::CpCoreIn&, const model::CpCoreOut& o) {
     for (; moves_seen < o.moves_done; ++moves_seen) fires.push_back(c);
   });
   drv.reset();
@@ -90,7 +96,30 @@ TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
   }
   drv.run_until_stopped(uint64_t(4 * job.fire_half_clocks.back()) + 100000);
   drv.idle(100);
-  const model::CpCoreOut& last = drv.last();
+  last = drv.last();
+  return fires;
+}
+
+// The run's verdict: no error, stopped, nothing late, every move at twice the
+// fitter's half clocks from the first, every axis where the job's steps put it.
+void expect_fitters_clocks(const card::PhaseTimerJob& job, const std::vector<uint64_t>& fires,
+                           const model::CpCoreOut& last) {
+  EXPECT_EQ(last.err_code, 0u);
+  EXPECT_FALSE(last.running);
+  EXPECT_EQ(last.stretch_count, 0u) << "no move late";
+  ASSERT_EQ(fires.size(), job.fire_half_clocks.size());
+  for (size_t n = 0; n < fires.size(); ++n)
+    ASSERT_EQ(int64_t(fires[n] - fires[0]), 2 * (job.fire_half_clocks[n] - job.fire_half_clocks[0])) << "move " << n;
+  for (unsigned a = 0; a < 4; ++a) EXPECT_EQ(last.position[a], job.end[a]) << "axis " << a;
+}
+
+TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
+  const card::PhaseTimerJob job = plan_tab();
+  ASSERT_FALSE(job.commands.empty());
+  using Port = sim::Skipping<CorePtimer>;
+  Lockstep<Port> ls("core_ptimer_tab");
+  model::CpCoreOut last;
+  const std::vector<uint64_t> fires = run_job(ls, job, last);
   const uint64_t skipped = ls.model_stepper().skipped(), cycles = ls.model_stepper().cycle();
   std::printf("tab.ngc: %llu segments, %llu phases, %llu bytes of segments (compact axis form) and phases "
               "(every axis's v sent: %llu; segments with chunks: %llu); %zu moves; the model skipped %llu of "
@@ -101,25 +130,42 @@ TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
               (unsigned long long)cycles);
   EXPECT_GT(skipped, cycles / 2) << "the model skipped too little to prove its skipping";
   EXPECT_LT(job.segment_bytes, job.every_axis_bytes) << "the compact form is shorter";
-  EXPECT_EQ(last.err_code, 0u);
-  EXPECT_FALSE(last.running);
-  EXPECT_EQ(last.stretch_count, 0u) << "no move late";
-  ASSERT_EQ(fires.size(), job.fire_half_clocks.size());
-  for (size_t n = 0; n < fires.size(); ++n)
-    ASSERT_EQ(int64_t(fires[n] - fires[0]), 2 * (job.fire_half_clocks[n] - job.fire_half_clocks[0])) << "move " << n;
-  for (unsigned a = 0; a < 4; ++a) EXPECT_EQ(last.position[a], job.end[a]) << "axis " << a;
+  expect_fitters_clocks(job, fires, last);
+}
+
+// A dwell shorter than a pause (2^32 - 1 clocks) is no segment of its own: the phases
+// hold the timer still through it. On the model core (skipping; the RTL is too slow
+// for the dwell's 8 M clocks), every move fires at the fitter's clock, the second line's
+// first the dwell after the first line's last.
+TEST(CorePtimer, AShortDwellIsTimedByThePhases) {
+  const plan::Machine m = hx8k_machine();
+  const card::CardLimits& limits = kHx8kLimits;
+  const builds::Build& b = builds::hx8k;
+  auto gcode = plan::parse_gcode("G21 G90\nG1 X1 Y0.5 F1800\nG4 P0.2\nG1 X2\nM2\n", "dwell.ngc");
+  ASSERT_TRUE(gcode.ok()) << plan::join(gcode.errors);
+  auto job = card::plan_phase_timer_job(*gcode, m, limits, "dwell.ngc");
+  ASSERT_TRUE(job.ok()) << plan::join(job.errors);
+  sim::SkippingModelDut<sim::Skipping<CorePtimer>> dut;
+  model::CpCoreOut last;
+  const std::vector<uint64_t> fires = run_job(dut, *job, last);
+  // The longest gap between moves: the dwell (0.2 s at 40 MHz), and a little more.
+  uint64_t gap = 0;
+  for (size_t n = 1; n < fires.size(); ++n) gap = std::max(gap, fires[n] - fires[n - 1]);
+  std::printf("dwell.ngc: %zu moves, the longest gap %llu clocks; the model skipped %llu of %llu clocks\n",
+              fires.size(), (unsigned long long)gap, (unsigned long long)dut.skipped(),
+              (unsigned long long)dut.cycle());
+  EXPECT_GE(gap, uint64_t(0.2 * b.clock_hz));
+  EXPECT_LT(gap, uint64_t(0.3 * b.clock_hz));
+  EXPECT_GT(dut.skipped(), dut.cycle() * 9 / 10);
+  expect_fitters_clocks(*job, fires, last);
 }
 
 // What a phase-timer card cannot time yet, the host refuses before anything is sent:
 // arcs planned as conics, pauses (a dwell longer than 2^32 - 1 clocks, which the
 // planner times as pause moves).
 TEST(CorePtimer, ThePhaseTimerJobRefusesWhatTheCardCannotTime) {
-  auto loaded = plan::load_machine(std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/seed002.toml");
-  ASSERT_TRUE(loaded.ok());
-  plan::Machine m = *loaded;
-  const builds::Build& b = builds::hx8k;
-  ASSERT_TRUE(plan::bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw}).empty());
-  const card::CardLimits limits{b.umax, b.kmax, b.w, 1u << b.caw, 1u << b.saw};
+  plan::Machine m = hx8k_machine();
+  const card::CardLimits& limits = kHx8kLimits;
   auto arcs = plan::parse_gcode("G21 G90 G17\nG1 X5 F600\nG2 X10 Y5 I0 J5\nM2\n", "arc.ngc");
   ASSERT_TRUE(arcs.ok()) << plan::join(arcs.errors);
   m.planner.arcs = plan::ArcMode::conic;
