@@ -29,6 +29,7 @@
 
 #include "card/caps.h"
 #include "card/job.h"
+#include "card/ptimer_job.h"
 #include "card/protocol.h"
 #include "cpstep/builds.h"
 #include "plan/phases.h"
@@ -274,6 +275,31 @@ int wire(const char* mpath, const char* jpath, const char* board, double fit_arc
     return 0;
 }
 
+// The wire a phase-timer card takes today (card::plan_phase_timer_job: arcs as chords,
+// the segments in the compact axis form, the phases' words), measured, not projected:
+// the setup words (CONFIG and the rest before the first command), then the segments'
+// and the phases' bytes, against the same segments with every axis sent and with
+// chunks. A job the card cannot time yet (pause moves) says why.
+int ptimer(const char* mpath, const char* jpath, const char* board) {
+    namespace card = cpstep::card;
+    const auto caps = card::board_caps(board);
+    if (!caps) { fmt::print(stderr, "no board {}\n", board); return 1; }
+    auto m = cpstep::run::load_card_machine(mpath, *caps);
+    if (!m.ok()) { fmt::print(stderr, "{}\n", join(m.errors)); return 1; }
+    m.value->planner.arcs = ArcMode::chords;
+    auto job = cpstep::run::read_card_gcode(jpath, *m);
+    if (!job.ok()) { fmt::print(stderr, "{}\n", join(job.errors)); return 1; }
+    auto pj = card::plan_phase_timer_job(*job, *m, card::limits(*caps), jpath);
+    if (!pj.ok()) { fmt::print("{} {}: {}\n", jpath, board, join(pj.errors)); return 0; }
+    fmt::print("{} {}: {} moves; setup {} + segments {} ({}, {:.1f} bytes each; every axis sent {}, with chunks {}) "
+               "+ phases {} ({}) = {} bytes\n",
+               jpath, board, pj->fire_half_clocks.size(), 4 * pj->preamble.size() + 4, pj->segment_bytes,
+               pj->segments, double(pj->segment_bytes) / double(std::max<std::size_t>(1, pj->segments)),
+               pj->every_axis_bytes, pj->chunked_bytes, pj->bytes - pj->segment_bytes, pj->phases,
+               4 * pj->preamble.size() + 4 + pj->bytes);
+    return 0;
+}
+
 int split() {
     // Exhaustive: 2 axes, every T <= 300 and 0 <= D <= T, W in {4, 16, 64}.
     for (std::uint32_t W : {4u, 16u, 64u}) {
@@ -485,9 +511,10 @@ int main(int argc, char** argv) {
                       argc >= 8 ? std::atof(argv[7]) : 0.0, reload, plan_jerk, rule);
     }
     if (cmd == "wire" && argc >= 5) return wire(argv[2], argv[3], argv[4], argc >= 6 ? std::atof(argv[5]) : 0.0);
+    if (cmd == "ptimer" && argc == 5) return ptimer(argv[2], argv[3], argv[4]);
     if (cmd == "bounds" && argc == 4) return bounds(argv[2], argv[3]);
     if (cmd == "fingerprint" && argc == 4) return fingerprint(argv[2], argv[3]);
     if (cmd == "speed" && argc >= 4) return speed(argv[2], argv[3], argc > 4 ? std::atoi(argv[4]) : 5);
-    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps] | fingerprint MACHINE JOB | phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy] [rule]] | wire MACHINE JOB BOARD [FIT_ARCS_MM]\n");
+    fmt::print(stderr, "usage: plan_figures chunks MACHINE JOB | split | bounds MACHINE JOB | speed MACHINE JOB [reps] | fingerprint MACHINE JOB | phases MACHINE JOB BOARD S F [UNIT [noreload] [greedy] [rule]] | wire MACHINE JOB BOARD [FIT_ARCS_MM] | ptimer MACHINE JOB BOARD\n");
     return 2;
 }
