@@ -19,9 +19,10 @@
 // {1, 3'b0, major valid, major[2:0], sent[7:0]}: only the axes of `sent` have a v_i
 // word (in axis order), the major axis's v_i is U, every other axis's 0 (the parser
 // writes those into the segment queue itself, a clock each); anything else, or an
-// axis past N named, or the major axis also sent, is refused whole (SEG_FORM); PHASE commands (opcode 0x6: {kind[3:0], ticks[23:0]} in H0,
-// then u, r's two words if kind[0], S's and H's four if kind[3]) go to the chunk
-// queue as the phase timer's words {sel, data}, W0 last, committed whole.
+// axis past N named, or the major axis also sent, is refused whole (SEG_FORM).
+// PHASE commands (opcode 0x6: {kind[3:0], ticks[23:0]} in H0, then u, r's two
+// words if kind[0], S's and H's four if kind[3]) go to the chunk queue as the phase
+// timer's words {sel, data}, W0 last, committed whole.
 //
 // Part of cp_core (docs/CORE.md "Structure"); model twin model/cp_cmd.*, bench
 // tb/core/test_core_parts.cpp.
