@@ -7,6 +7,8 @@
 #   CPSTEP_BOARDS                 those of kind "board"
 #   CPSTEP_DEFAULT_BOARD
 #   CPSTEP_BUILD_<name>_<FIELD>   KIND DESCRIPTION TOP DEVICE PACKAGE SYNTH_OPTS CLOCK_HZ BUILD_ID
+#                                 PINS (the board: rtl/boards/<pins>/, constraints/<pins>.pcf;
+#                                 the key "pins", else the build's name)
 #   CPSTEP_BUILD_<name>_<PARAM>   every parameter of CPSTEP_BUILD_PARAM_NAMES
 #   CPSTEP_BUILD_<name>_PARAMS    NAME=VALUE for every parameter, CLK_HZ and BUILD_ID included:
 #                                 what cp_card / cp_core / the board tops are built with
@@ -20,7 +22,7 @@ cmake_minimum_required(VERSION 3.25)
 
 set(CPSTEP_BUILDS_JSON "${CMAKE_CURRENT_LIST_DIR}/../rtl/builds.json")
 # The parameters every build names, in the order the build id hashes them.
-set(CPSTEP_BUILD_PARAM_NAMES N W UMAX KMAX CAW SAW TW CBUF_AW STEP_POL_RESET DIR_POL_RESET CONIC INPUTS FEED)
+set(CPSTEP_BUILD_PARAM_NAMES N W UMAX KMAX CAW SAW TW CBUF_AW STEP_POL_RESET DIR_POL_RESET CONIC INPUTS FEED PTIMER)
 
 function(cpstep_builds_fail msg)
   message(FATAL_ERROR "rtl/builds.json: ${msg}")
@@ -74,6 +76,14 @@ macro(cpstep_read_builds)
     if(CPSTEP_BUILD_${_cb_name}_KIND STREQUAL "board")
       list(APPEND CPSTEP_BOARDS ${_cb_name})
     endif()
+    # The board whose top and pins the build uses (several builds may share one).
+    string(JSON _cb_v ERROR_VARIABLE _cb_err GET "${_cb_json}" builds ${_cb_i} pins)
+    if(_cb_err)
+      set(_cb_v "${_cb_name}")
+    elseif(NOT _cb_v MATCHES "^[a-z][a-z0-9_]*$")
+      cpstep_builds_fail("build '${_cb_name}': pins '${_cb_v}' is not [a-z][a-z0-9_]*")
+    endif()
+    set(CPSTEP_BUILD_${_cb_name}_PINS "${_cb_v}")
     # Parameters: all of them, integers, in a fixed order; the build id hashes them.
     set(_cb_params "")
     set(_cb_canon "${_cb_name}")
@@ -92,10 +102,10 @@ macro(cpstep_read_builds)
       else()
         list(APPEND _cb_params "${_cb_p}=${_cb_v}")
       endif()
-      # CONIC, INPUTS and FEED (added later) join the line only when set, so that the ids of
-      # the builds without them, and of the cards already flashed with them, stay what
-      # they were.
-      if(NOT ((_cb_p STREQUAL "CONIC" OR _cb_p STREQUAL "INPUTS" OR _cb_p STREQUAL "FEED") AND _cb_v EQUAL 0))
+      # CONIC, INPUTS, FEED and PTIMER (added later) join the line only when set, so that
+      # the ids of the builds without them, and of the cards already flashed with them,
+      # stay what they were.
+      if(NOT (_cb_p MATCHES "^(CONIC|INPUTS|FEED|PTIMER)$" AND _cb_v EQUAL 0))
         string(APPEND _cb_canon " ${_cb_p}=${_cb_v}")
       endif()
     endforeach()
@@ -169,6 +179,7 @@ struct Build {
   unsigned conic = 0;          // CONIC segments (docs/CORE.md), the walker of 40 bits
   unsigned inputs = 0;         // limit switches and the probe (docs/CORE.md \"Inputs\")
   unsigned feed = 0;           // feed hold and override (docs/CORE.md \"Feed hold and override\")
+  unsigned ptimer = 0;         // moves timed by PHASE commands (docs/CORE.md \"Phase-timer builds\")
 };
 
 ${defs}inline constexpr const Build* kAll[] = {${all}};
@@ -215,7 +226,7 @@ if(CMAKE_SCRIPT_MODE_FILE AND CMAKE_SCRIPT_MODE_FILE STREQUAL CMAKE_CURRENT_LIST
     set(b ${QUERY})
     list(JOIN CPSTEP_BUILD_${b}_PARAMS " " params)
     execute_process(COMMAND ${CMAKE_COMMAND} -E echo
-      "kind='${CPSTEP_BUILD_${b}_KIND}' top='${CPSTEP_BUILD_${b}_TOP}' device='${CPSTEP_BUILD_${b}_DEVICE}' package='${CPSTEP_BUILD_${b}_PACKAGE}' synth_opts='${CPSTEP_BUILD_${b}_SYNTH_OPTS}' clock_hz='${CPSTEP_BUILD_${b}_CLOCK_HZ}' build_id='${CPSTEP_BUILD_${b}_BUILD_ID_HEX}' params=\"${params}\"")
+      "kind='${CPSTEP_BUILD_${b}_KIND}' top='${CPSTEP_BUILD_${b}_TOP}' pins='${CPSTEP_BUILD_${b}_PINS}' device='${CPSTEP_BUILD_${b}_DEVICE}' package='${CPSTEP_BUILD_${b}_PACKAGE}' synth_opts='${CPSTEP_BUILD_${b}_SYNTH_OPTS}' clock_hz='${CPSTEP_BUILD_${b}_CLOCK_HZ}' build_id='${CPSTEP_BUILD_${b}_BUILD_ID_HEX}' params=\"${params}\"")
   else()
     message(FATAL_ERROR "cmake/builds.cmake: no build '${QUERY}' in rtl/builds.json (builds: ${CPSTEP_BUILDS})")
   endif()

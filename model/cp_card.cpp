@@ -5,7 +5,7 @@
 
 namespace cpstep::model {
 
-CpCard::CpCard(Params p) : p_(p), spi_({p.core.n, p.core.cbuf_aw, p.core.conic}), core_(p.core) {
+CpCard::CpCard(Params p) : p_(p), spi_({p.core.n, p.core.cbuf_aw, p.core.conic, p.core.ptimer}), core_(p.core) {
   if (p_.core.pw != 32) throw std::invalid_argument("cp_card: the card's positions are 32 bits (PW = 32)");
 }
 

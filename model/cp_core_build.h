@@ -26,6 +26,7 @@ constexpr CpCoreParams core_params(const builds::Build& b) {
   p.conic = b.conic != 0;  // the walker at the RTL's default width, CIW = 40
   p.inputs = b.inputs != 0;
   p.feed = b.feed != 0;
+  p.ptimer = b.ptimer != 0;
   return p;
 }
 

@@ -34,7 +34,7 @@ cp_i128 CpPtimer::threshold() const {
 
 CpPtimerOut CpPtimer::outputs() const {
   Out o;
-  o.due = r_.tdue || (!r_.timed && !r_.owe && r_.r >= 0);
+  o.due = r_.tdue || (!r_.owe && r_.r >= 0);  // (also in a timed phase: rtl/cp_ptimer.v)
   o.active = r_.active;
   o.ready = !r_.nvalid;
   o.starved = r_.starved;
@@ -49,7 +49,7 @@ void CpPtimer::tick() {
   }
   const Regs o = r_;
   Regs n = r_;
-  const bool due = o.tdue || (!o.timed && !o.owe && o.r >= 0);
+  const bool due = o.tdue || (!o.owe && o.r >= 0);
   // The next phase's buffer: written while free, W0 last.
   if (in.wr && !o.nvalid) {
     switch (in.sel & 7) {
@@ -133,7 +133,7 @@ void CpPtimer::tick() {
 
 std::optional<uint64_t> CpPtimer::quiet_advs(bool len_valid, uint64_t limit) const {
   const Regs& q = r_;
-  if (q.tdue || (!q.timed && !q.owe && q.r >= 0)) return std::nullopt;   // due now
+  if (q.tdue || (!q.owe && q.r >= 0)) return std::nullopt;   // due now
   if (q.owe && len_valid) return std::nullopt;                          // taken off now
   if (!q.active) {
     if (q.nvalid) return std::nullopt;                                  // loads now

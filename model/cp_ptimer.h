@@ -19,7 +19,8 @@
 //   from its second tick on), or starts from rest (p, S, H = 0), and/or loads S
 //   and H, and/or r, from the buffer (in that order); a timed phase is one move,
 //   due `ticks` clocks after the phase's start, with p, S and H frozen until then
-//   and p = 0 after (r = 0 until the timed move fires and takes off the next's).
+//   and p = 0 after (r = 0 until the timed move fires and takes off the next's);
+//   a move that came due in the last clock before it is due in it too.
 //
 // The next phase is written word by word into a buffer (sel 1: u; 2, 3: r's top
 // 64 bits, low word first; 4, 5: S; 6, 7: H) and committed by W0 (sel 0) while

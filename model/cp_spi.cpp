@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "model/cp_spi.h"
 
+#include <bit>
 #include <stdexcept>
 
 namespace cpstep::model {
@@ -183,11 +184,27 @@ void CpSpi::tick() {
                   d.bad_cmd = true;
                   break;
                 }
-                // A CONIC also carries K0..K6 (K5, K6 with H0[18], a continuation).
-                d.hdr_left = ((rx_word >> 28) == 0x5 ? ((rx_word >> 18 & 1) ? 3 + p_.n : 8 + p_.n) : 1 + p_.n) & 31;
-                d.chunks_left = rx_word & 0xFFFF;
+                if (p_.ptimer) {
+                  // H1, the axis form's v words (every axis's, or those of the mask
+                  // H0[7:0] with H0[15]), a CONIC's K words, L; no chunks.
+                  const uint32_t v = (rx_word >> 15 & 1) ? uint32_t(std::popcount(rx_word & 0xFFu)) : p_.n;
+                  const uint32_t k = (rx_word >> 28) != 0x5 ? 0 : (rx_word >> 18 & 1) ? 2 : 7;
+                  d.hdr_left = (2 + v + k) & 31;
+                  d.chunks_left = 0;
+                } else {
+                  // A CONIC also carries K0..K6 (K5, K6 with H0[18], a continuation).
+                  d.hdr_left = ((rx_word >> 28) == 0x5 ? ((rx_word >> 18 & 1) ? 3 + p_.n : 8 + p_.n) : 1 + p_.n) & 31;
+                  d.chunks_left = rx_word & 0xFFFF;
+                }
                 d.seg_add2 = (rx_word >> 22 & 1) != 0;
                 d.cw = 0;
+                break;
+              case 0x6:
+                // PHASE: u, r's two words with H0[24], S and H's four with H0[27].
+                if (p_.ptimer)
+                  d.hdr_left = 1 + ((rx_word >> 24 & 1) ? 2 : 0) + ((rx_word >> 27 & 1) ? 4 : 0);
+                else
+                  d.bad_cmd = true;
                 break;
               case 0x2:
               case 0x3:

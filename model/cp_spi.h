@@ -17,6 +17,9 @@ struct CpSpiParams {
   unsigned n = 4;        // axes: the reply carries n positions, a SEGMENT 2 + n + ... words
   unsigned cbuf_aw = 9;  // command buffer address width: it holds 2^cbuf_aw words
   bool conic = false;    // CONIC commands (opcode 5) framed whole; else refused (BAD_COMMAND)
+  // Moves timed by the phase timer (rtl/cp_spi.v's PTIMER): segments carry their axis
+  // form's v words and L, no chunks; PHASE (opcode 6) framed whole; else refused.
+  bool ptimer = false;
 };
 
 struct CpSpiIn {

@@ -102,7 +102,7 @@ wire        frame_ok;   // a whole frame with a good CRC: the watchdog's kick
 // the same registers through the core's read port instead.
 wire unused_core = &{1'b0, rsp_data, status, stretch_cnt, moves_done, segs_done};
 
-cp_spi #(.N(N), .CBUF_AW(CBUF_AW), .CONIC(CONIC)) u_spi (
+cp_spi #(.N(N), .CBUF_AW(CBUF_AW), .CONIC(CONIC), .PTIMER(PTIMER)) u_spi (
     .clk(clk), .rst(rst),
     .spi_sck_i(spi_sck_i), .spi_cs_n_i(spi_cs_n_i), .spi_mosi_i(spi_mosi_i),
     .spi_miso_o(spi_miso_o), .spi_miso_oe_o(spi_miso_oe_o),

@@ -26,7 +26,9 @@
 // from the buffer, in that order; a timed phase is one move, due `ticks` clocks
 // after the phase's start, p, S and H frozen until then and p = 0 after (r = 0
 // until the timed move fires and takes off the next one's length; the last move
-// of a stop, which no phase times within 1 us).
+// of a stop, which no phase times within 1 us). A move that came due in the last
+// clock of the phase before it (r's sign clear in the timed phase's first) is due
+// there too: r is frozen, so nothing else is.
 //
 // The next phase is written word by word into a buffer (sel 1: u; 2, 3: r's top
 // 64 bits, low word first; 4, 5: S; 6, 7: H) and committed by W0 (sel 0) while
@@ -85,7 +87,11 @@ reg           up_q, hp_q, tp_q;   // u's, H's and 3u's bit before (for 2u, 2H, 6
 reg           hs_q;           // the tick's H's sign (its bits past HW)
 
 wire [RW-1:0] thresh = {{(RW-LW-S){1'b0}}, len_i, {S{1'b0}}};
-wire          due = tdue_q || (!timed_q && !owe_q && !r_q[RW-1]);
+// Due: the timed move at its phase's end, or r's sign clear (not while owed) — also
+// in a timed phase, whose r is frozen: it is clear there only when the move before
+// the timed one came due in the jerk phase's last clock (the host's arithmetic fires
+// it there, plan::simulate_phases), and it fires at once.
+wire          due = tdue_q || (!owe_q && !r_q[RW-1]);
 assign due_o     = due;
 assign active_o  = active_q;
 assign ready_o   = !nvalid_q;

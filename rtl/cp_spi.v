@@ -26,7 +26,13 @@ module cp_spi #(
     // 1: CONIC commands (opcode 5, docs/CORE.md "CONIC") are framed as whole commands
     // of 2 + N + 7 + chunk words (2 + N + 2 + chunk words with H0[18], a continuation); 0: opcode 5 is refused (BAD_COMMAND), as the core
     // would refuse it.
-    parameter integer CONIC = 0
+    parameter integer CONIC = 0,
+    // 1: the core's moves are timed by the phase timer (docs/CORE.md "Phase-timer
+    // builds"): a SEGMENT or CONIC carries no chunks but its axis form's v words (every
+    // axis's, or with H0[15] those of the mask H0[7:0]), a CONIC's K words and one L
+    // word; a PHASE (opcode 6) is 2, 4, 6 or 8 words (H0[24] adds r, H0[27] S and H).
+    // 0: opcode 6 is refused (BAD_COMMAND), as the core would refuse it.
+    parameter integer PTIMER = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -82,6 +88,9 @@ generate
     if (CONIC != 0 && CONIC != 1) begin : g_check_conic
         cp_spi_parameter_CONIC_must_be_0_or_1 u_bad ();
     end
+    if (PTIMER != 0 && PTIMER != 1) begin : g_check_ptimer
+        cp_spi_parameter_PTIMER_must_be_0_or_1 u_bad ();
+    end
 endgenerate
 
 // ---------------------------------------------------------------- constants
@@ -113,6 +122,15 @@ localparam [TXW-1:0] TX_ZERO = 5'd8 + N[TXW-1:0];
 
 localparam [4:0] SEG_HDR_WORDS = 5'd1 + N[4:0];   // H1 and the N v words after H0
 localparam [4:0] CON_HDR_WORDS = 5'd8 + N[4:0];   // and a CONIC's seven K words
+
+// The set bits of an axis mask.
+function [3:0] ones8(input [7:0] m);
+    integer i;
+    begin
+        ones8 = 4'd0;
+        for (i = 0; i < 8; i = i + 1) ones8 = ones8 + {3'd0, m[i]};
+    end
+endfunction
 
 // CRC-16/CCITT-FALSE, one bit: polynomial 0x1021, MSB first.
 function [15:0] crc_bit(input [15:0] crc, input b);
@@ -201,6 +219,8 @@ reg [7:0]     last_addr_q;              // the register the last READ named
 assign rx_word = {sr_q[30:0], bit_in};
 wire [15:0] crc_tx_next = crc_bit(crc_tx_q, sr_q[31]);
 wire        in_cmd = (hdr_left_q != 5'd0) || (chunks_left_q != 16'd0);
+// PTIMER: a segment's v words after H1, by its axis form H0[15:0].
+wire [4:0]  pt_v_words = rx_word[15] ? {1'b0, ones8(rx_word[7:0])} : N[4:0];
 wire        word_end = shift && (bit_q == 5'd31);
 
 // The reply words, each loaded onto MISO when its first bit goes out: word 0 at
@@ -287,21 +307,39 @@ always @* begin
                 // come, a CONIC also K0..K6 before its chunks.
                 case (rx_word[31:28])
                 4'h1: begin
-                    hdr_left_d = SEG_HDR_WORDS;
-                    chunks_left_d = rx_word[15:0];
+                    if (PTIMER != 0) begin
+                        // H1, the form's v words, L; no chunks.
+                        hdr_left_d = 5'd2 + pt_v_words;
+                        chunks_left_d = 16'd0;
+                    end else begin
+                        hdr_left_d = SEG_HDR_WORDS;
+                        chunks_left_d = rx_word[15:0];
+                    end
                     seg_add2_d = rx_word[22];
                     cw_d = 2'd0;
                 end
                 4'h5: begin
                     if (CONIC != 0) begin
                         // H0[18]: a continuation carries K5, K6 only.
-                        hdr_left_d = rx_word[18] ? CON_HDR_WORDS - 5'd5 : CON_HDR_WORDS;
-                        chunks_left_d = rx_word[15:0];
+                        if (PTIMER != 0) begin
+                            hdr_left_d = 5'd2 + pt_v_words + (rx_word[18] ? 5'd2 : 5'd7);
+                            chunks_left_d = 16'd0;
+                        end else begin
+                            hdr_left_d = rx_word[18] ? CON_HDR_WORDS - 5'd5 : CON_HDR_WORDS;
+                            chunks_left_d = rx_word[15:0];
+                        end
                         seg_add2_d = rx_word[22];
                         cw_d = 2'd0;
                     end else begin
                         bad_cmd_d = 1'b1;
                     end
+                end
+                4'h6: begin
+                    // PHASE: u, r's two words with H0[24], S and H's four with H0[27].
+                    if (PTIMER != 0)
+                        hdr_left_d = 5'd1 + (rx_word[24] ? 5'd2 : 5'd0) + (rx_word[27] ? 5'd4 : 5'd0);
+                    else
+                        bad_cmd_d = 1'b1;
                 end
                 4'h2, 4'h3, 4'h4: ;
                 default: bad_cmd_d = 1'b1;
@@ -415,6 +453,18 @@ wire [17:0] f_nchunks = {2'd0, f_word[15:0]};
 wire [17:0] f_seg_len = N + (f_word[22] ? 18'd3 * f_nchunks : 18'd2 * f_nchunks) + 18'd1;
 wire [17:0] f_con_len = f_seg_len + (f_word[18] ? 18'd2 : 18'd7);
 wire        f_conic   = CONIC != 0;
+// PTIMER (docs/CORE.md "Phase-timer builds"): no chunks; the axis form's v words, L.
+wire [17:0] f_pt_v    = !f_word[15] ? N[17:0] : {17'd0, f_word[0]} + {17'd0, f_word[1]} + {17'd0, f_word[2]} +
+                        {17'd0, f_word[3]} + {17'd0, f_word[4]} + {17'd0, f_word[5]} +
+                        {17'd0, f_word[6]} + {17'd0, f_word[7]};
+wire [17:0] f_pt_seg  = f_pt_v + 18'd2;
+wire [17:0] f_pt_con  = f_pt_seg + (f_word[18] ? 18'd2 : 18'd7);
+wire [17:0] f_phase   = 18'd1 + (f_word[24] ? 18'd2 : 18'd0) + (f_word[27] ? 18'd4 : 18'd0);
+wire        f_ptimer  = PTIMER != 0;
+// The most header words a command has left (PTIMER: H1, at most 8 v words, a mask's,
+// a CONIC's seven K words and L).
+localparam [4:0] HDR_MAX = (PTIMER != 0) ? ((CONIC != 0) ? 5'd17 : 5'd10)
+                                         : ((CONIC != 0) ? CON_HDR_WORDS : SEG_HDR_WORDS);
 
 // The result of the frame ending now: the first failing check.
 reg [2:0] f_result;
@@ -447,8 +497,9 @@ always @(posedge clk) begin
         if (f_cmdword && !f_urgent) begin
             if (f_wr_ok) f_nwr <= f_nwr + 1'b1;
             if (f_cl != 18'd0)                f_cl <= f_cl - 1'b1;
-            else if (f_word[31:28] == 4'h1)   f_cl <= f_seg_len;
-            else if (f_word[31:28] == 4'h5 && f_conic) f_cl <= f_con_len;
+            else if (f_word[31:28] == 4'h1)   f_cl <= f_ptimer ? f_pt_seg : f_seg_len;
+            else if (f_word[31:28] == 4'h5 && f_conic) f_cl <= f_ptimer ? f_pt_con : f_con_len;
+            else if (f_word[31:28] == 4'h6 && f_ptimer) f_cl <= f_phase;
             else if (f_word[31:28] < 4'h2 || f_word[31:28] > 4'h4) f_bc <= 1'b1;
         end
     end
@@ -507,7 +558,8 @@ always @* if (f_past_valid) begin
         assert(((sr_q ^ f_sr) & f_mask) == 32'd0);
         assert(bad_cmd_q == f_bc);
         assert(f_rtl_cl == f_cl);
-        assert(cw_q < f_cpc[1:0] && hdr_left_q <= (f_conic ? CON_HDR_WORDS : SEG_HDR_WORDS));
+        assert(cw_q < f_cpc[1:0] && hdr_left_q <= HDR_MAX);
+        if (f_ptimer) assert(chunks_left_q == 16'd0);
         if (hdr_left_q != 5'd0 || chunks_left_q == 16'd0) assert(cw_q == 2'd0);
         if (!f_hdr_ok) begin
             assert(ph_q == PH_HDR && f_cl == 18'd0 && !f_bc && f_nwr == 17'd0 && !urg_q);

@@ -45,6 +45,7 @@ CardCaps caps_of(const builds::Build& b) {
   c.ciw = b.conic ? 40 : 0;  // the walker at the RTL's default width (cp_core's CIW)
   c.inputs = b.inputs != 0;
   c.feed = b.feed != 0;
+  c.ptimer = b.ptimer != 0;
   return c;
 }
 
@@ -92,10 +93,6 @@ std::string unusable(const CardCaps& c, unsigned axes) {
     return fmt::format("the card has {} axes; this host's segments carry {} (docs/CORE.md, SEGMENT)", c.n, axes);
   if (c.w < 2 || c.umax < c.w || c.tw < 1 || c.clock_hz == 0)
     return fmt::format("the card reports impossible capabilities ({})", describe(c));
-  if (c.ptimer)
-    return "the card times its moves by the phase timer (READ 0x23 [26], docs/CORE.md \"Phase-timer builds\"): "
-           "its segments carry no chunks, and this host plans chunks (a phase-timer card would refuse them "
-           "with SEG_FORM); drive it with a chunk build";
   return "";
 }
 

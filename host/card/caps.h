@@ -64,7 +64,7 @@ std::string board_names();
 std::string describe(const CardCaps& caps);
 // Why the host cannot drive this card ("" when it can): not a cpstep card,
 // another protocol version, another number of axes than the host's segments carry,
-// a phase-timer build (its segments carry no chunks; this host plans chunks).
+// impossible capabilities.
 std::string unusable(const CardCaps& caps, unsigned axes);
 
 }  // namespace cpstep::card

@@ -26,9 +26,9 @@ bool damage(uint8_t code) {
 // A refusal the client repairs by sending the same frame again.
 bool resendable(uint8_t code) { return damage(code) || code == uint8_t(FrameResult::no_room); }
 
-uint16_t count_reads(std::span<const uint32_t> words, unsigned axes) {
+uint16_t count_reads(std::span<const uint32_t> words, unsigned axes, bool ptimer) {
   uint16_t n = 0;
-  for (size_t i = 0; i < words.size(); i += command_words(words[i], axes))
+  for (size_t i = 0; i < words.size(); i += command_words(words[i], axes, ptimer))
     if (words[i] >> 28 == kOpRead) ++n;
   return n;
 }
@@ -58,7 +58,7 @@ void CardClient::send_frame(std::vector<uint32_t> frame_words, size_t caller_wor
       encode_frame(FrameType::commands, seq, frame_words, reply_bytes(o_.axes));
   ++stats_.command_frames;
   Pending p;
-  p.reads = count_reads(frame_words, o_.axes);
+  p.reads = count_reads(frame_words, o_.axes, o_.ptimer);
   p.caller_words = caller_words;
   p.seq = seq;
   const size_t n = frame_words.size();
@@ -302,7 +302,7 @@ bool CardClient::settle(const KeepWaiting& keep) {
 
 size_t CardClient::send(std::span<const uint32_t> words, const KeepWaiting& keep) {
   // Whole commands only (throws std::invalid_argument naming the word).
-  split_commands(words, o_.axes, SIZE_MAX);
+  split_commands(words, o_.axes, SIZE_MAX, o_.ptimer);
   const size_t marker = marker_words();
   size_t pos = 0;
   for (;;) {
@@ -315,7 +315,7 @@ size_t CardClient::send(std::span<const uint32_t> words, const KeepWaiting& keep
       poll();
       continue;
     }
-    const size_t first_len = command_words(words[pos], o_.axes);
+    const size_t first_len = command_words(words[pos], o_.axes, o_.ptimer);
     if (o_.max_frame_words && first_len + marker > o_.max_frame_words)
       throw std::invalid_argument("a command of " + std::to_string(first_len) + " words (and " +
                                   std::to_string(marker) + " marker) does not fit frames of at most " +
@@ -329,7 +329,7 @@ size_t CardClient::send(std::span<const uint32_t> words, const KeepWaiting& keep
     if (o_.max_frame_words) limit = std::min(limit, o_.max_frame_words);
     size_t take = 0;
     while (pos + take < words.size()) {
-      const size_t len = command_words(words[pos + take], o_.axes);
+      const size_t len = command_words(words[pos + take], o_.axes, o_.ptimer);
       if (take + len + marker > limit) break;
       take += len;
     }

@@ -44,6 +44,7 @@ class CardError : public std::runtime_error {
 
 struct ClientOptions {
   unsigned axes = 4;              // the card's N (the reply has 7 + N words)
+  bool ptimer = false;            // a phase-timer card (READ 0x23 [26]): its commands' lengths (command_words)
   size_t max_frame_words = 0;     // at most this many words per frame (marker included); 0: no limit of
                                   // the host's (the card's free words always limit)
   double poll_interval_s = 1e-3;  // between POLLs while waiting for room, a lost result or the end

@@ -69,11 +69,12 @@ std::vector<uint8_t> encode_poll(uint8_t seq, unsigned axes) {
   return encode_frame(FrameType::poll, seq, {}, reply_bytes(axes));
 }
 
-std::vector<WordRange> split_commands(std::span<const uint32_t> words, unsigned axes, size_t max_words) {
+std::vector<WordRange> split_commands(std::span<const uint32_t> words, unsigned axes, size_t max_words,
+                                      bool ptimer) {
   std::vector<WordRange> frames;
   WordRange cur;
   for (size_t c = 0; c < words.size();) {
-    const size_t len = command_words(words[c], axes);
+    const size_t len = command_words(words[c], axes, ptimer);
     if (len > max_words)
       throw std::invalid_argument("the command at word " + std::to_string(c) + " (" + hex(words[c], 8) +
                                   ") has " + std::to_string(len) + " words, more than a frame's " +

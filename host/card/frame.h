@@ -66,10 +66,11 @@ struct WordRange {
 };
 // Cuts a command stream into frames of whole commands, each at most `max_words`
 // words, as few as possible in order (each frame takes as many whole commands as
-// fit). Command lengths are command_words() on a card of `axes` axes. Throws
-// std::invalid_argument naming the word when a command is longer than
-// `max_words` or the stream ends inside a command.
-std::vector<WordRange> split_commands(std::span<const uint32_t> words, unsigned axes, size_t max_words);
+// fit). Command lengths are command_words() on a card of `axes` axes (a
+// phase-timer card's with `ptimer`). Throws std::invalid_argument naming the word
+// when a command is longer than `max_words` or the stream ends inside a command.
+std::vector<WordRange> split_commands(std::span<const uint32_t> words, unsigned axes, size_t max_words,
+                                      bool ptimer = false);
 
 // The result of a frame (reply word 0, [15:8]).
 enum class FrameResult : uint8_t {

@@ -63,6 +63,7 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
     if (!fitter.push(half, lengths_mm, rest_at < 0 ? rest_at : rest_at / 2, ch)) hook_error = fitter.error();
   };
   auto planned = plan::plan_job(job, machine, o);
+  r.warnings = planned.warnings;
   if (!planned.ok()) {
     r.errors = planned.errors;
     return r;
@@ -105,6 +106,7 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
     encode_phase(wire_phase(ph), w);
     timed.push_back({2 * t, std::move(w)});
     t += phase_half_clocks(ph);
+    out.phase_end_half_clocks.push_back(t);
     ++out.phases;
   }
   for (size_t i = 0; i < wire.segments.size(); ++i) {
@@ -126,6 +128,8 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
     if (out.start_after == 0 && (w[0] >> 28) != 6) out.start_after = out.commands.size() + 1;
     out.commands.push_back(std::move(w));
   }
+  out.planned = std::move(*planned.value);
+  out.wire = std::move(wire);
   return r;
 }
 

@@ -19,6 +19,11 @@
 
 namespace cpstep::card {
 
+// The clocks from the cycle a phase-timer card takes START to the fire of a move
+// due at half clock 0 of its first phase (docs/CORE.md "Phase-timer builds"): move n
+// fires 2 * fire_half_clocks[n] + kPhaseTimerStartCycles clocks after START, at scale 1.
+inline constexpr int64_t kPhaseTimerStartCycles = 1;
+
 struct PhaseTimerJob {
   std::vector<uint32_t> preamble;               // encode_preamble: drivers, axes, inputs, feed
   std::vector<std::vector<uint32_t>> commands;  // PHASE and SEGMENT commands, in the order to send
@@ -33,6 +38,13 @@ struct PhaseTimerJob {
   uint64_t segment_bytes = 0;                   // of which the segments'
   uint64_t every_axis_bytes = 0;                // the segments with every axis's v sent
   uint64_t chunked_bytes = 0;                   // the segments with their chunks, as a chunk card takes them
+  // The plan the commands were made from (its chunks unsent: to_wire checks them) and
+  // its wire segments, each with its length per move (WireSegment::length).
+  plan::PlannedJob planned;
+  WireJob wire;
+  // The phases' ends in half clocks from the first phase's start, one per PHASE command
+  // in `commands`' order (phases are sent in time order).
+  std::vector<int64_t> phase_end_half_clocks;
 };
 
 // Plans `job` on `machine` (bound to the card: its clock) for a phase-timer card of

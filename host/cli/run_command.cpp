@@ -102,8 +102,10 @@ void print_plan_summary(const run::CardJob& j) {
     fmt::print("\n");
   }
   fmt::print("moves      {}\n", j.moves());
-  fmt::print("chunks     {}, {:.2f} moves per chunk\n", chunks,
-             chunks ? double(j.moves()) / double(chunks) : 0.0);
+  if (j.caps.ptimer)
+    fmt::print("phases     {} PHASE commands timing the moves on the card's phase timer (no chunks)\n", j.phases);
+  else
+    fmt::print("chunks     {}, {:.2f} moves per chunk\n", chunks, chunks ? double(j.moves()) / double(chunks) : 0.0);
 }
 
 std::string axis_positions(const run::CardJob& j, const plan::PerAxis<int64_t>& steps) {
@@ -224,9 +226,9 @@ int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r,
       fmt::print("timing     not compared with the plan: the feed override or hold scaled the card's time\n");
     else
       fmt::print("timing     max {:.1f} cycles ({:.3f} us) from the planner's ideal times, at move {}; "
-                 "{} moves off their chunk times\n",
+                 "{} moves off their {} times\n",
                  m.max_timing_error_cycles, m.max_timing_error_cycles / j.clock_hz() * 1e6,
-                 m.max_timing_error_move, m.moves_off_chunk_time);
+                 m.max_timing_error_move, m.moves_off_chunk_time, j.caps.ptimer ? "phase-timer" : "chunk");
     for (const run::FeedApplied& f : r.feed)
       fmt::print("feed       {} taken at {:.6f} s from START{}\n", f.what, f.taken_s,
                  f.event.kind == run::FeedEvent::Kind::toggle ? " (SIGUSR1)"

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "card/protocol.h"
+#include "card/ptimer_job.h"
 #include "plan/steptime.h"
 
 namespace cpstep::run {
@@ -49,6 +50,7 @@ uint64_t CardJob::conic_segments() const {
 
 uint64_t CardJob::wire_chunks() const {
   if (streamed) return streamed_chunks;
+  if (caps.ptimer) return 0;  // its segments carry no chunks (the plan's are not sent)
   uint64_t n = 0;
   for (const card::WireSegment& s : wire.segments) n += s.chunks.size();
   return n;
@@ -126,7 +128,9 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
       r.errors.push_back({gcode.string(), {}, "cannot open file"});
       return r;
     }
-    if (!plan::file_has_probe_words(gcode)) planned = plan_streamed_file(gcode, *options, *machine, caps, start);
+    // (A phase-timer card's job is planned whole: card::plan_phase_timer_job.)
+    if (!plan::file_has_probe_words(gcode) && !caps.ptimer)
+      planned = plan_streamed_file(gcode, *options, *machine, caps, start);
   }
   if (!planned.ok() && planned.errors.empty()) {
     auto job = read_card_gcode(gcode, *machine, start);
@@ -136,8 +140,9 @@ plan::Result<CardJob> prepare_job(const std::filesystem::path& gcode, const std:
       return r;
     }
     // A streamed job keeps its blocks (it plans them again as it runs): moved, not copied.
-    planned = streamed ? plan_streamed(std::make_shared<const plan::Job>(std::move(*job.value)), *machine, caps, start)
-                       : plan_card_job(*job, *machine, caps, start);
+    planned = streamed && !caps.ptimer
+                  ? plan_streamed(std::make_shared<const plan::Job>(std::move(*job.value)), *machine, caps, start)
+                  : plan_card_job(*job, *machine, caps, start);
   }
   r.warnings.insert(r.warnings.end(), planned.warnings.begin(), planned.warnings.end());
   r.warnings = plan::summarize_repeats(std::move(r.warnings));  // e.g. "feed lowered" once, with a count
@@ -356,10 +361,83 @@ plan::Result<CardJob> plan_streamed_file(const std::filesystem::path& file, cons
   return plan_streamed_from(std::move(cj), caps, start, {}, std::make_shared<plan::GcodeFileMark>());
 }
 
+// The job's checkpoints, start and end, from its plan (not streamed).
+void set_checkpoints(CardJob& cj, const plan::PerAxis<int64_t>& start) {
+  plan::PerAxis<int64_t> pos = start;
+  if (!cj.planned.step_segments.empty()) pos = cj.planned.step_segments.front().start;
+  cj.start = pos;
+  uint64_t moves = 0;
+  for (const plan::PlannedCardSegment& c : cj.planned.card) {
+    // The pins show neither a pause's moves nor a checkpoint for it.
+    if (c.segment.pause) continue;
+    moves += c.segment.moves;
+    for (int a = 0; a < plan::kAxes; ++a) pos[a] += c.segment.delta[a];
+    cj.checkpoints.push_back({moves, pos, c.segment.loc});
+  }
+  cj.checkpoint_count = cj.checkpoints.size();
+  cj.final_position = cj.checkpoints.empty() ? cj.start : cj.checkpoints.back().position;
+  for (const plan::StepSegment& st : cj.planned.step_segments)
+    cj.has_nurbs = cj.has_nurbs || st.kind == plan::MotionKind::nurbs;
+}
+
+// A job for a phase-timer card (card::plan_phase_timer_job): arcs as chords (the card
+// does not time a conic's moves yet), planned whole. The card's timer starts with
+// START, and move n fires 2 * fire_half_clocks[n] + card::kPhaseTimerStartCycles
+// clocks after it (at scale 1).
+plan::Result<CardJob> plan_phase_timer_card_job(const plan::Job& job, const plan::Machine& machine,
+                                                const card::CardCaps& caps, const plan::PerAxis<int64_t>& start) {
+  plan::Result<CardJob> r;
+  plan::Machine m = machine;
+  if (m.planner.arcs != plan::ArcMode::chords) {
+    m.planner.arcs = plan::ArcMode::chords;
+    r.warnings.push_back({job.file, {},
+                          "arcs planned as chords: a phase-timer card does not time a conic's moves yet"});
+  }
+  auto pt = card::plan_phase_timer_job(job, m, card::limits(caps), job.file);
+  r.warnings.insert(r.warnings.end(), pt.warnings.begin(), pt.warnings.end());
+  if (!pt.ok()) {
+    r.errors = pt.errors;
+    return r;
+  }
+  card::PhaseTimerJob& p = *pt.value;
+  CardJob& cj = r.value.emplace();
+  cj.job_file = job.file;
+  cj.machine = m;
+  cj.caps = caps;
+  cj.planned = std::move(p.planned);
+  cj.wire = std::move(p.wire);
+  cj.phases = p.phases;
+  const auto cycle = [](int64_t half_clocks) { return 2 * half_clocks + card::kPhaseTimerStartCycles; };
+  cj.fire_cycles.reserve(p.fire_half_clocks.size());
+  for (int64_t h : p.fire_half_clocks) cj.fire_cycles.push_back(cycle(h));
+  cj.words = std::move(p.preamble);
+  size_t phase = 0;
+  uint64_t end_moves = 0;
+  for (size_t i = 0; i < p.commands.size(); ++i) {
+    const std::vector<uint32_t>& c = p.commands[i];
+    cj.words.insert(cj.words.end(), c.begin(), c.end());
+    if ((c[0] >> 28) == 0x6) {
+      cj.phase_end_word.push_back(cj.words.size());
+      cj.phase_end_cycle.push_back(uint64_t(cycle(p.phase_end_half_clocks.at(phase++))));
+    } else {
+      const card::WireSegment& s = cj.wire.segments.at(cj.segment_end_word.size());
+      end_moves += uint64_t(s.u) << s.k;
+      cj.segment_end_word.push_back(cj.words.size());
+      cj.segment_end_cycle.push_back(uint64_t(cj.fire_cycles.at(end_moves - 1)));
+      cj.segment_end_moves.push_back(end_moves);
+    }
+    if (i + 1 == p.start_after) card::encode_control(true, false, false, cj.words);
+  }
+  set_checkpoints(cj, start);
+  cj.warnings = r.warnings;
+  return r;
+}
+
 }  // namespace
 
 plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& machine, const card::CardCaps& caps,
                                     const plan::PerAxis<int64_t>& start, bool streamed) {
+  if (caps.ptimer) return plan_phase_timer_card_job(job, machine, caps, start);
   if (streamed) {
     auto r = plan_streamed(std::make_shared<const plan::Job>(job), machine, caps, start);
     if (r.value) r.value->warnings = r.warnings;
@@ -388,22 +466,7 @@ plan::Result<CardJob> plan_card_job(const plan::Job& job, const plan::Machine& m
   cj.wire = std::move(*wire.value);
   cj.words = card::encode_job(cj.machine, cj.wire);
   cj.plan_options = options;
-
-  plan::PerAxis<int64_t> pos = start;
-  if (!cj.planned.step_segments.empty()) pos = cj.planned.step_segments.front().start;
-  cj.start = pos;
-  uint64_t moves = 0;
-  for (const plan::PlannedCardSegment& c : cj.planned.card) {
-    // The pins show neither a pause's moves nor a checkpoint for it.
-    if (c.segment.pause) continue;
-    moves += c.segment.moves;
-    for (int a = 0; a < plan::kAxes; ++a) pos[a] += c.segment.delta[a];
-    cj.checkpoints.push_back({moves, pos, c.segment.loc});
-  }
-  cj.checkpoint_count = cj.checkpoints.size();
-  cj.final_position = cj.checkpoints.empty() ? cj.start : cj.checkpoints.back().position;
-  for (const plan::StepSegment& st : cj.planned.step_segments)
-    cj.has_nurbs = cj.has_nurbs || st.kind == plan::MotionKind::nurbs;
+  set_checkpoints(cj, start);
   // Where each SEGMENT command ends in the stream, and when it ends.
   uint64_t end_cycle = 0, end_moves = 0;
   size_t seg = 0;
@@ -562,9 +625,14 @@ bool MoveClock::fill() {
       chunk_move_ = 0;
       continue;
     }
-    // The chunk times of the block's moves (the card's sum, move by move).
+    // The chunk times of the block's moves (the card's sum, move by move; a
+    // phase-timer card's fire times).
     std::vector<int64_t> times;
-    for (uint64_t i = 0; i < n; ++i) {
+    for (uint64_t i = 0; i < n && !job_.fire_cycles.empty(); ++i) {
+      if (timed_ >= job_.fire_cycles.size()) break;  // a bad plan: times stop
+      times.push_back(job_.fire_cycles[timed_++]);
+    }
+    for (uint64_t i = 0; i < n && job_.fire_cycles.empty(); ++i) {
       while (chunk_index_ < chunks.size() && chunk_move_ >= chunks[chunk_index_].count) {
         ++chunk_index_;
         chunk_move_ = 0;
@@ -700,8 +768,16 @@ double buffered_seconds(const CardJob& job, uint64_t segments_done, uint64_t mov
   const uint64_t start = segments_done ? job.segment_end_cycle[segments_done - 1] : 0;
   const uint64_t before = segments_done ? job.segment_end_moves[segments_done - 1] : 0;
   const uint64_t into = moves_done > before ? moves_done - before : 0;
-  const uint64_t next = start + chunk_cycles_until(job.wire.segments[segments_done].chunks, into + 1);
-  const uint64_t end = job.segment_end_cycle[sent - 1];
+  uint64_t next = start + chunk_cycles_until(job.wire.segments[segments_done].chunks, into + 1);
+  uint64_t end = job.segment_end_cycle[sent - 1];
+  if (!job.fire_cycles.empty()) {
+    // A phase-timer card: its next move's fire time, and it holds motion only as far
+    // as the phases handed time it too.
+    next = uint64_t(job.fire_cycles[std::min<uint64_t>(moves_done, job.fire_cycles.size() - 1)]);
+    const auto& pe = job.phase_end_word;
+    const auto timed = size_t(std::upper_bound(pe.begin(), pe.end(), words_handed) - pe.begin());
+    end = std::min(end, timed ? job.phase_end_cycle[timed - 1] : 0);
+  }
   return end > next ? double(end - next) / job.clock_hz() : 0;
 }
 

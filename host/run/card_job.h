@@ -45,6 +45,16 @@ struct CardJob {
   std::vector<uint64_t> segment_end_word;
   std::vector<uint64_t> segment_end_cycle;
   std::vector<uint64_t> segment_end_moves;
+  // A phase-timer card's job (caps.ptimer; docs/CORE.md "Phase-timer builds",
+  // card::plan_phase_timer_job): `words` are the preamble, the PHASE and SEGMENT
+  // commands in the order the card needs them, START after the first segment; its
+  // segments carry no chunks. Each move's cycle from START as the card fires it (in
+  // place of the chunks' times: MoveClock::chunk()), and each PHASE command's end
+  // word and the cycle its phase ends (the motion the card holds needs both).
+  std::vector<int64_t> fire_cycles;
+  std::vector<uint64_t> phase_end_word;
+  std::vector<uint64_t> phase_end_cycle;
+  uint64_t phases = 0;
   std::vector<plan::Diagnostic> warnings;  // the planner's (also in the Result)
   // Streamed (prepare_job(..., streamed)): none of the plan is kept. `planned`
   // holds its statistics, `words`, `wire.segments` and `checkpoints` are empty;
@@ -87,7 +97,7 @@ struct CardJob {
   [[nodiscard]] uint64_t moves() const { return planned.stats.moves; }
   // Every move the card makes and counts: those that step and the pause moves.
   [[nodiscard]] uint64_t card_moves() const { return planned.stats.moves + planned.stats.pause_moves; }
-  [[nodiscard]] uint64_t wire_chunks() const;
+  [[nodiscard]] uint64_t wire_chunks() const;  // the chunks sent (none to a phase-timer card)
   card::CardCaps caps;                   // the card it is planned for
   [[nodiscard]] double clock_hz() const { return machine.card.clock_hz; }
 };
@@ -176,6 +186,7 @@ class MoveClock {
   size_t chunk_index_ = 0;   // the chunk of the card segment the next move is in
   uint32_t chunk_move_ = 0;  // that move's index in its chunk
   int64_t last_event_ = 0;   // the chunk time of the move before
+  uint64_t timed_ = 0;       // moves given their times so far (a phase-timer job's fire_cycles)
   std::vector<double> ideal_;
   std::vector<int64_t> chunk_;
   size_t at_ = 0;

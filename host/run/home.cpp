@@ -27,6 +27,9 @@ std::vector<int> homing_order(const plan::Machine& m) {
 std::string homing_refusal(const plan::Machine& m, const card::CardCaps& caps) {
   if (homing_order(m).empty()) return fmt::format("{}: no axis has an [axes.X.home] table", m.file);
   if (!caps.inputs) return "the card has no limit and probe inputs (READ 0x23 [24]): it cannot home";
+  if (caps.ptimer)
+    return "the card times its moves by the phase timer (READ 0x23 [26]): homing on such a card is not built yet "
+           "(its seek moves are planned in chunks)";
   return "";
 }
 

@@ -234,6 +234,11 @@ SimProbeRun probe_on_card(const std::string& gcode_file, const std::string& mach
     run.error = "the card has no limit and probe inputs (READ 0x23 [24]): it cannot probe";
     return run;
   }
+  if (s.caps.ptimer) {
+    run.error = "the card times its moves by the phase timer (READ 0x23 [26]): probing on such a card is not "
+                "built yet (its seek moves are planned in chunks)";
+    return run;
+  }
   std::ifstream in(gcode_file, std::ios::binary);
   if (!in) {
     run.error = fmt::format("{}: cannot open file", gcode_file);

@@ -24,6 +24,7 @@ CardRun run_on_link(const CardJob& job, card::Link& link, const LinkRunOptions& 
   run.pins_observed = false;
   card::ClientOptions co = feed_waits(keeping_alive(o.client, o.watchdog_s), !o.feed.empty(), bool(o.feed_toggle));
   co.axes = plan::kAxes;
+  co.ptimer = job.caps.ptimer;  // its commands' lengths
   co.buffer_words = job.caps.command_buffer_words();
   card::CardClient client(link, co);
   const double t0 = link.now_s();

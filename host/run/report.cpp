@@ -38,6 +38,7 @@ nlohmann::json make_report(const CardJob& job, const CardRun& run, const RunMeas
   r["chunks"] = job.wire_chunks();
   r["moves"] = job.moves();
   r["moves_per_chunk"] = job.wire_chunks() ? double(job.moves()) / double(job.wire_chunks()) : 0.0;
+  r["phases"] = job.phases;  // PHASE commands (a phase-timer card; 0 otherwise)
   r["command_words"] = job.word_count();
   r["planned_time_s"] = st.duration_s;
   if (run.pins_observed) {

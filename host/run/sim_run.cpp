@@ -326,6 +326,7 @@ CardRun run_on_card(const CardJob& job, const SimRunOptions& o) {
   const uint64_t before_job = words.prefix_words();  // the watchdog's CONFIG
   card::ClientOptions co = feed_waits(keeping_alive(o.client, o.watchdog_s), !o.feed.empty(), bool(o.feed_toggle));
   co.axes = plan::kAxes;
+  co.ptimer = job.caps.ptimer;  // its commands' lengths
   co.buffer_words = job.caps.command_buffer_words();
   card::CardClient client(wrapped ? *wrapped : sim_link, co);
   // A fresh card: its segment count starts at 0 with the job's first.

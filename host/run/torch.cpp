@@ -30,8 +30,12 @@ std::vector<TorchSwitch> torch_switches(const CardJob& job) {
   };
   for (size_t s = 0; s < segs.size(); ++s) {
     if (segs[s].torch != level) {
-      // The first move fires `interval` of its first chunk after the move before.
-      const uint64_t first = segs[s].chunks.empty() ? 1 : segs[s].chunks.front().interval;
+      // The first move fires `interval` of its first chunk after the move before (on a
+      // phase-timer card, at its fire time).
+      uint64_t first = segs[s].chunks.empty() ? 1 : segs[s].chunks.front().interval;
+      const uint64_t first_move = s == 0 ? 0 : s - 1 < job.segment_end_moves.size() ? job.segment_end_moves[s - 1] : 0;
+      if (first_move < job.fire_cycles.size())
+        first = std::max<uint64_t>(1, uint64_t(job.fire_cycles[first_move]) - end_before);
       out.push_back({s, segs[s].torch, end_before + 1, end_before + first, loc_of(s)});
       level = segs[s].torch;
     }

@@ -21,6 +21,7 @@ struct CardOf : CardPortBase<V, B.n> {
 
 using CardIcebreaker = CardOf<builds::icebreaker, Vcp_card_icebreaker>;
 using CardHx8k = CardOf<builds::hx8k, Vcp_card_hx8k>;
+using CardHx8kPt = CardOf<builds::hx8k_pt, Vcp_card_hx8k_pt>;  // the phase-timer card
 // The benches' default card: the RTL's default parameters (the HX8K's build).
 using CardDefault = CardHx8k;
 

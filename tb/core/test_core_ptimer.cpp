@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-#include "Vcp_core_ptimer.h"
+#include "Vcp_core_hx8k_pt.h"
 #include "card/caps.h"
 #include "card/job.h"
 #include "card/ptimer_job.h"
@@ -36,12 +36,10 @@
 namespace cpstep::tb {
 namespace {
 
-struct CorePtimer : sim::CorePortBase<Vcp_core_ptimer, 4> {
+struct CorePtimer : sim::CorePortBase<Vcp_core_hx8k_pt, 4> {
   using Model = model::CpCore;
   static Model::Params model_params() {
-    model::CpCoreParams p = model::core_params(builds::hx8k);
-    p.ptimer = true;
-    return p;
+    return model::core_params(builds::hx8k_pt);
   }
 };
 
@@ -54,12 +52,12 @@ plan::Machine hx8k_machine() {
   EXPECT_TRUE(loaded.ok()) << plan::join(loaded.errors);
   plan::Machine m = *loaded;
   m.planner.arcs = plan::ArcMode::chords;
-  const builds::Build& b = builds::hx8k;
+  const builds::Build& b = builds::hx8k_pt;
   EXPECT_TRUE(plan::bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw}).empty());
   return m;
 }
-const card::CardLimits kHx8kLimits{builds::hx8k.umax, builds::hx8k.kmax, builds::hx8k.w, 1u << builds::hx8k.caw,
-                                   1u << builds::hx8k.saw};
+const card::CardLimits kHx8kLimits{builds::hx8k_pt.umax, builds::hx8k_pt.kmax, builds::hx8k_pt.w, 1u << builds::hx8k_pt.caw,
+                                   1u << builds::hx8k_pt.saw};
 
 card::PhaseTimerJob plan_tab() {
   const plan::Machine m = hx8k_machine();
@@ -140,7 +138,7 @@ TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
 TEST(CorePtimer, AShortDwellIsTimedByThePhases) {
   const plan::Machine m = hx8k_machine();
   const card::CardLimits& limits = kHx8kLimits;
-  const builds::Build& b = builds::hx8k;
+  const builds::Build& b = builds::hx8k_pt;
   auto gcode = plan::parse_gcode("G21 G90\nG1 X1 Y0.5 F1800\nG4 P0.2\nG1 X2\nM2\n", "dwell.ngc");
   ASSERT_TRUE(gcode.ok()) << plan::join(gcode.errors);
   auto job = card::plan_phase_timer_job(*gcode, m, limits, "dwell.ngc");
@@ -182,8 +180,10 @@ TEST(CorePtimer, ThePhaseTimerJobRefusesWhatTheCardCannotTime) {
 }
 
 // The card says what it is (READ 0x23 [26], through the core's read port, RTL and
-// model in lockstep) and the host, which plans chunks, refuses to drive it.
-TEST(CorePtimer, TheHostSeesAPhaseTimerCardAndRefusesIt) {
+// model in lockstep), and the host, which plans a phase-timer card's jobs with its
+// phases (run::plan_card_job), takes it; the same core's build without the phase
+// timer says it has none.
+TEST(CorePtimer, TheHostSeesAPhaseTimerCard) {
   Lockstep<CorePtimer> ls("core_ptimer_caps");
   ls.reset();
   std::array<uint32_t, card::kCapsRegisters.size()> values{};
@@ -195,17 +195,15 @@ TEST(CorePtimer, TheHostSeesAPhaseTimerCardAndRefusesIt) {
   const card::CardCaps caps = card::decode_caps(values);
   EXPECT_TRUE(caps.ptimer);
   EXPECT_EQ(caps.n, 4u);
-  const std::string why = card::unusable(caps, 4);
-  EXPECT_NE(why.find("phase timer"), std::string::npos) << why;
+  EXPECT_EQ(card::unusable(caps, 4), "");
   EXPECT_NE(card::describe(caps).find("phase timer"), std::string::npos);
-  // The same core's build without the phase timer: usable, and it says so.
   model::CpCore chunked(model::core_params(builds::hx8k));
   for (size_t r = 0; r < values.size(); ++r) {
     chunked.in.rd_addr = uint32_t(card::kCapsRegisters[r]);
     values[r] = chunked.outputs().rd_data;
   }
   EXPECT_FALSE(card::decode_caps(values).ptimer);
-  EXPECT_EQ(card::unusable(card::decode_caps(values), 4), "");
+  EXPECT_EQ(card::describe(card::decode_caps(values)).find("phase timer"), std::string::npos);
 }
 
 }  // namespace

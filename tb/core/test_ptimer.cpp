@@ -252,6 +252,37 @@ void run_host_phases(const std::string& name, const std::vector<plan::TimerPhase
   }
 }
 
+// A move that comes due in the last clock of a jerk phase followed by a timed move
+// (the last move of a stop): the host's arithmetic (plan::simulate_phases) fires it
+// there, and so must the card, although its due shows in the timed phase's first
+// clock (r came due while the step was still added). Found by the plasma example on
+// the phase-timer card (`cpstep run --board hx8k_pt`), where the card, which took no
+// r-due in a timed phase, fired it at the timed move's end and lost a move.
+// Constant steps of 2^50 against lengths of 2^50 (2^56 in r): a move every tick.
+TEST(Ptimer, AMoveDueInTheLastClockBeforeATimedMoveFiresThere) {
+  const plan::PhaseFormat fmt{6, 60, true, false, 1.0};
+  const int64_t step = int64_t(1) << 50;
+  std::vector<plan::TimerPhase> phases;
+  plan::TimerPhase run;
+  run.ticks = 2;
+  run.rest = run.adjust = true;
+  run.s = step;
+  phases.push_back(run);   // moves due at clocks 64 and 128, its last
+  plan::TimerPhase timed;
+  timed.ticks = 100;
+  timed.timed = true;
+  phases.push_back(timed);   // the stop's last move, 100 clocks on
+  phases.push_back(run);     // from rest again: two more
+  const std::vector<plan::i128> lengths(5, plan::i128(1) << 50);
+  const std::vector<int64_t> want = plan::simulate_phases(phases, fmt, lengths);
+  ASSERT_EQ(want, (std::vector<int64_t>{64, 128, 228, 292, 356})) << "the host's arithmetic";
+  std::vector<int64_t> got;
+  ASSERT_NO_FATAL_FAILURE(
+      run_host_phases("ptimer_timed_edge", phases, std::vector<uint64_t>(5, uint64_t(1) << 50), 1000, got));
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t n = 0; n < want.size(); ++n) EXPECT_EQ(got[n], want[n]) << "move " << n;
+}
+
 // The host's phases for two S-curves (a stop between) along a path of 1 mm moves,
 // the plan's own phases given (corrected where needed), written to the timer as
 // its buffer frees: every move due at the fitter's clock, in both.

@@ -53,6 +53,8 @@ TEST_P(Boards, TheCardReportsItsBuild) {
   EXPECT_EQ(caps.clock_hz, b.clock_hz);
   EXPECT_EQ(caps.build_id, b.build_id);
   EXPECT_EQ(card::build_of(caps), &b);
+  EXPECT_EQ(caps.ptimer, b.ptimer != 0);
+  EXPECT_EQ(caps, *card::board_caps(b.name));
   EXPECT_EQ(card::unusable(caps, 4), "");
 }
 

@@ -116,7 +116,7 @@ inline uint16_t crc_reference(std::span<const uint8_t> bytes) {
 // the card's core takes CONIC commands (opcode 5). Written from the protocol's
 // table, independently of the RTL and the codec.
 inline uint8_t expected_result(std::span<const uint8_t> b, size_t bits, size_t free, unsigned axes,
-                               bool conic = false) {
+                               bool conic = false, bool ptimer = false) {
   auto got = [&](size_t nbytes) { return bits >= 8 * nbytes && b.size() >= nbytes; };
   if (!got(4)) return 1;
   const size_t nwords = size_t(b[2]) << 8 | b[3];
@@ -134,7 +134,18 @@ inline uint8_t expected_result(std::span<const uint8_t> b, size_t bits, size_t f
     const size_t at = 4 + 4 * i;
     const uint32_t w = uint32_t(b[at]) << 24 | uint32_t(b[at + 1]) << 16 | uint32_t(b[at + 2]) << 8 | b[at + 3];
     const unsigned op = w >> 28;
-    if (op == 1) i += 2 + axes + ((w >> 22 & 1) ? 3 : 2) * (w & 0xFFFF);
+    if (ptimer && (op == 1 || (op == 5 && conic))) {
+      // A phase-timer card's segment: H0, H1, the v words of its axis form (with [15] set,
+      // one per bit of [7:0]; else one per axis), a CONIC's K words, then L; no chunks.
+      size_t v = axes;
+      if (w >> 15 & 1) {
+        v = 0;
+        for (unsigned a = 0; a < 8; ++a) v += w >> a & 1;
+      }
+      i += 2 + v + (op == 5 ? ((w >> 18 & 1) ? 2 : 7) : 0) + 1;
+    } else if (ptimer && op == 6) {
+      i += 2 + ((w >> 24 & 1) ? 2 : 0) + ((w >> 27 & 1) ? 4 : 0);  // PHASE: u; r; S and H
+    } else if (op == 1) i += 2 + axes + ((w >> 22 & 1) ? 3 : 2) * (w & 0xFFFF);
     else if (op == 5 && conic) i += 2 + axes + ((w >> 18 & 1) ? 2 : 7) + ((w >> 22 & 1) ? 3 : 2) * (w & 0xFFFF);
     else if (op >= 2 && op <= 4) i += 1;
     else return 5;

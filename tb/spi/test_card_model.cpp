@@ -60,6 +60,7 @@ class Bench {
  public:
   static constexpr unsigned N = P::kAxes;
   static constexpr bool kConic = P::kBuild.conic != 0;
+  static constexpr bool kPtimer = P::kBuild.ptimer != 0;
   using Ls = Lockstep<P>;
 
   explicit Bench(uint64_t seed = 1, SpiTiming t = {}) : ls_("card_model"), spi_(ls_, t), rng_(seed) {
@@ -112,10 +113,11 @@ class Bench {
     frame_free_.reset();
     if (readable && bits >= 64) {
       const size_t free = size_t(miso[4]) << 8 | miso[5];
-      want_ = Want{expected_result(bytes, bits, free, N, kConic), seq, false};
+      want_ = Want{expected_result(bytes, bits, free, N, kConic, kPtimer), seq, false};
       frame_free_ = free;
     } else {
-      const uint8_t lo = expected_result(bytes, bits, 0, N, kConic), hi = expected_result(bytes, bits, 0xFFFF, N, kConic);
+      const uint8_t lo = expected_result(bytes, bits, 0, N, kConic, kPtimer),
+                    hi = expected_result(bytes, bits, 0xFFFF, N, kConic, kPtimer);
       if (lo == hi && (want_ || bits >= 16)) want_ = Want{lo, seq, false};
       else want_.reset();
     }
@@ -281,6 +283,27 @@ std::vector<uint32_t> random_commands(Bench<P>& b, const builds::Build& build, s
       case 5: card::encode_control(b.chance(0.3), b.chance(0.2), b.chance(0.8), c); break;
       default: {
         SegmentShape s = random_segment(b, build);
+        if (build.ptimer) {
+          // A phase-timer card (docs/CORE.md "Phase-timer builds"): PHASE commands of
+          // every kind with random fields, segments with a length per move and no
+          // chunks, in the compact axis form or with every axis's v.
+          if (b.chance(0.4)) {
+            card::WirePhase ph;
+            ph.kind = b.rand(0, 15);
+            ph.ticks = b.chance(0.5) ? b.rand(0, 40) : b.rand(0, 0xFFFFFF);
+            ph.u = int32_t(b.rand(0, 0xFFFFFF)) - 0x800000;
+            ph.r_top = uint64_t(b.rand(0, 0xFFFFFFFF)) << 32 | b.rand(0, 0xFFFFFFFF);
+            ph.s = int64_t(b.rand(0, 0xFFFFFF)) << b.rand(0, 30);
+            ph.h = int64_t(b.rand(0, 0xFFFFFF)) << b.rand(0, 14);
+            card::encode_phase(ph, c);
+            break;
+          }
+          card::WireSegment w = to_wire(s, b.chance(0.5));
+          w.length = b.chance(0.05) ? 0 : b.rand(1, 0xFFFFFFFF);  // 0: SEG_LENGTH
+          if (b.chance(0.08)) w.v[0] = w.u + 1;                   // SEG_V_GT_U
+          card::encode_segment(w, c, b.chance(0.3));
+          break;
+        }
         if (build.conic && b.chance(0.3)) {
           card::encode_conic(random_conic(b, s), c);
           break;
@@ -351,15 +374,17 @@ struct CardNames {
     if constexpr (std::is_same_v<P, CardSmall>) return "Small";
     else if constexpr (std::is_same_v<P, sim::CardIcebreaker>) return "Icebreaker";
     else if constexpr (std::is_same_v<P, sim::CardHx8k>) return "Hx8k";
+    else if constexpr (std::is_same_v<P, sim::CardHx8kPt>) return "Hx8kPt";
     else if constexpr (std::is_same_v<P, sim::Fast<CardSmall>>) return "FastSmall";
     else if constexpr (std::is_same_v<P, sim::Fast<sim::CardIcebreaker>>) return "FastIcebreaker";
-    else return "FastHx8k";
+    else if constexpr (std::is_same_v<P, sim::Fast<sim::CardHx8k>>) return "FastHx8k";
+    else return "FastHx8kPt";
   }
 };
 // The golden model clocked every cycle, and the fast engine (sim::FastCardDut:
 // the same model advanced event to event, frames clocked in the front end alone).
-using Cards = ::testing::Types<CardSmall, sim::CardIcebreaker, sim::CardHx8k, sim::Fast<CardSmall>,
-                               sim::Fast<sim::CardIcebreaker>, sim::Fast<sim::CardHx8k>>;
+using Cards = ::testing::Types<CardSmall, sim::CardIcebreaker, sim::CardHx8k, sim::CardHx8kPt, sim::Fast<CardSmall>,
+                               sim::Fast<sim::CardIcebreaker>, sim::Fast<sim::CardHx8k>, sim::Fast<sim::CardHx8kPt>>;
 TYPED_TEST_SUITE(CardModel, Cards, CardNames);
 
 TYPED_TEST(CardModel, ModelParamsAreTheBuilds) {
@@ -372,6 +397,9 @@ TYPED_TEST(CardModel, ModelParamsAreTheBuilds) {
 
 TYPED_TEST(CardModel, RealJob) {
   constexpr unsigned N = TypeParam::kAxes;
+  if constexpr (TypeParam::kBuild.ptimer != 0)
+    GTEST_SKIP() << "a chunk job; the phase-timer card's real jobs: Boards.AGcodeJobRunsOnTheCard/hx8k_pt "
+                    "(tab.ngc through the host, the Verilated card and this model in lockstep), PhaseTimerRun.*";
   Bench<TypeParam> b;
   const card::Reply hello = b.poll();
   EXPECT_EQ(hello.last_result, 0);
@@ -572,12 +600,12 @@ void random_run(uint64_t seed, uint64_t budget, RandomStats& stats) {
       // BAD_CMD: an unknown opcode at a command boundary.
       auto w = random_commands(b, build, 8);
       std::vector<size_t> starts;
-      for (size_t i = 0; i <= w.size(); i += card::command_words(w[i], N)) {
+      for (size_t i = 0; i <= w.size(); i += card::command_words(w[i], N, build.ptimer)) {
         starts.push_back(i);
         if (i == w.size()) break;
       }
-      // (5 is CONIC where the card's core takes conics.)
-      const uint32_t op = b.chance(0.3) ? 0 : b.rand(Bench<P>::kConic ? 6 : 5, 15);
+      // (5 is CONIC where the card's core takes conics, 6 PHASE on a phase-timer card.)
+      const uint32_t op = b.chance(0.3) ? 0 : b.rand(build.ptimer ? 7 : Bench<P>::kConic ? 6 : 5, 15);
       const size_t at = starts[b.rand(0, uint32_t(starts.size() - 1))];
       w.insert(w.begin() + ptrdiff_t(at), op << 28 | b.rand(0, 0xFFFFFF));
       b.frame(b.encode(0x01, w));
@@ -588,7 +616,9 @@ void random_run(uint64_t seed, uint64_t budget, RandomStats& stats) {
       // SPLIT: a frame ending inside a segment.
       std::vector<uint32_t> w;
       card::encode_read(card::Register::moves_done, 0, w);
-      card::encode_segment(to_wire(random_segment(b, build), true), w);
+      card::WireSegment seg = to_wire(random_segment(b, build), true);
+      if (build.ptimer) seg.length = b.rand(1, 0xFFFFFFFF);  // its axis form's v words and L
+      card::encode_segment(seg, w, b.chance(0.5));
       w.resize(b.rand(2, uint32_t(w.size() - 1)));
       b.frame(b.encode(0x01, w));
       if (const auto f = b.frame_free()) {

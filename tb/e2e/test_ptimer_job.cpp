@@ -1,0 +1,172 @@
+// SPDX-License-Identifier: MIT
+// `cpstep run` on the phase-timer card (rtl/builds.json's hx8k_pt; docs/CORE.md
+// "Phase-timer builds"): the host reads that the card times its moves by the phase
+// timer, plans the job with its phases (run::plan_card_job -> card::plan_phase_timer_job)
+// and streams the PHASE and SEGMENT commands through the card's SPI pins; every move
+// must fire at the cycle the host computed for it (MoveClock's chunk time: twice the
+// fitter's half clocks after the timer's start), every card segment end where the
+// plan says, and the wire must carry fewer bytes than the chunk card's job. What
+// such a card cannot do yet is refused before anything is sent.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "card/caps.h"
+#include "card/protocol.h"
+#include "card/ptimer_job.h"
+#include "plan/common.h"
+#include "run/card_job.h"
+#include "run/home.h"
+#include "run/measure.h"
+#include "run/sim_run.h"
+
+namespace cpstep::tb {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kMachine = std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/seed002.toml";
+const std::string kTab = std::string(CPSTEP_SOURCE_DIR) + "/examples/jobs/tab.ngc";
+
+bool has_warning(const std::vector<plan::Diagnostic>& w, const std::string& text) {
+  for (const plan::Diagnostic& d : w)
+    if (d.message.find(text) != std::string::npos) return true;
+  return false;
+}
+
+// tab.ngc on the simulated phase-timer card (the fast engine; the Boards suite runs the
+// same job on the Verilated card in lockstep with it): the card's own report of what
+// it is, the job planned from it, every move at its computed cycle.
+TEST(PhaseTimerRun, EveryMoveFiresAtTheCycleTheHostComputed) {
+  const card::CardCaps caps = run::connect_sim("hx8k_pt");
+  ASSERT_TRUE(caps.ptimer) << "the card reports its phase timer (READ 0x23 [26])";
+  auto prepared = run::prepare_job(kTab, kMachine, caps);
+  ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
+  const run::CardJob& job = *prepared.value;
+  EXPECT_TRUE(has_warning(job.warnings, "arcs planned as chords")) << "seed002.toml asks for conics";
+  ASSERT_EQ(job.fire_cycles.size(), job.moves());
+  ASSERT_GT(job.phases, 0u);
+  EXPECT_EQ(job.phase_end_word.size(), job.phases);
+  EXPECT_EQ(job.segment_end_word.size(), job.wire.segments.size());
+  // Every command whole by the card's lengths, START once, after the first segment.
+  size_t starts = 0, segments = 0, phases = 0;
+  for (size_t i = 0; i < job.words.size(); i += card::command_words(job.words[i], 4, true)) {
+    const uint32_t op = job.words[i] >> 28;
+    if (op == 0x3 && (job.words[i] & 1)) {
+      EXPECT_EQ(segments, 1u) << "START after the first segment";
+      ++starts;
+    }
+    segments += op == 0x1;
+    phases += op == 0x6;
+  }
+  EXPECT_EQ(starts, 1u);
+  EXPECT_EQ(segments, job.wire.segments.size());
+  EXPECT_EQ(phases, job.phases);
+
+  run::SimRunOptions o;
+  o.board = "hx8k_pt";
+  const run::CardRun r = run::run_on_sim(job, o);
+  ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
+  EXPECT_EQ(r.moves_done, job.moves());
+  EXPECT_EQ(r.checked_segments, job.checkpoints.size());
+  EXPECT_EQ(r.position_mismatches, 0u);
+  EXPECT_EQ(r.position, job.checkpoints.back().position);
+  EXPECT_EQ(r.stretch_count, 0u);
+  ASSERT_EQ(r.move_cycles.size(), job.moves());
+  // Each move's fire against the host's cycle for it, START counted from.
+  for (size_t n = 0; n < r.move_cycles.size(); ++n)
+    ASSERT_EQ(int64_t(r.move_cycles[n] - r.start_cycle), job.fire_cycles[n]) << "move " << n + 1;
+  const run::RunMeasure m = run::measure_run(job, r);
+  EXPECT_EQ(m.max_chunk_error_cycles, 0);
+  EXPECT_EQ(m.moves_off_chunk_time, 0u);
+  EXPECT_LE(m.max_timing_error_cycles, job.machine.chunk_tolerance_cycles() + 2);
+
+  // The same job for the chunk card (the hx8k build, arcs as chords too): more bytes.
+  plan::Machine chords = job.machine;
+  auto gcode = run::read_card_gcode(kTab, chords, {});
+  ASSERT_TRUE(gcode.ok());
+  auto chunked = run::plan_card_job(*gcode, chords, *card::board_caps("hx8k"));
+  ASSERT_TRUE(chunked.ok()) << plan::join(chunked.errors);
+  std::printf("tab.ngc, arcs as chords: %zu command words on the phase-timer card (%llu phases, %zu segments), "
+              "%zu on the chunk card; %llu bytes on the link (frames, polls and replies)\n",
+              job.words.size(), (unsigned long long)job.phases, job.wire.segments.size(),
+              chunked->words.size(), (unsigned long long)r.link.stats.bytes);
+  EXPECT_LT(job.words.size() * 10, chunked->words.size() * 6) << "the phase-timer card's wire is shorter";
+  // The card took the job's words and the READs of its capability registers, nothing else.
+  EXPECT_EQ(r.link.stats.words, job.words.size() + card::kCapsRegisters.size());
+}
+
+// plasma.ngc, 238,280 moves of 60 pierced contours with their stops, on the same card
+// (the fast engine): every move at its cycle, the torch as planned. This job found the
+// timer's lost move (Ptimer.AMoveDueInTheLastClockBeforeATimedMoveFiresThere): one move
+// due in the last clock before a stop's timed move, then the card a move behind and an
+// underrun at the end.
+TEST(PhaseTimerRun, ThePlasmaJobsMovesAllFireAtTheirCycles) {
+  const card::CardCaps caps = *card::board_caps("hx8k_pt");
+  auto prepared = run::prepare_job(std::string(CPSTEP_SOURCE_DIR) + "/examples/jobs/plasma.ngc", kMachine, caps);
+  ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
+  const run::CardJob& job = *prepared.value;
+  run::SimRunOptions o;
+  o.board = "hx8k_pt";
+  const run::CardRun r = run::run_on_sim(job, o);
+  ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
+  ASSERT_EQ(r.move_cycles.size(), job.fire_cycles.size());
+  size_t off = 0;
+  for (size_t n = 0; n < r.move_cycles.size(); ++n)
+    if (int64_t(r.move_cycles[n] - r.start_cycle) != job.fire_cycles[n] && off++ == 0)
+      ADD_FAILURE() << "move " << n + 1 << " fired at " << r.move_cycles[n] - r.start_cycle << ", the host says "
+                    << job.fire_cycles[n];
+  EXPECT_EQ(off, 0u) << "moves off their cycles";
+  EXPECT_EQ(r.position, job.checkpoints.back().position);
+  EXPECT_EQ(r.torch_verdict.errors.size(), 0u);
+  EXPECT_GT(job.phases, 500u);
+}
+
+// The motion the card holds, as the client's batching sees it: never more than both
+// the segments and the phases handed time.
+TEST(PhaseTimerRun, TheHeldMotionEndsWhereTheHandedPhasesEnd) {
+  const card::CardCaps caps = *card::board_caps("hx8k_pt");
+  auto prepared = run::prepare_job(kTab, kMachine, caps);
+  ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
+  const run::CardJob& job = *prepared.value;
+  const double hz = job.clock_hz();
+  for (size_t p = 0; p < job.phase_end_word.size(); ++p) {
+    const uint64_t handed = job.phase_end_word[p];
+    // The segments whose words are all handed by then.
+    size_t sent = 0;
+    while (sent < job.segment_end_word.size() && job.segment_end_word[sent] <= handed) ++sent;
+    if (sent == 0) continue;
+    const double held = run::buffered_seconds(job, 0, 0, handed);
+    const double by_segments = double(job.segment_end_cycle[sent - 1]) - double(job.fire_cycles[0]);
+    const double by_phases = double(job.phase_end_cycle[p]) - double(job.fire_cycles[0]);
+    EXPECT_NEAR(held * hz, std::max(0.0, std::min(by_segments, by_phases)), 1e-6 * hz) << "phase " << p;
+  }
+  EXPECT_EQ(run::buffered_seconds(job, 0, 0, 0), 0.0);
+}
+
+// What a phase-timer card cannot do yet is refused before anything is sent: pauses
+// (a dwell longer than the timer's 2^32 - 1 clocks), homing and probing.
+TEST(PhaseTimerRun, WhatTheCardCannotTimeIsRefusedUnsent) {
+  const card::CardCaps caps = *card::board_caps("hx8k_pt");
+  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
+  fs::create_directories(dir);
+  const fs::path dwell = dir / "dwell.ngc";
+  std::ofstream(dwell) << "G21 G90\nG1 X5 F600\nG4 P200\nG1 X10\nM2\n";
+  auto refused = run::prepare_job(dwell, kMachine, caps);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(plan::join(refused.errors).find("pauses"), std::string::npos) << plan::join(refused.errors);
+  // The same job on the chunk card is planned (its pause runs as pause moves).
+  EXPECT_TRUE(run::prepare_job(dwell, kMachine, *card::board_caps("hx8k")).ok());
+  // mill.toml homes X, Y and Z: refused on this card, taken on the chunk card.
+  auto m = run::load_card_machine(std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/mill.toml", caps);
+  ASSERT_TRUE(m.ok()) << plan::join(m.errors);
+  const std::string why = run::homing_refusal(*m, caps);
+  EXPECT_NE(why.find("phase timer"), std::string::npos) << why;
+  EXPECT_EQ(run::homing_refusal(*m, *card::board_caps("hx8k")), "");
+}
+
+}  // namespace
+}  // namespace cpstep::tb
