@@ -34,7 +34,7 @@ cp_i128 CpPtimer::threshold() const {
 
 CpPtimerOut CpPtimer::outputs() const {
   Out o;
-  o.due = r_.tdue || (!r_.owe && r_.r >= 0);  // (also in a timed phase: rtl/cp_ptimer.v)
+  o.due = r_.tdue || r_.bdue || (!r_.owe && r_.r >= 0);  // (also in a timed phase: rtl/cp_ptimer.v)
   o.active = r_.active;
   o.ready = !r_.nvalid;
   o.starved = r_.starved;
@@ -49,7 +49,7 @@ void CpPtimer::tick() {
   }
   const Regs o = r_;
   Regs n = r_;
-  const bool due = o.tdue || (!o.owe && o.r >= 0);
+  const bool due = o.tdue || o.bdue || (!o.owe && o.r >= 0);
   // The next phase's buffer: written while free, W0 last.
   if (in.wr && !o.nvalid) {
     switch (in.sel & 7) {
@@ -72,7 +72,9 @@ void CpPtimer::tick() {
   // owed, after a start from rest or such a fire, is taken off when known.)
   cp_i128 r = o.r;
   if (in.fire && due && o.tdue) n.tdue = false;
-  const bool take = (in.fire && due) || o.owe;
+  if (in.fire && o.bdue) n.bdue = false;
+  // (A bdue move's fire takes nothing off: the r that replaced it is the next move's.)
+  const bool take = (in.fire && due && !o.bdue) || o.owe;
   n.owe = take && !in.len_valid;
   if (take && in.len_valid) r -= threshold();
   bool phase_end = false;
@@ -97,6 +99,9 @@ void CpPtimer::tick() {
       }
     }
   }
+  // A jerk phase ending with its pending move due (nothing owed after this clock) while
+  // the next phase replaces r (rest, load r): the move stays due (rtl/cp_ptimer.v, bdue_q).
+  if (phase_end && !o.timed && o.nvalid && (o.nkind & 5) != 0 && sx128(r, rw()) >= 0 && !n.owe) n.bdue = true;
   if (phase_end || (!o.active && o.nvalid)) {
     if (o.nvalid) {
       const int64_t u = sx(o.nu, p_.uw);
@@ -133,7 +138,7 @@ void CpPtimer::tick() {
 
 std::optional<uint64_t> CpPtimer::quiet_advs(bool len_valid, uint64_t limit) const {
   const Regs& q = r_;
-  if (q.tdue || (!q.owe && q.r >= 0)) return std::nullopt;   // due now
+  if (q.tdue || q.bdue || (!q.owe && q.r >= 0)) return std::nullopt;   // due now
   if (q.owe && len_valid) return std::nullopt;                          // taken off now
   if (!q.active) {
     if (q.nvalid) return std::nullopt;                                  // loads now

@@ -96,6 +96,7 @@ class CpPtimer {
  private:
   struct Regs {
     bool active = false, timed = false, tdue = false, starved = false;
+    bool bdue = false;   // a move came due in the last clock of a jerk phase whose r the next phase replaced
     bool owe = false;     // the pending move's length is still to be taken off r (no move due)
     uint32_t kind = 0;
     uint32_t tleft = 0, tcnt = 0;

@@ -69,6 +69,7 @@ localparam integer RW = F + S + 3;      // r (signed)
 localparam integer TW = 24;             // ticks
 
 reg           active_q, timed_q, tdue_q, starved_q, nvalid_q;
+reg           bdue_q;         // a move came due in the last clock of the phase before, whose r the load replaced
 reg           owe_q;          // the pending move's length is still to be taken off r (no move due)
 reg  [3:0]    kind_q, nkind_q;
 reg  [TW-1:0] tleft_q, nticks_q;
@@ -87,11 +88,13 @@ reg           up_q, hp_q, tp_q;   // u's, H's and 3u's bit before (for 2u, 2H, 6
 reg           hs_q;           // the tick's H's sign (its bits past HW)
 
 wire [RW-1:0] thresh = {{(RW-LW-S){1'b0}}, len_i, {S{1'b0}}};
-// Due: the timed move at its phase's end, or r's sign clear (not while owed) — also
-// in a timed phase, whose r is frozen: it is clear there only when the move before
-// the timed one came due in the jerk phase's last clock (the host's arithmetic fires
-// it there, plan::simulate_phases), and it fires at once.
-wire          due = tdue_q || (!owe_q && !r_q[RW-1]);
+// Due: the timed move at its phase's end; a move that came due in the last clock of a
+// jerk phase whose r the next phase replaced (rest, load r: bdue_q); or r's sign clear
+// (not while owed) — also in a timed phase, whose r is frozen: it is clear there only
+// when the move before the timed one came due in the jerk phase's last clock. The
+// host's arithmetic fires every such move where it comes due (plan::simulate_phases),
+// the card in the clock after, as every other.
+wire          due = tdue_q || bdue_q || (!owe_q && !r_q[RW-1]);
 assign due_o     = due;
 assign active_o  = active_q;
 assign ready_o   = !nvalid_q;
@@ -139,17 +142,23 @@ wire signed [HW-1:0] h_ld    = nkind_q[3] ? nh_q : nkind_q[2] ? {HW{1'b0}} : h_q
 // fire whose next length was not known) takes off the pending move's length if
 // len_valid_i, else owes it; then the step.
 wire          tdue_n  = (tdue_q && !(fire_i && due)) || (running && timed_q && phase_end);
-wire          take    = (fire_i && due) || owe_q;
+// (A bdue_q move's fire takes nothing off: the replaced r is already the next move's.)
+wire          take    = (fire_i && due && !bdue_q) || owe_q;
 wire [RW-1:0] step_r  = {{(RW-VW){step_q[VW-1]}}, step_q};
 wire [RW-1:0] r_fired = (take && len_valid_i) ? r_q - thresh : r_q;
 wire [RW-1:0] r_run   = (running && !timed_q) ? r_fired + step_r
                       : (running && timed_q && phase_end) ? {RW{1'b0}} : r_fired;
+// This clock ends a jerk phase with its pending move due (r's sign clear, nothing owed
+// after it) and the next phase replaces r.
+wire          b_cross = running && !timed_q && phase_end && nvalid_q && (nkind_q[0] || nkind_q[2]) &&
+                        !r_run[RW-1] && !(take && !len_valid_i);
 
 always @(posedge clk) begin
     if (rst || clear_i) begin
         active_q  <= 1'b0;
         timed_q   <= 1'b0;
         tdue_q    <= 1'b0;
+        bdue_q    <= 1'b0;
         starved_q <= 1'b0;
         nvalid_q  <= 1'b0;
         kind_q    <= 4'd0;
@@ -190,6 +199,8 @@ always @(posedge clk) begin
             endcase
         end
         if (fire_i && tdue_q) tdue_q <= 1'b0;
+        if (fire_i && bdue_q) bdue_q <= 1'b0;
+        if (b_cross) bdue_q <= 1'b1;
         if (running && timed_q && phase_end) tdue_q <= 1'b1;
         if (running && timed_q && !phase_end) tleft_q <= tleft_q - 1'b1;
         if (running && !timed_q) begin

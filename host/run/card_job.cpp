@@ -411,6 +411,7 @@ plan::Result<CardJob> plan_phase_timer_card_job(const plan::Job& job, const plan
   cj.fire_cycles.reserve(p.fire_half_clocks.size());
   for (int64_t h : p.fire_half_clocks) cj.fire_cycles.push_back(cycle(h));
   cj.words = std::move(p.preamble);
+  cj.preamble_words = cj.words.size();
   size_t phase = 0;
   uint64_t end_moves = 0;
   for (size_t i = 0; i < p.commands.size(); ++i) {

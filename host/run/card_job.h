@@ -52,6 +52,7 @@ struct CardJob {
   // place of the chunks' times: MoveClock::chunk()), and each PHASE command's end
   // word and the cycle its phase ends (the motion the card holds needs both).
   std::vector<int64_t> fire_cycles;
+  size_t preamble_words = 0;  // the words before the first PHASE (drivers, axes, inputs, feed)
   std::vector<uint64_t> phase_end_word;
   std::vector<uint64_t> phase_end_cycle;
   uint64_t phases = 0;

@@ -27,9 +27,6 @@ std::vector<int> homing_order(const plan::Machine& m) {
 std::string homing_refusal(const plan::Machine& m, const card::CardCaps& caps) {
   if (homing_order(m).empty()) return fmt::format("{}: no axis has an [axes.X.home] table", m.file);
   if (!caps.inputs) return "the card has no limit and probe inputs (READ 0x23 [24]): it cannot home";
-  if (caps.ptimer)
-    return "the card times its moves by the phase timer (READ 0x23 [26]): homing on such a card is not built yet "
-           "(its seek moves are planned in chunks)";
   return "";
 }
 
@@ -66,7 +63,18 @@ BlocksRun run_blocks(card::CardClient& c, const plan::Machine& m, const card::Ca
   }
   CardJob& cj = *planned.value;
   cj.wire.seek = seek;
-  const std::vector<uint32_t> words = card::encode_job(cj.machine, cj.wire);
+  std::vector<uint32_t> words;
+  if (caps.ptimer) {
+    // A phase-timer card's job (its phases and segments as planned): the seek's CONFIG
+    // after its preamble.
+    if (!c.options().ptimer) throw std::logic_error("run_blocks: a phase-timer card needs a client that frames its commands");
+    words = cj.words;
+    std::vector<uint32_t> arm;
+    if (seek != card::seek_mode::off) card::encode_config(0, card::ConfigField::seek, seek, arm);
+    words.insert(words.begin() + std::ptrdiff_t(cj.preamble_words), arm.begin(), arm.end());
+  } else {
+    words = card::encode_job(cj.machine, cj.wire);
+  }
   const double t0 = c.link().now_s();
   const double budget = 2 * cj.planned.stats.duration_s + 1;
   bool out_of_time = false;

@@ -166,6 +166,7 @@ struct Session {
   static card::ClientOptions options() {
     card::ClientOptions co;
     co.axes = Card::kAxes;
+    co.ptimer = Card::kBuild.ptimer != 0;  // a phase-timer card's commands (docs/CORE.md)
     return co;
   }
   // Resets the card, reads what it is, loads the machine file for it: "" or why not.
@@ -232,11 +233,6 @@ SimProbeRun probe_on_card(const std::string& gcode_file, const std::string& mach
   const plan::Machine& m = run.machine;
   if (!s.caps.inputs) {
     run.error = "the card has no limit and probe inputs (READ 0x23 [24]): it cannot probe";
-    return run;
-  }
-  if (s.caps.ptimer) {
-    run.error = "the card times its moves by the phase timer (READ 0x23 [26]): probing on such a card is not "
-                "built yet (its seek moves are planned in chunks)";
     return run;
   }
   std::ifstream in(gcode_file, std::ios::binary);

@@ -283,6 +283,34 @@ TEST(Ptimer, AMoveDueInTheLastClockBeforeATimedMoveFiresThere) {
   for (std::size_t n = 0; n < want.size(); ++n) EXPECT_EQ(got[n], want[n]) << "move " << n;
 }
 
+// The same where the next phase replaces r: a start from rest, and a reload of r (the
+// host's r for the move after the one due). Found by a rapid on the mill
+// (`cpstep run` of G0 X20 Y20 Z-5, examples/machines/mill.toml, --board hx8k_pt): its
+// 10th move came due in the last clock before a reload and the card, whose r the reload
+// replaced, never fired it (the job a move behind, then an underrun).
+TEST(Ptimer, AMoveDueInTheLastClockBeforeARestOrAReloadFiresThere) {
+  const plan::PhaseFormat fmt{6, 60, true, false, 1.0};
+  const int64_t step = int64_t(1) << 50;
+  plan::TimerPhase run;
+  run.ticks = 2;
+  run.rest = run.adjust = true;
+  run.s = step;
+  plan::TimerPhase reload;
+  reload.ticks = 2;
+  reload.reload = true;
+  reload.s = step;
+  reload.r_top = -(int64_t(1) << 50);   // r = -2^55: half a move (2^56 in r) to go
+  const std::vector<plan::TimerPhase> phases = {run, run, reload, run};
+  const std::vector<plan::i128> lengths(8, plan::i128(1) << 50);
+  const std::vector<int64_t> want = plan::simulate_phases(phases, fmt, lengths);
+  ASSERT_EQ(want, (std::vector<int64_t>{64, 128, 192, 256, 288, 352, 448, 512})) << "the host's arithmetic";
+  std::vector<int64_t> got;
+  ASSERT_NO_FATAL_FAILURE(
+      run_host_phases("ptimer_reload_edge", phases, std::vector<uint64_t>(8, uint64_t(1) << 50), 2000, got));
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t n = 0; n < want.size(); ++n) EXPECT_EQ(got[n], want[n]) << "move " << n;
+}
+
 // The host's phases for two S-curves (a stop between) along a path of 1 mm moves,
 // the plan's own phases given (corrected where needed), written to the timer as
 // its buffer frees: every move due at the fitter's clock, in both.

@@ -101,13 +101,17 @@ void expect_homed(const run::SimHomeRun& r) {
   EXPECT_EQ(r.pins, r.counts) << "the STEP edges on the pins equal the card's counters";
 }
 
+// On the HX8K's chunk card and on its phase-timer card (hx8k_pt: the seek's moves
+// planned with phases, the seek armed after the preamble).
 TEST(Home, EveryAxisHomesAtItsSwitchOnTheFastEngine) {
   std::mt19937_64 rng(5061);
   for (int trial = 0; trial < 3; ++trial) {
-    SCOPED_TRACE(trial);
     std::uniform_real_distribution<double> xy(-40.0, -3.0), z(3.0, 15.0);
     const fs::path m = mill_with_switches("mill_" + std::to_string(trial) + ".toml", xy(rng), xy(rng), z(rng));
-    expect_homed(run::home_on_sim(m.string(), "hx8k", "model"));
+    for (const char* board : {"hx8k", "hx8k_pt"}) {
+      SCOPED_TRACE(std::to_string(trial) + " on " + board);
+      expect_homed(run::home_on_sim(m.string(), board, "model"));
+    }
   }
 }
 

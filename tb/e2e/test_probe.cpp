@@ -56,8 +56,10 @@ int64_t overshoot_bound(const plan::Machine& m, double mm_s) {
   return int64_t(std::ceil(mm_s * m.axes[2].steps_per_mm * latency / m.card.clock_hz)) + 1;
 }
 
-TEST(Probe, TheExampleJobTouchesOffAndCutsAtTheHeightFound) {
-  const run::SimProbeRun r = run::probe_job_on_sim(kSrc + "/examples/jobs/probe.ngc", kMill, "hx8k", "model");
+// On the HX8K's chunk card and on its phase-timer card (hx8k_pt).
+class ProbeBoards : public ::testing::TestWithParam<const char*> {};
+TEST_P(ProbeBoards, TheExampleJobTouchesOffAndCutsAtTheHeightFound) {
+  const run::SimProbeRun r = run::probe_job_on_sim(kSrc + "/examples/jobs/probe.ngc", kMill, GetParam(), "model");
   ASSERT_TRUE(r.ok()) << r.error << (r.errors.empty() ? "" : r.errors.front().str());
   ASSERT_EQ(r.probes.size(), 2u);
   const plan::Machine& m = r.machine;
@@ -85,6 +87,9 @@ TEST(Probe, TheExampleJobTouchesOffAndCutsAtTheHeightFound) {
   EXPECT_EQ(r.counts[2], touch.counts[2] + std::llround(5 * spm));
   EXPECT_EQ(r.pins, r.counts) << "the STEP edges on the pins equal the card's counters";
 }
+
+INSTANTIATE_TEST_SUITE_P(Hx8k, ProbeBoards, ::testing::Values("hx8k", "hx8k_pt"),
+                         [](const auto& info) { return std::string(info.param); });
 
 // #5070 after a probe that trips and one that does not, used by the program.
 TEST(Probe, TheProgramReadsTheTripFlagAndPosition) {

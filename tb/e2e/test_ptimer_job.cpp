@@ -19,7 +19,6 @@
 #include "card/ptimer_job.h"
 #include "plan/common.h"
 #include "run/card_job.h"
-#include "run/home.h"
 #include "run/measure.h"
 #include "run/sim_run.h"
 
@@ -148,7 +147,8 @@ TEST(PhaseTimerRun, TheHeldMotionEndsWhereTheHandedPhasesEnd) {
 }
 
 // What a phase-timer card cannot do yet is refused before anything is sent: pauses
-// (a dwell longer than the timer's 2^32 - 1 clocks), homing and probing.
+// (a dwell longer than the timer's 2^32 - 1 clocks). (Homing and probing run on it:
+// Home.EveryAxisHomesAtItsSwitchOnTheFastEngine, ProbeBoards.*/hx8k_pt.)
 TEST(PhaseTimerRun, WhatTheCardCannotTimeIsRefusedUnsent) {
   const card::CardCaps caps = *card::board_caps("hx8k_pt");
   const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
@@ -160,12 +160,6 @@ TEST(PhaseTimerRun, WhatTheCardCannotTimeIsRefusedUnsent) {
   EXPECT_NE(plan::join(refused.errors).find("pauses"), std::string::npos) << plan::join(refused.errors);
   // The same job on the chunk card is planned (its pause runs as pause moves).
   EXPECT_TRUE(run::prepare_job(dwell, kMachine, *card::board_caps("hx8k")).ok());
-  // mill.toml homes X, Y and Z: refused on this card, taken on the chunk card.
-  auto m = run::load_card_machine(std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/mill.toml", caps);
-  ASSERT_TRUE(m.ok()) << plan::join(m.errors);
-  const std::string why = run::homing_refusal(*m, caps);
-  EXPECT_NE(why.find("phase timer"), std::string::npos) << why;
-  EXPECT_EQ(run::homing_refusal(*m, *card::board_caps("hx8k")), "");
 }
 
 }  // namespace
