@@ -390,8 +390,13 @@ plan::Result<CardJob> plan_phase_timer_card_job(const plan::Job& job, const plan
   plan::Machine m = machine;
   if (m.planner.arcs != plan::ArcMode::chords) {
     m.planner.arcs = plan::ArcMode::chords;
-    r.warnings.push_back({job.file, {},
-                          "arcs planned as chords: a phase-timer card does not time a conic's moves yet"});
+    // Said once, at the first arc (a job without arcs has nothing to say).
+    for (const plan::MotionBlock& b : job.blocks)
+      if (b.kind == plan::MotionKind::arc_cw || b.kind == plan::MotionKind::arc_ccw) {
+        r.warnings.push_back({job.file, b.loc,
+                              "arcs planned as chords: a phase-timer card does not time a conic's moves yet"});
+        break;
+      }
   }
   auto pt = card::plan_phase_timer_job(job, m, card::limits(caps), job.file);
   r.warnings.insert(r.warnings.end(), pt.warnings.begin(), pt.warnings.end());

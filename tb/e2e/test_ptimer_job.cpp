@@ -160,6 +160,22 @@ TEST(PhaseTimerRun, WhatTheCardCannotTimeIsRefusedUnsent) {
   EXPECT_NE(plan::join(refused.errors).find("pauses"), std::string::npos) << plan::join(refused.errors);
   // The same job on the chunk card is planned (its pause runs as pause moves).
   EXPECT_TRUE(run::prepare_job(dwell, kMachine, *card::board_caps("hx8k")).ok());
+  // A job without arcs has nothing to say about them; one with an arc says it once, at it.
+  const fs::path lines = dir / "lines.ngc", arcs = dir / "arcs.ngc";
+  std::ofstream(lines) << "G21 G90\nG1 X5 F600\nG1 Y5\nM2\n";
+  std::ofstream(arcs) << "G21 G90 G17\nG1 X5 F600\nG2 X10 Y5 I0 J5\nG2 X15 Y0 I5 J0\nM2\n";
+  auto l = run::prepare_job(lines, kMachine, caps);
+  ASSERT_TRUE(l.ok()) << plan::join(l.errors);
+  EXPECT_FALSE(has_warning(l->warnings, "arcs planned as chords"));
+  auto a = run::prepare_job(arcs, kMachine, caps);
+  ASSERT_TRUE(a.ok()) << plan::join(a.errors);
+  size_t said = 0;
+  for (const plan::Diagnostic& d : a->warnings)
+    if (d.message.find("arcs planned as chords") != std::string::npos) {
+      ++said;
+      EXPECT_EQ(d.loc.line, 3) << "at the first arc";
+    }
+  EXPECT_EQ(said, 1u);
 }
 
 }  // namespace
