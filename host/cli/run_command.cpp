@@ -203,9 +203,11 @@ static std::string klipper_text(const plan::QueueStepCost& c) {
 }
 
 // The summary on stdout and the faults and warnings on stderr; returns the exit code.
-int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& r, run::RunMeter& meter,
+int print_run(const RunOptions& o, const run::CardJob& j, const run::CardRun& run_in, run::RunMeter& meter,
               double wall_s, std::ofstream& report_file) {
-  const run::RunMeasure m = meter.finish(r);
+  const run::RunMeasure m = meter.finish(run_in);
+  run::CardRun r = run_in;
+  run::add_phase_timer_fault(j, m, r);
   int rc = r.ok() ? 0 : kExitFault;
   if (report_file.is_open()) {
     report_file << run::make_report(j, r, m).dump(2) << '\n';

@@ -8,6 +8,8 @@
 #include <tuple>
 #include <memory>
 
+#include <fmt/format.h>
+
 #include "plan/gcode.h"
 #include "plan/planner.h"
 #include "plan/segments.h"
@@ -456,6 +458,14 @@ void replay(const CardRun& run, RunMeter& meter) {
     }
     meter.move(move + 1, leading, dirs);
   }
+}
+
+void add_phase_timer_fault(const CardJob& job, const RunMeasure& m, CardRun& run) {
+  if (!job.caps.ptimer || !run.pins_observed || run.feed_scaled || m.moves_off_chunk_time == 0) return;
+  run.faults.push_back(host_fault(
+      HostFault::late, fmt::format("{} move(s) fired off the cycles the host computed for the phase-timer card, "
+                                   "the farthest {} cycles off",
+                                   m.moves_off_chunk_time, m.max_chunk_error_cycles)));
 }
 
 RunMeasure measure_run(const CardJob& job, const CardRun& run) {

@@ -73,6 +73,11 @@ inline constexpr int kEvaluationsPerWindow = 8;
 // SimRunOptions::record_pins): RunMeter fed with them. A run whose pins were
 // not observed (a real card) gives the counts only.
 RunMeasure measure_run(const CardJob& job, const CardRun& run);
+// A phase-timer card counts no move as stretched (its timer fires a move when it comes
+// due; docs/CORE.md "Phase-timer builds"): there the pins measured against the cycles
+// the host computed are the check. Adds a LATE fault to `run` when its pins were
+// observed, its time not scaled by the feed, and some move fired off its cycle.
+void add_phase_timer_fault(const CardJob& job, const RunMeasure& m, CardRun& run);
 class RunMeter;
 // A run's recorded events fed to a meter (START, then every move event).
 void replay(const CardRun& run, RunMeter& meter);

@@ -94,6 +94,19 @@ TEST(PhaseTimerRun, EveryMoveFiresAtTheCycleTheHostComputed) {
               job.words.size(), (unsigned long long)job.phases, job.wire.segments.size(),
               chunked->words.size(), (unsigned long long)r.link.stats.bytes);
   EXPECT_LT(job.words.size() * 10, chunked->words.size() * 6) << "the phase-timer card's wire is shorter";
+  // A move off its cycle (here, the pins' record of one moved by 3 clocks) is a LATE
+  // fault: a phase-timer card counts no move as stretched.
+  run::CardRun off = r;
+  EXPECT_TRUE(off.ok());
+  run::add_phase_timer_fault(job, m, off);
+  EXPECT_TRUE(off.ok()) << "every move at its cycle";
+  off.move_cycles[600] += 3;
+  const run::RunMeasure moved = run::measure_run(job, off);
+  EXPECT_EQ(moved.moves_off_chunk_time, 1u);
+  run::add_phase_timer_fault(job, moved, off);
+  ASSERT_EQ(off.faults.size(), 1u);
+  EXPECT_EQ(off.faults[0].name, "LATE");
+  EXPECT_NE(off.faults[0].message.find("1 move(s) fired off"), std::string::npos) << off.faults[0].message;
   // The card took the job's words and the READs of its capability registers, nothing else.
   EXPECT_EQ(r.link.stats.words, job.words.size() + card::kCapsRegisters.size());
 }
