@@ -67,7 +67,8 @@ BlocksRun run_blocks(card::CardClient& c, const plan::Machine& m, const card::Ca
   if (caps.ptimer) {
     // A phase-timer card's job (its phases and segments as planned): the seek's CONFIG
     // after its preamble.
-    if (!c.options().ptimer) throw std::logic_error("run_blocks: a phase-timer card needs a client that frames its commands");
+    if (!c.options().ptimer)
+      throw std::logic_error("run_blocks: a phase-timer card needs a client that frames its commands");
     words = cj.words;
     std::vector<uint32_t> arm;
     if (seek != card::seek_mode::off) card::encode_config(0, card::ConfigField::seek, seek, arm);

@@ -56,8 +56,8 @@ plan::Machine hx8k_machine() {
   EXPECT_TRUE(plan::bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw}).empty());
   return m;
 }
-const card::CardLimits kHx8kLimits{builds::hx8k_pt.umax, builds::hx8k_pt.kmax, builds::hx8k_pt.w, 1u << builds::hx8k_pt.caw,
-                                   1u << builds::hx8k_pt.saw};
+const card::CardLimits kHx8kLimits{builds::hx8k_pt.umax, builds::hx8k_pt.kmax, builds::hx8k_pt.w,
+                                   1u << builds::hx8k_pt.caw, 1u << builds::hx8k_pt.saw};
 
 card::PhaseTimerJob plan_tab() {
   const plan::Machine m = hx8k_machine();
