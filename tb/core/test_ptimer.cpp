@@ -9,7 +9,9 @@
 #include <deque>
 #include <optional>
 #include <random>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "Vcp_ptimer.h"
 #include "common/lockstep.h"
@@ -252,35 +254,44 @@ void run_host_phases(const std::string& name, const std::vector<plan::TimerPhase
   }
 }
 
+// Phases of constant steps of 2^50 against moves of 2^50 (2^56 in r): a move every
+// tick (64 clocks) from rest, the last in a 2-tick phase's last clock.
+constexpr int64_t kEdgeStep = int64_t(1) << 50;
+plan::TimerPhase edge_run() {
+  plan::TimerPhase run;
+  run.ticks = 2;
+  run.rest = run.adjust = true;
+  run.s = kEdgeStep;
+  return run;
+}
+
+// The host's arithmetic for `phases` (plan::simulate_phases) is `want`, and the timer
+// (RTL and twin in lockstep) fires every move at those clocks.
+void expect_timer_fires_as_host(const std::string& name, const std::vector<plan::TimerPhase>& phases,
+                                const std::vector<int64_t>& want, int64_t max_cycles) {
+  const plan::PhaseFormat fmt{6, 60, true, false, 1.0};
+  const std::vector<plan::i128> lengths(want.size(), plan::i128(kEdgeStep));
+  ASSERT_EQ(plan::simulate_phases(phases, fmt, lengths), want) << "the host's arithmetic";
+  std::vector<int64_t> got;
+  ASSERT_NO_FATAL_FAILURE(
+      run_host_phases(name, phases, std::vector<uint64_t>(want.size(), uint64_t(kEdgeStep)), max_cycles, got));
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t n = 0; n < want.size(); ++n) EXPECT_EQ(got[n], want[n]) << "move " << n;
+}
+
 // A move that comes due in the last clock of a jerk phase followed by a timed move
 // (the last move of a stop): the host's arithmetic (plan::simulate_phases) fires it
 // there, and so must the card, although its due shows in the timed phase's first
 // clock (r came due while the step was still added). Found by the plasma example on
 // the phase-timer card (`cpstep run --board hx8k_pt`), where the card, which took no
 // r-due in a timed phase, fired it at the timed move's end and lost a move.
-// Constant steps of 2^50 against lengths of 2^50 (2^56 in r): a move every tick.
 TEST(Ptimer, AMoveDueInTheLastClockBeforeATimedMoveFiresThere) {
-  const plan::PhaseFormat fmt{6, 60, true, false, 1.0};
-  const int64_t step = int64_t(1) << 50;
-  std::vector<plan::TimerPhase> phases;
-  plan::TimerPhase run;
-  run.ticks = 2;
-  run.rest = run.adjust = true;
-  run.s = step;
-  phases.push_back(run);   // moves due at clocks 64 and 128, its last
   plan::TimerPhase timed;
   timed.ticks = 100;
   timed.timed = true;
-  phases.push_back(timed);   // the stop's last move, 100 clocks on
-  phases.push_back(run);     // from rest again: two more
-  const std::vector<plan::i128> lengths(5, plan::i128(1) << 50);
-  const std::vector<int64_t> want = plan::simulate_phases(phases, fmt, lengths);
-  ASSERT_EQ(want, (std::vector<int64_t>{64, 128, 228, 292, 356})) << "the host's arithmetic";
-  std::vector<int64_t> got;
-  ASSERT_NO_FATAL_FAILURE(
-      run_host_phases("ptimer_timed_edge", phases, std::vector<uint64_t>(5, uint64_t(1) << 50), 1000, got));
-  ASSERT_EQ(got.size(), want.size());
-  for (std::size_t n = 0; n < want.size(); ++n) EXPECT_EQ(got[n], want[n]) << "move " << n;
+  // Moves due at clocks 64 and 128 (the run's last), the stop's last move 100 clocks on,
+  // then from rest again: two more.
+  expect_timer_fires_as_host("ptimer_timed_edge", {edge_run(), timed, edge_run()}, {64, 128, 228, 292, 356}, 1000);
 }
 
 // The same where the next phase replaces r: a start from rest, and a reload of r (the
@@ -289,26 +300,13 @@ TEST(Ptimer, AMoveDueInTheLastClockBeforeATimedMoveFiresThere) {
 // 10th move came due in the last clock before a reload and the card, whose r the reload
 // replaced, never fired it (the job a move behind, then an underrun).
 TEST(Ptimer, AMoveDueInTheLastClockBeforeARestOrAReloadFiresThere) {
-  const plan::PhaseFormat fmt{6, 60, true, false, 1.0};
-  const int64_t step = int64_t(1) << 50;
-  plan::TimerPhase run;
-  run.ticks = 2;
-  run.rest = run.adjust = true;
-  run.s = step;
   plan::TimerPhase reload;
   reload.ticks = 2;
   reload.reload = true;
-  reload.s = step;
+  reload.s = kEdgeStep;
   reload.r_top = -(int64_t(1) << 50);   // r = -2^55: half a move (2^56 in r) to go
-  const std::vector<plan::TimerPhase> phases = {run, run, reload, run};
-  const std::vector<plan::i128> lengths(8, plan::i128(1) << 50);
-  const std::vector<int64_t> want = plan::simulate_phases(phases, fmt, lengths);
-  ASSERT_EQ(want, (std::vector<int64_t>{64, 128, 192, 256, 288, 352, 448, 512})) << "the host's arithmetic";
-  std::vector<int64_t> got;
-  ASSERT_NO_FATAL_FAILURE(
-      run_host_phases("ptimer_reload_edge", phases, std::vector<uint64_t>(8, uint64_t(1) << 50), 2000, got));
-  ASSERT_EQ(got.size(), want.size());
-  for (std::size_t n = 0; n < want.size(); ++n) EXPECT_EQ(got[n], want[n]) << "move " << n;
+  expect_timer_fires_as_host("ptimer_reload_edge", {edge_run(), edge_run(), reload, edge_run()},
+                             {64, 128, 192, 256, 288, 352, 448, 512}, 2000);
 }
 
 // The host's phases for two S-curves (a stop between) along a path of 1 mm moves,
