@@ -39,10 +39,12 @@ void evaluations(const CpConic::Coeffs& k, const CpConic::Node& n, int sx, int s
 
 }  // namespace
 
-CpConicSerial::CpConicSerial(CpConicSerialParams params) : p_(params) {
+CpConicSerial::CpConicSerial(CpConicSerialParams params)
+    : p_(params), div_(CpDivParams{params.iw < 26 ? 26 : params.iw > 61 ? 61 : params.iw, 27, 5, 32}) {
   if (p_.qw < 2 || p_.qw > 16) throw std::invalid_argument("cp_conic_serial: QW must be 2 to 16");
   if (p_.iw < p_.qw + 4 || p_.iw > 120) throw std::invalid_argument("cp_conic_serial: IW must be QW + 4 to 120");
   if (p_.xw < 2 || p_.xw > 24) throw std::invalid_argument("cp_conic_serial: XW must be 2 to 24");
+  if (p_.len && (p_.iw < 26 || p_.iw > 61)) throw std::invalid_argument("cp_conic_serial: IW must be 26 to 61 with LEN");
 }
 
 // docs/CONIC.md "The rule"; the quadrant from the signs of the gradient, each
@@ -88,6 +90,16 @@ std::array<uint32_t, 7> CpConicSerial::words(const CpConic::Coeffs& k, const CpC
           lo32(start.gy), uint32_t(du) & 0xFFFFFF, uint32_t(dv) & 0xFFFFFF};
 }
 
+void CpConicSerial::rule_divisor(const CpConic::Node& n, unsigned iw, uint64_t& d, bool& inc) {
+  const uint64_t m = (iw >= 64) ? ~uint64_t{0} : (uint64_t{1} << iw) - 1;
+  const uint64_t gx = uint64_t(n.gx) & m, gy = uint64_t(n.gy) & m;
+  const bool sx = n.gx < 0, sy = n.gy < 0;
+  const uint64_t ax = (sx ? 0 - gx : gx) & m, ay = (sy ? 0 - gy : gy) & m;
+  const bool sel = ay > ax;
+  inc = sel ? sy : sx;
+  d = (sel ? gy : gx) ^ (inc ? m : 0);
+}
+
 CpConicSerialOut CpConicSerial::outputs() const {
   const Regs& q = r_;
   CpConicSerialOut o;
@@ -98,6 +110,7 @@ CpConicSerialOut CpConicSerial::outputs() const {
     o.move_dy = q.ody;
     o.move_end = q.oend;
   }
+  if (p_.len) o.len = uint32_t(div_.outputs().q);
   return o;
 }
 
@@ -105,7 +118,12 @@ void CpConicSerial::tick() {
   const Regs& q = r_;
   Regs d = q;
   const bool last_bit = q.pass && q.i == p_.iw - 1;
-  const bool issue = q.pend && (!q.ov || in.move_ready);
+  const bool out_free = !q.ov || in.move_ready;
+  const CpDivOut dv = div_.outputs();
+  // len: the decided move is presented in the clock its length's division is done;
+  // the division starts once it could be presented.
+  const bool issue = q.pend && out_free && (!p_.len || dv.done);
+  const bool len_start = p_.len && q.pend && !dv.busy && !dv.done && out_free && in.len_go;
   const int64_t du_n = wrap64(q.du - q.mdx, p_.xw), dv_n = wrap64(q.dv - q.mdy, p_.xw);
   const bool at_end = du_n == 0 && dv_n == 0;
 
@@ -148,6 +166,17 @@ void CpConicSerial::tick() {
     } else if (cut) {
       part_turned(q.i + 1);
     }
+  }
+  // len: the comparisons of a pass, whole at its last bit (whatever else this clock does).
+  if (p_.len && last_bit) rule_divisor(after, p_.iw, d.ld, d.linc);
+  if (p_.len) {
+    div_.in.rst = in.rst || in.clear;
+    div_.in.start = len_start;
+    div_.in.k = in.len_k & ((1u << 27) - 1);
+    div_.in.s = in.len_k >> 27;
+    div_.in.d = q.ld;
+    div_.in.d_inc = q.linc;
+    div_.tick();
   }
   if (issue && !in.start) {
     d.odx = q.mdx;

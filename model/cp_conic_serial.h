@@ -12,6 +12,7 @@
 #include <cstdint>
 
 #include "model/cp_conic.h"
+#include "model/cp_div.h"
 
 namespace cpstep::model {
 
@@ -19,6 +20,8 @@ struct CpConicSerialParams {
   unsigned qw = 16;  // signed width of A, B, C (at most 16: a word carries two)
   unsigned iw = 40;  // width of G, its gradient and the evaluations (modulo 2^IW)
   unsigned xw = 24;  // signed width of the end node's offset from the start node (at most 24)
+  // Each move's length by the conic length rule (len_k, len): rtl/cp_conic_serial.v's LEN.
+  bool len = false;
 };
 
 struct CpConicSerialIn {
@@ -34,6 +37,10 @@ struct CpConicSerialIn {
   // applied by the first pass): only words 5, 6 need be written.
   bool cont = false;
   bool move_ready = false;
+  // len: the walk's length rule {S [31:27], K [26:0]}, held while len_go says its
+  // segment is loaded (a division starts only then).
+  uint32_t len_k = 0;
+  bool len_go = false;
 };
 
 struct CpConicSerialOut {
@@ -41,6 +48,8 @@ struct CpConicSerialOut {
   bool move_valid = false;
   int move_dx = 0, move_dy = 0;  // in {-1, 0, 1}; 0 while not valid
   bool move_end = false;
+  // len: the presented move's length (Q2.30).
+  uint32_t len = 0;
 };
 
 class CpConicSerial {
@@ -60,7 +69,12 @@ class CpConicSerial {
   // No pass is running and none will start by itself: idle, or a decided move
   // waiting behind the one presented. Until an input changes (a word, start,
   // clear, reset, or the presented move taken) the walker's state stays as it is.
-  bool quiet() const { return !r_.pass && (!r_.pend || r_.ov); }
+  // (len: a division runs only while a decided move waits with nothing presented;
+  // such a move also holds still while its segment is not loaded, len_go false.)
+  bool quiet(bool len_go = true) const {
+    const CpDivOut dv = div_.outputs();
+    return !r_.pass && (!r_.pend || r_.ov || (p_.len && !len_go && !dv.busy && !dv.done));
+  }
 
   // The move from a node, docs/CONIC.md "The rule", with every value taken modulo
   // 2^iw as the walker's adders take them: CpConic::rule for any walk whose values
@@ -74,6 +88,10 @@ class CpConicSerial {
   // start (24 bits each). The caller checks that the values fit.
   static std::array<uint32_t, 7> words(const CpConic::Coeffs& k, const CpConic::Node& start, bool cw,
                                        int64_t du, int64_t dv);
+  // The length rule's divisor at a node as the walker takes it: the larger of |Gx|
+  // and |Gy| (modulo 2^iw, as its serial comparisons see them; Gx on a tie), given
+  // to the divider as v ^ sign and the sign (the magnitude is their sum).
+  static void rule_divisor(const CpConic::Node& n, unsigned iw, uint64_t& d, bool& inc);
 
  private:
   struct Regs {
@@ -88,10 +106,14 @@ class CpConicSerial {
     int mdx = 0, mdy = 0;    // the move the next pass applies
     int odx = 0, ody = 0;
     bool oend = false;
+    // len: the divisor of the node the last pass computed (v ^ sign, sign).
+    uint64_t ld = 0;
+    bool linc = false;
   };
 
   CpConicSerialParams p_;
   Regs r_;
+  CpDiv div_;
 };
 
 }  // namespace cpstep::model

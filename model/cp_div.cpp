@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "model/cp_div.h"
 
+#include <stdexcept>
+
 #include "model/bits.h"
 
 namespace cpstep::model {
@@ -9,48 +11,52 @@ namespace {
 uint64_t low(uint64_t x, unsigned w) { return x & bits::mask64(w); }
 }  // namespace
 
+CpDiv::CpDiv(Params p) : p_(p) {
+  if (p_.kw < 2 || p_.sw > 5 || p_.qw < 2 || p_.qw > 62 || p_.dw < 2 || p_.dw > 62 || p_.kw + (1u << p_.sw) - 1 >= 64)
+    throw std::invalid_argument("cp_div: parameters out of range");
+}
+
 CpDivOut CpDiv::outputs() const {
   Out o;
   o.busy = r_.busy;
   o.done = r_.done;
-  o.err = r_.err;
-  o.q = r_.sr;
+  o.q = r_.ovf ? bits::mask64(p_.qw) : r_.q;
   return o;
 }
 
 void CpDiv::tick() {
-  if (in.rst) {
-    r_ = Regs{};
-    return;
-  }
   const Regs o = r_;
   Regs n = r_;
-  n.done = false;
   if (o.busy) {
-    // The remainder with k's next bit, less d where it fits.
-    const uint64_t t = (o.rem << 1) | (o.sr >> (p_.qw - 1) & 1);   // DW + 1 < 64 bits
-    const bool fits = t >= o.d;
-    n.rem = fits ? t - o.d : low(t, p_.dw);
-    n.sr = low(o.sr << 1 | uint64_t(fits), p_.qw);
-    n.left = o.left - 1;
-    if (o.left == 1) {
-      n.busy = false;
-      n.done = true;
-    }
+    // Bit left - 1 of k 2^s into the remainder, less D where it fits; the quotient
+    // bit in, the one leaving the quotient remembered.
+    const unsigned s = in.s & ((1u << p_.sw) - 1);
+    const int idx = int(o.left) - int(s) - 1;
+    const uint64_t bit = idx >= 0 ? (low(in.k, p_.kw) >> idx & 1) : 0;
+    const uint64_t t = (o.rem << 1) | bit;   // DW + 1 bits
+    const uint64_t divisor = low(in.d, p_.dw) + uint64_t(in.d_inc);
+    const bool fits = t >= divisor;
+    n.rem = low(fits ? t - divisor : t, p_.dw);
+    n.q = low(o.q << 1 | uint64_t(fits), p_.qw);
+    n.ovf = o.ovf || (o.q >> (p_.qw - 1) & 1) != 0;
   } else if (in.start) {
-    const uint64_t k = low(in.k, p_.kw), d = low(in.d, p_.dw);
-    const uint64_t k_hi = k >> p_.qw;
-    const bool bad = d == 0 || k_hi >= d;
-    n.err = bad;
-    n.d = d;
-    if (bad) {
-      n.done = true;
-      n.sr = 0;
-    } else {
+    n.rem = n.q = 0;
+    n.ovf = false;
+  }
+  if (in.rst) {
+    n.busy = n.done = false;
+    n.left = 0;
+  } else {
+    n.done = false;
+    if (o.busy) {
+      n.left = o.left - 1;
+      if (o.left == 1) {
+        n.busy = false;
+        n.done = true;
+      }
+    } else if (in.start) {
       n.busy = true;
-      n.left = p_.qw;
-      n.rem = k_hi;
-      n.sr = low(k, p_.qw);
+      n.left = (in.s & ((1u << p_.sw) - 1)) + p_.kw;
     }
   }
   r_ = n;

@@ -8,7 +8,7 @@
 
 namespace cpstep::model {
 
-CpRun::CpRun(Params p) : p_(p), aw_(CpEngineParams{p.w}.aw()), walker_(CpConicSerialParams{16, p.ciw, 24}), ptimer_() {
+CpRun::CpRun(Params p) : p_(p), aw_(CpEngineParams{p.w}.aw()), walker_(CpConicSerialParams{16, p.ciw, 24, p.ptimer}), ptimer_() {
   banks_.assign(p_.n, std::vector<uint8_t>(std::size_t(2) << aw_, 0));
 }
 
@@ -207,7 +207,7 @@ uint64_t CpRun::quiet_for(const In& i) const {
   // The conic walker turns its passes every clock: clocked while a pass runs or
   // starts; between its passes (a move presented and the next decided, waiting for
   // the run to take it) it holds still, and the span to the move's due time skips.
-  if (p_.conic && (!walker_.quiet() || i.cw_wr || i.cw_start || i.flush)) return 0;
+  if (p_.conic && (!walker_.quiet(r_.cur_valid && r_.cur_conic) || i.cw_wr || i.cw_start || i.flush)) return 0;
   Regs d = r_;
   Replay rp;
   const Out o = eval(i, d, rp);
@@ -237,7 +237,9 @@ uint64_t CpRun::quiet_for(const In& i) const {
 uint64_t CpRun::ptimer_quiet_for(const In& i) const {
   if (i.flush || (i.ch_valid && ptimer_.outputs().ready)) return 0;
   const uint64_t sc = i.scale & 0x3FFFF;
-  const std::optional<uint64_t> advs = ptimer_.quiet_advs(r_.cur_valid, uint64_t(1) << 40);
+  // (No move fires in a quiet clock; a conic's next length comes from the walker.)
+  const bool len_valid = r_.cur_valid && (!(p_.conic && r_.cur_conic) || walker_.outputs().move_valid);
+  const std::optional<uint64_t> advs = ptimer_.quiet_advs(len_valid, uint64_t(1) << 40);
   if (!advs) return 0;
   if (!r_.running || sc == 0 || *advs == CpPtimer::kForever) return kForever;
   if (sc > (1u << 17)) return 0;   // (two carries' worth a clock: clocked one by one)
@@ -288,8 +290,12 @@ void CpRun::tick() {
     walker_.in.start = in.cw_start;
     walker_.in.cont = in.cw_cont;
     walker_.in.move_ready = r_.cur_conic && o.fire;
-    walker_.tick();
+    walker_.in.len_k = r_.cur_len;
+    walker_.in.len_go = r_.cur_valid && r_.cur_conic;
   }
+  // ptimer: a conic's move lengths come from the walker (before its edge).
+  const CpConicSerialOut wk = p_.conic && p_.ptimer ? walker_.outputs() : CpConicSerialOut{};
+  if (p_.conic) walker_.tick();
   if (p_.ptimer) {
     const CpPtimerOut pt = ptimer_.outputs();
     CpPtimerIn& pi = ptimer_.in;
@@ -300,9 +306,12 @@ void CpRun::tick() {
     pi.sel = uint32_t(in.ch_head[0] >> 32) & 7;
     pi.data = uint32_t(in.ch_head[0]);
     pi.fire = o.fire;
-    // The length of the move pending after this clock: the segment loaded after it.
-    pi.len = uint64_t(d.cur_len) << 30;
-    pi.len_valid = d.cur_valid;
+    // The length of the move pending after a fire is owed, handed the clock after:
+    // the loaded segment's L, or with a conic loaded the walker's once it presents
+    // the move.
+    const bool walk = p_.conic && r_.cur_valid && r_.cur_conic;
+    pi.len = uint64_t(walk ? wk.len : r_.cur_len) << 30;
+    pi.len_valid = !o.fire && (walk ? wk.move_valid : r_.cur_valid);
     ptimer_.tick();
   }
   if (in.rst) {

@@ -21,6 +21,19 @@
 // Valid/ready contract on the moves (docs/ENGINE.md): valid never waits for ready;
 // while valid && !ready the move holds.
 //
+// With LEN = 1 (a phase-timer core's walker, docs/CORE.md "Phase-timer builds") it
+// also gives each move's length by the conic length rule (docs/CONIC.md "The length
+// rule"): q = floor(K 2^S / m), m = max(|Gx|, |Gy|) at the node the move leaves,
+// {S[31:27], K[26:0]} on len_k_i (the CONIC segment's L word, which the core holds
+// while the segment is loaded, len_go_i), saturated to 2^32 - 1 (rtl/cp_div.v). A
+// pass compares the two magnitudes of the node it computes serially as its bits
+// appear (for all four sign cases; the signs at its last bit pick one); once the move
+// it decides can be presented (nothing presented, or the presented move taken) and
+// its segment is loaded, the divider divides by m from the shift registers, which
+// hold still until that move is presented, and the move is presented in the clock
+// the division is done: a presented move's length is len_o (the next division
+// starts only once it is taken).
+//
 // cp_run instantiates it in a core built with CONIC = 1 (docs/CORE.md "CONIC").
 `resetall
 `timescale 1ns / 1ps
@@ -32,7 +45,9 @@ module cp_conic_serial #(
     // Width of G, its gradient and the evaluations (two's complement, modulo 2^IW).
     parameter integer IW = 40,
     // Signed width of the end node's offset from the start node.
-    parameter integer XW = 24
+    parameter integer XW = 24,
+    // 1: each move's length by the conic length rule (word 7, len_o).
+    parameter integer LEN = 0
 ) (
     input  wire          clk,
     input  wire          rst,
@@ -63,7 +78,14 @@ module cp_conic_serial #(
     input  wire          move_ready_i,
     output wire [1:0]    move_dx_o,
     output wire [1:0]    move_dy_o,
-    output wire          move_end_o
+    output wire          move_end_o,
+
+    // LEN: the walk's length rule {S, K}, held while len_go_i says its segment is
+    // loaded (a division starts only then); the presented move's length (Q2.30; 0
+    // with LEN = 0).
+    input  wire [31:0]   len_k_i,
+    input  wire          len_go_i,
+    output wire [31:0]   len_o
 );
 
 localparam integer BW = $clog2(IW);
@@ -79,6 +101,9 @@ generate
     end
     if (XW < 2 || XW > 24) begin : g_check_xw
         cp_conic_serial_parameter_XW_must_be_2_to_24 u_bad ();
+    end
+    if (LEN != 0 && (IW < 26 || IW > 61)) begin : g_check_len
+        cp_conic_serial_parameter_IW_must_be_26_to_61_with_LEN u_bad ();
     end
 endgenerate
 
@@ -198,9 +223,14 @@ wire second = same ? left_m : left_l;
 wire step_x = first && (!second || same) || !first && !same;
 wire step_y = first && (!second || !same) || !first && same;
 
-// ---------------------------------------------------------------- presenting a move
+// ---------------------------------------------------------------- the move's length (LEN)
+// The division for the decided move starts once it could be presented; the move is
+// presented when the division is done (len_have).
 wire out_free = !ov_q || move_ready_i;
-wire issue    = pend_q && out_free;
+wire len_have;
+
+// ---------------------------------------------------------------- presenting a move
+wire issue    = pend_q && out_free && len_have;
 wire [1:0] dx = !mx_q ? 2'b00 : qx_q ? 2'b11 : 2'b01;
 wire [1:0] dy = !my_q ? 2'b00 : qy_q ? 2'b11 : 2'b01;
 wire [XW-1:0] du_n = du_q - {{(XW-2){dx[1]}}, dx};
@@ -215,6 +245,54 @@ wire [31:0]  wr_s16h = {{16{wr_data_i[31]}}, wr_data_i[31:16]};
 wire [31:0]  wr_s24 = {{8{wr_data_i[23]}}, wr_data_i[23:0]};
 wire         take_wr = wr_i && !busy_o;
 wire unused_wr = &{1'b0, wr_s32[127:IW], wr_s16[31:QW], wr_s16h[31:QW], wr_s24[31:XW]};
+
+generate
+    if (LEN != 0) begin : g_len
+        // Serial negations of Gx' and Gy' (carry in 1 at the first bit), and the four
+        // comparisons |Gy'| > |Gx'| for each pair of signs {Gx' < 0, Gy' < 0}: the
+        // later bit decides, equal bits keep the earlier answer.
+        reg        cnx_q, cny_q, sel_q, neg_q;
+        reg [3:0]  gt_q;
+        wire       cnx = first_bit || cnx_q;
+        wire       cny = first_bit || cny_q;
+        wire       mx  = !nx ^ cnx, my = !ny ^ cny;        // bit i of -Gx', -Gy'
+        wire [3:0] gt;
+        genvar c;
+        for (c = 0; c < 4; c = c + 1) begin : g_cmp
+            wire ab = ((c >> 1) & 1) != 0 ? mx : nx;      // |Gx'| with Gx' < 0 assumed or not
+            wire bb = (c & 1) != 0 ? my : ny;
+            assign gt[c] = bb && !ab || !(ab ^ bb) && !first_bit && gt_q[c];
+        end
+        wire [1:0] sgn = {nx, ny};                         // at the last bit: the signs
+        wire       sel = gt[sgn];
+        wire       div_busy, div_done, len_start;
+        wire [31:0] div_q;
+        cp_div #(.DW(IW), .KW(27), .SW(5), .QW(32)) u_div (
+            .clk(clk), .rst(rst || clear_i), .start_i(len_start), .k_i(len_k_i[26:0]), .s_i(len_k_i[31:27]),
+            .d_i((sel_q ? sgy_q : sgx_q) ^ {IW{neg_q}}), .d_inc_i(neg_q),
+            .busy_o(div_busy), .done_o(div_done), .q_o(div_q));
+        // Nothing is presented while the division runs (it starts only when the output
+        // is free), so the move is presented in the clock its division is done.
+        assign len_have  = div_done;
+        assign len_start = pend_q && !div_busy && !div_done && out_free && len_go_i;
+        always @(posedge clk) begin
+            if (pass_q) begin
+                cnx_q <= !nx && cnx;
+                cny_q <= !ny && cny;
+                gt_q  <= gt;
+                if (last_bit) begin
+                    sel_q <= sel;
+                    neg_q <= sel ? ny : nx;
+                end
+            end
+        end
+        assign len_o     = div_q;
+    end else begin : g_no_len
+        assign len_have  = 1'b1;
+        assign len_o     = 32'd0;
+        wire unused_len = &{1'b0, len_k_i, len_go_i};
+    end
+endgenerate
 
 always @(posedge clk) begin
     if (rst || clear_i && !start_i) begin

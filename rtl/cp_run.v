@@ -183,20 +183,23 @@ endgenerate
 // ---------------------------------------------------------------- the conic walker
 wire       wk_valid, wk_end, wk_busy;
 wire [1:0] wk_dx, wk_dy;
+wire [31:0] wk_len;                      // PTIMER: the presented conic move's length
 wire       wk_ready;                     // a conic move fires now
 generate
     if (CONIC != 0) begin : g_walker
-        cp_conic_serial #(.QW(16), .IW(CIW), .XW(24)) u_walker (
+        cp_conic_serial #(.QW(16), .IW(CIW), .XW(24), .LEN(PTIMER)) u_walker (
             .clk(clk), .rst(rst), .clear_i(flush_i),
             .wr_i(cw_wr_i), .wr_sel_i(cw_sel_i), .wr_data_i(cw_data_i), .start_i(cw_start_i), .cont_i(cw_cont_i),
             .busy_o(wk_busy), .move_valid_o(wk_valid), .move_ready_i(wk_ready),
-            .move_dx_o(wk_dx), .move_dy_o(wk_dy), .move_end_o(wk_end));
+            .move_dx_o(wk_dx), .move_dy_o(wk_dy), .move_end_o(wk_end),
+            .len_k_i(cur_len_q), .len_go_i(cur_valid_q && cur_conic_q), .len_o(wk_len));
     end else begin : g_no_walker
         assign wk_valid = 1'b0;
         assign wk_end   = 1'b0;
         assign wk_busy  = 1'b0;
         assign wk_dx    = 2'b00;
         assign wk_dy    = 2'b00;
+        assign wk_len   = 32'd0;
         localparam [31:0] CIW_WORD = CIW;
         wire unused_walker = &{1'b0, cw_wr_i, cw_sel_i, cw_data_i, cw_start_i, cw_cont_i, wk_ready, CIW_WORD};
     end
@@ -206,13 +209,20 @@ assign walker_free_o = !wk_busy && !wk_valid;
 // ---------------------------------------------------------------- the phase timer (PTIMER)
 // Half clocks of scaled time: the fraction pa_q takes scale_i (at most 2) each clock
 // and the timer advances on its carry. Its words come from the chunk queue while its
-// buffer is free; a fire hands it the length of the move pending after this clock
-// (cur_len_d), known while a segment is loaded after it (cur_valid_d).
+// buffer is free. The length of the move pending after a fire is owed to it and
+// handed the clock after (so that nothing of a fire's clock reaches the timer's
+// subtraction but the fire itself): the loaded segment's, a line's L (cur_len_q) or,
+// with a conic loaded (pt_walk), the walker's (the length rule's) once it presents
+// the move (wk_valid). So a move never fires in the clock after another (the host
+// plans none that close: card::plan_phase_timer_job).
 wire        pt_due, pt_ready, pt_starved;
 wire [17:0] pa_scale = (FEED != 0) ? scale_i : 18'h10000;
 wire [17:0] pa_sum   = {1'b0, pa_q} + pa_scale;
 wire        pt_adv   = running_q && pa_sum[17];
 wire        pt_wr    = ch_valid_i && pt_ready;
+wire        pt_walk  = CONIC != 0 && cur_valid_q && cur_conic_q;
+wire [31:0] pt_len   = pt_walk ? wk_len : cur_len_q;
+wire        pt_len_valid = !fire_o && (pt_walk ? wk_valid : cur_valid_q);
 generate
     if (PTIMER != 0) begin : g_ptimer
         wire       pt_active;
@@ -220,14 +230,14 @@ generate
         cp_ptimer u_ptimer (
             .clk(clk), .rst(rst), .clear_i(flush_i), .adv_i(pt_adv),
             .wr_i(pt_wr), .sel_i(ch_head_i[34:32]), .data_i(ch_head_i[31:0]),
-            .fire_i(fire_o), .len_i({cur_len_d, 30'd0}), .len_valid_i(cur_valid_d),
+            .fire_i(fire_o), .len_i({pt_len, 30'd0}), .len_valid_i(pt_len_valid),
             .due_o(pt_due), .active_o(pt_active), .ready_o(pt_ready), .starved_o(pt_starved), .kind_o(pt_kind));
         wire unused_pt = &{1'b0, pt_active, pt_kind};
     end else begin : g_no_ptimer
         assign pt_due     = 1'b0;
         assign pt_ready   = 1'b0;
         assign pt_starved = 1'b0;
-        wire unused_pt = &{1'b0, pt_adv, pt_wr};
+        wire unused_pt = &{1'b0, pt_adv, pt_wr, pt_len, pt_len_valid};
     end
 endgenerate
 

@@ -2,11 +2,13 @@
 #include "card/ptimer_job.h"
 
 #include <algorithm>
+#include <optional>
 #include <utility>
 
 #include <fmt/format.h>
 
 #include "card/protocol.h"
+#include "plan/conic_arc.h"
 #include "plan/phases.h"
 
 namespace cpstep::card {
@@ -29,18 +31,25 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
     r.value.reset();
     return r;
   };
-  if (machine.planner.arcs != plan::ArcMode::chords)
-    return fail("a phase-timer card does not time a conic's moves yet: plan arcs as chords ([planner] arcs)");
-
   // The timer counts half clocks (rtl/cp_run.v, PTIMER): every time in them.
   plan::PhaseFormat fmt{6, 60, true, false, 0.0125};
   fmt.clock_hz = machine.card.clock_hz / 2;
   fmt.length_bits = 30;  // the segment word L: Q2.30 of the path unit
   plan::PhaseFitter fitter(fmt, machine.chunk_tolerance_cycles() / 2);
-  std::vector<uint32_t> lengths;  // per timed batch (a card segment): its L
+  // Per timed batch (a card segment): its first move's L, or none when its moves
+  // differ (a conic's, whose L word is its arc's {S, K}; a line's must be one).
+  std::vector<std::optional<uint32_t>> lengths;
   std::string hook_error;
   plan::PlanOptions o;
-  o.chunk_limits = chunk_limits(limits);  // (the chunks are not sent; to_wire checks them)
+  // The chunks are not sent (to_wire checks them): no chunk queue to fill, so no
+  // segment is cut to fit one (a conic goes whole, cut only where U would not fit).
+  CardLimits unqueued = limits;
+  unqueued.chunk_queue = 1u << 30;
+  o.chunk_limits = chunk_limits(unqueued);
+  // Conics (where the machine file and the card have them): each move's length by the
+  // rule the card's walker applies, exactly (rtl/cp_conic_serial.v LEN).
+  o.conic_length_rule = true;
+  o.conic_rule_unit_mm = fmt.path_unit_mm;
   o.on_move_times = [&](std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at,
                         std::span<const plan::PlanJerk> changes) {
     if (!hook_error.empty()) return;
@@ -49,17 +58,9 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
     std::vector<plan::PlanJerk> ch(changes.begin(), changes.end());
     for (plan::PlanJerk& c : ch) c.at /= 2;
     const plan::i128 l = plan::move_length(lengths_mm.front(), fmt) >> 30;
-    if (!(l > 0 && l < (plan::i128(1) << 32))) {
-      hook_error = fmt::format("card segment {}: its length per move, {} mm, does not fit the 32-bit L word",
-                               lengths.size(), lengths_mm.front());
-      return;
-    }
-    for (double x : lengths_mm)
-      if ((plan::move_length(x, fmt) >> 30) != l) {
-        hook_error = fmt::format("card segment {}: its moves are not of one length", lengths.size());
-        return;
-      }
-    lengths.push_back(uint32_t(l));
+    bool one = l > 0 && l < (plan::i128(1) << 32);
+    for (double x : lengths_mm) one = one && (plan::move_length(x, fmt) >> 30) == l;
+    lengths.push_back(one ? std::optional<uint32_t>(uint32_t(l)) : std::nullopt);
     if (!fitter.push(half, lengths_mm, rest_at < 0 ? rest_at : rest_at / 2, ch)) hook_error = fitter.error();
   };
   auto planned = plan::plan_job(job, machine, o);
@@ -70,7 +71,7 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
   }
   if (!hook_error.empty()) return fail(hook_error);
   if (!fitter.finish()) return fail(fitter.error());
-  auto wired = to_wire(*planned, file, limits);
+  auto wired = to_wire(*planned, file, unqueued);
   if (!wired.ok()) {
     r.errors = wired.errors;
     return r;
@@ -86,14 +87,56 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
     const size_t c = wire.source[i];
     if (planned->card[c].segment.pause) return fail("a phase-timer card does not take pauses (dwells, M0) yet");
     if (c >= lengths.size()) return fail(fmt::format("card segment {} has no length per move", c));
-    s.length = lengths[c];
+    if (planned->card[c].conic) {
+      s.length = planned->card[c].rule_word;
+    } else if (lengths[c]) {
+      s.length = *lengths[c];
+    } else {
+      return fail(fmt::format("card segment {}: its moves are not of one length that fits the 32-bit L word", c));
+    }
     first_move.push_back(moves);
     moves += uint64_t(s.u) << s.k;
     for (size_t a = 0; a < out.end.size() && a < s.v.size(); ++a)
       out.end[a] += (s.dir_positive[a] ? 1 : -1) * int64_t(uint64_t(s.v[a]) << s.k);
+    if (s.conic) {   // the plane's axes step by the walk: its end minus its start (K5, K6)
+      const auto s24 = [](uint32_t w) { return int64_t(int32_t(w << 8) >> 8); };
+      if (s.conic->axis_u < out.end.size()) out.end[s.conic->axis_u] += s24(s.conic->words[5]);
+      if (s.conic->axis_v < out.end.size()) out.end[s.conic->axis_v] += s24(s.conic->words[6]);
+    }
   }
   if (moves != out.fire_half_clocks.size())
     return fail(fmt::format("{} moves on the wire, {} timed", moves, out.fire_half_clocks.size()));
+  // The card hands its timer a move's length the clock after the move before fires
+  // (rtl/cp_run.v): no move may be due in that clock.
+  for (size_t n = 1; n < out.fire_half_clocks.size(); ++n)
+    if (out.fire_half_clocks[n] <= out.fire_half_clocks[n - 1])
+      return fail(fmt::format("moves {} and {} are due {} clocks apart: the card needs 2 at least", n, n + 1,
+                              2 * (out.fire_half_clocks[n] - out.fire_half_clocks[n - 1])));
+  // A conic's moves come from the walker, each after its pass and its length's
+  // division (docs/CORE.md "Phase-timer builds"): each must be due that long after
+  // the conic move before it, a walk's first also after its words.
+  {
+    const unsigned ciw = machine.card.conic_width;
+    bool have = false;
+    int64_t last = 0;
+    for (size_t i = 0; i < wire.segments.size(); ++i) {
+      const WireSegment& s = wire.segments[i];
+      if (!s.conic) continue;
+      const unsigned shift = *s.length >> 27;
+      const uint64_t n = uint64_t(s.u) << s.k;
+      for (uint64_t j = 0; j < n; ++j) {
+        const int64_t at = 2 * out.fire_half_clocks[first_move[i] + j];
+        const int64_t gap = j == 0 ? int64_t(plan::conic_gap_cycles(ciw)) + 27 + shift + 1
+                                   : conic_move_gap_cycles(ciw, shift);
+        if (have && at - last < gap)
+          return fail(fmt::format("an arc's move comes {} clocks after the one before it, sooner than the card's "
+                                  "walker gives it ({}): plan arcs as chords ([planner] arcs)",
+                                  at - last, gap));
+        have = true;
+        last = at;
+      }
+    }
+  }
   if (wire.segments.empty()) return fail("no motion");
   wire.segments.back().end = true;
 

@@ -24,6 +24,11 @@ namespace cpstep::card {
 // fires 2 * fire_half_clocks[n] + kPhaseTimerStartCycles clocks after START, at scale 1.
 inline constexpr int64_t kPhaseTimerStartCycles = 1;
 
+// The fewest clocks between two moves of a conic on a phase-timer card: the
+// walker's pass (IW + 1 clocks) and the length's division (the 27 + S bits of
+// K 2^S, then the done clock), rtl/cp_conic_serial.v LEN.
+inline constexpr int64_t conic_move_gap_cycles(unsigned ciw, unsigned s) { return int64_t(ciw) + 1 + 27 + s + 1; }
+
 struct PhaseTimerJob {
   std::vector<uint32_t> preamble;               // encode_preamble: drivers, axes, inputs, feed
   std::vector<std::vector<uint32_t>> commands;  // PHASE and SEGMENT commands, in the order to send
@@ -48,10 +53,11 @@ struct PhaseTimerJob {
 };
 
 // Plans `job` on `machine` (bound to the card: its clock) for a phase-timer card of
-// `limits`. Arcs must be planned as chords (machine.planner.arcs; a phase-timer
-// card does not time a conic's moves yet) and the job must have no pauses (dwells,
-// M0): errors otherwise, as for a line too long for one length word. `file` names
-// the G-code in errors.
+// `limits`. Arcs as the machine file plans them (planner.arcs): as conics, each
+// move measured by the walker's length rule (plan::conic_rule_lengths, the CONIC's
+// L word its arc's {S, K}), its moves at least conic_move_gap_cycles apart. The job
+// must have no pauses (dwells, M0): errors otherwise, as for a line too long for
+// one length word. `file` names the G-code in errors.
 plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const plan::Machine& machine,
                                                  const CardLimits& limits, const std::string& file);
 

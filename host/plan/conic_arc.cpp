@@ -90,13 +90,44 @@ std::vector<std::uint64_t> conic_rule_divisors(const ConicWalk& w) {
     std::vector<std::uint64_t> out;
     out.reserve(w.moves.size());
     std::int64_t x = w.u0, y = w.v0;
-    std::uint64_t before = m(x, y);
     for (std::uint8_t mv : w.moves) {
+        out.push_back(m(x, y));   // the node the move leaves
         x += ConicWalk::dx_of(mv);
         y += ConicWalk::dy_of(mv);
-        const std::uint64_t here = m(x, y);
-        out.push_back(before + here);
-        before = here;
+    }
+    return out;
+}
+
+std::uint32_t conic_rule_length(std::uint32_t word, std::uint64_t m) {
+    __extension__ typedef unsigned __int128 u128;
+    if (m == 0) return 0xFFFFFFFFu;
+    const u128 q = (u128(word & ((1u << 27) - 1)) << (word >> 27)) / m;
+    return q > 0xFFFFFFFFu ? 0xFFFFFFFFu : std::uint32_t(q);
+}
+
+std::variant<ConicRuleLengths, std::string> conic_rule_lengths(std::span<const std::uint64_t> divisors,
+                                                               double total) {
+    long double inv = 0;
+    for (std::uint64_t m : divisors) {
+        if (m == 0) return std::string("a node of its walk has no gradient (the length rule divides by it)");
+        inv += 1.0L / static_cast<long double>(m);
+    }
+    if (divisors.empty() || !(total > 0)) return std::string("no path to measure");
+    // K 2^S = total / sum(1/m): K below 2^27, as many of its bits as S allows.
+    const long double x = static_cast<long double>(total) / inv;
+    int s = 0;
+    while (s < 31 && std::ldexp(x, -s) >= std::ldexp(1.0L, 27) - 0.5L) ++s;
+    const long double kf = std::nearbyint(std::ldexp(x, -s));
+    if (!(kf >= 1) || kf >= std::ldexp(1.0L, 27))
+        return fmt::format("its length rule's constant ({:.4g}) does not fit K [26:0] 2^S [31:27]", double(x));
+    ConicRuleLengths out;
+    out.word = std::uint32_t(s) << 27 | std::uint32_t(kf);
+    out.lengths.reserve(divisors.size());
+    for (std::uint64_t m : divisors) {
+        const std::uint32_t l = conic_rule_length(out.word, m);
+        if (l == 0 || l == 0xFFFFFFFFu)
+            return fmt::format("a move's length by the rule ({} / {}) does not fit the 32-bit length", double(x), m);
+        out.lengths.push_back(l);
     }
     return out;
 }

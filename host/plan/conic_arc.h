@@ -57,16 +57,30 @@ struct ConicWalk {
     [[nodiscard]] ConicWalk tail(std::size_t n) const;
 };
 
-// A rule for the length of a conic's move that the card's walker can apply
-// (issue 13, toward timing moves by their path length on the card,
-// docs/PROTOCOL.md "Toward a compact wire"): move n, from node n-1 to node n,
-// is K / D_n long, D_n = m(node n-1) + m(node n), m(P) = max(|Gx(P)|, |Gy(P)|)
-// (the walker's gradient: Gx = 2Ax + By + D, Gy = Bx + 2Cy + E), K one constant
-// of the walk. On a circle ds/d(major) = |grad G| / |G of the minor's normal|:
-// the move advances the axis its octant steps every move by one, and the
-// gradient's larger component is the other one's, so 1 / D_n is the path per
-// move up to a constant, its two nodes averaged. One divisor per move of `w`.
+// The rule for the length of a conic's move that a phase-timer card's walker
+// applies (docs/CONIC.md "The length rule", rtl/cp_conic_serial.v LEN): move n,
+// from node n-1 to node n, is K 2^S / m(node n-1) long, m(P) = max(|Gx(P)|,
+// |Gy(P)|) (the walker's gradient: Gx = 2Ax + By + D, Gy = Bx + 2Cy + E), K and S
+// one constant of the arc. On a circle ds/d(major) = |grad G| / |G of the minor's
+// normal|: the move advances the axis its octant steps every move by one, and the
+// gradient's larger component is the other one's, so 1 / m is the path per move up
+// to a constant. One divisor m per move of `w`.
 [[nodiscard]] std::vector<std::uint64_t> conic_rule_divisors(const ConicWalk& w);
+
+// An arc's constant for the rule, as a CONIC segment's length word carries it on a
+// phase-timer card: {S [31:27], K [26:0]}, and its moves' lengths floor(K 2^S / m)
+// (units of 2^-30 of the phases' path unit), chosen so that they sum to `total`
+// (the arc's path, in the same units) as closely as K's 27 bits allow. An error
+// when a length would not fit 32 bits or be 0 (or a divisor is 0).
+struct ConicRuleLengths {
+    std::uint32_t word = 0;
+    std::vector<std::uint32_t> lengths;
+};
+[[nodiscard]] std::variant<ConicRuleLengths, std::string> conic_rule_lengths(std::span<const std::uint64_t> divisors,
+                                                                            double total);
+// floor(K 2^S / m) for a length word {S, K}, saturated to 2^32 - 1 (m = 0 too), as
+// rtl/cp_div.v gives it.
+[[nodiscard]] std::uint32_t conic_rule_length(std::uint32_t word, std::uint64_t m);
 
 // One CONIC card segment: what the planner records of it (moves, delta, the other
 // axes' patterns over T with k = 0) and its walk.

@@ -74,7 +74,10 @@ struct PlanStream::Impl {
         on_move_times;
     double arc_path_done = 0;   // on_move_times: the path length of the arc's pieces so far
     bool conic_length_rule = false;
+    double rule_unit_mm = 0;       // conic_rule_unit_mm
     std::vector<double> rule_at;   // conic_length_rule: the arc's moves' path positions (mm)
+    std::vector<double> rule_len;  // ... and lengths (mm), exact for the card (rule_unit_mm)
+    std::uint32_t rule_word = 0;   // ... the arc's {S, K} (rule_unit_mm)
     std::size_t rule_next = 0;     // the next move's in rule_at
     double rule_last_time = 0;     // the last rule-timed move's time (cycles)
     StepSegmenter segmenter;
@@ -120,6 +123,7 @@ struct PlanStream::Impl {
           tol(machine.chunk_tolerance_cycles()),
           on_move_times(options.on_move_times),
           conic_length_rule(options.conic_length_rule),
+          rule_unit_mm(options.conic_rule_unit_mm),
           segmenter(machine, file),
           feeds(machine, file) {
         conics = m.planner.arcs == ArcMode::conic && m.card.conic_width > 0;
@@ -315,7 +319,7 @@ struct PlanStream::Impl {
                     std::span<const double> ideal = piece.walk->ideal;
                     std::vector<double> rule_ideal;
                     if (conic_length_rule) {
-                        if (p == 0) rule_positions(*list, in.feeds);   // before any piece's walk is handed on
+                        if (p == 0 && !rule_positions(*list, in.feeds, s.loc)) return false;   // before any piece's walk is handed on
                         for (std::size_t n = 0; n < piece.walk->ideal.size(); ++n) {
                             const double here = rule_at[rule_next++];
                             const double t = time_at(in.feeds, here);
@@ -330,10 +334,19 @@ struct PlanStream::Impl {
                                     std::min(stats.conic_rule_min_gap_cycles, t - rule_last_time);
                             rule_last_time = t;
                             rule_ideal.push_back(t);
-                            lengths.push_back(here - last);
+                            lengths.push_back(rule_len[rule_next - 1]);
                             last = here;
                         }
                         ideal = rule_ideal;
+                        if (rule_unit_mm > 0) {
+                            // The card times them so: the plan's times for the rule's
+                            // positions are the walk's (PlanStats::conic_rule_shift_*
+                            // keep how far they are from the true curve's).
+                            auto timed = std::make_shared<ConicWalk>(*piece.walk);
+                            timed->ideal = rule_ideal;
+                            piece.walk = std::move(timed);
+                            ideal = piece.walk->ideal;
+                        }
                     } else {
                         for (double c : piece.walk->ideal) {
                             const double here = path_at(c);
@@ -362,6 +375,7 @@ struct PlanStream::Impl {
                 ++stats.conic_segments;
                 for (int a = 0; a < kAxes; ++a) pos[a] += piece.segment.delta[a];
                 PlannedCardSegment c{piece.segment, std::move(chunks.chunks), std::move(piece.walk)};
+                c.rule_word = conic_length_rule ? rule_word : 0;
                 c.prev_event = before;
                 c.step_moves = piece.segment.moves;
                 card(std::move(c));
@@ -390,24 +404,53 @@ struct PlanStream::Impl {
     }
 
     // conic_length_rule: every move of the arc's pieces at its position along the
-    // arc's path (mm), move n's length K / D_n (plan::conic_rule_divisors), K such
-    // that the last move ends the arc's path, as the feeds plan it.
-    void rule_positions(const std::vector<ConicPiece>& pieces, std::span<const PlannedSegment> arc_feeds) {
+    // arc's path (mm), move n's length K 2^S / m_n (plan::conic_rule_divisors), K
+    // such that the last move ends the arc's path, as the feeds plan it: in real
+    // numbers, or (rule_unit_mm) exactly as the card divides (plan::conic_rule_lengths;
+    // an error when the rule cannot measure the arc).
+    bool rule_positions(const std::vector<ConicPiece>& pieces, std::span<const PlannedSegment> arc_feeds,
+                        const SourceLoc& loc) {
         double total = 0;
         for (const PlannedSegment& f : arc_feeds) total += f.length;
-        std::vector<double> w;
+        std::vector<std::uint64_t> divisors;
         for (const ConicPiece& piece : pieces)
-            for (std::uint64_t d : conic_rule_divisors(*piece.walk)) w.push_back(1.0 / double(std::max<std::uint64_t>(d, 1)));
+            for (std::uint64_t d : conic_rule_divisors(*piece.walk)) divisors.push_back(d);
+        rule_at.clear();
+        rule_len.clear();
+        rule_next = 0;
+        if (rule_unit_mm > 0) {
+            const double unit = std::ldexp(rule_unit_mm, -30);
+            auto lengths = conic_rule_lengths(divisors, total / unit);
+            if (auto* e = std::get_if<std::string>(&lengths)) {
+                loop_errors.push_back({file, loc, "arc as a conic on a phase-timer card: " + *e});
+                return false;
+            }
+            const ConicRuleLengths& rl = std::get<ConicRuleLengths>(lengths);
+            rule_word = rl.word;
+            std::uint64_t acc = 0;   // (exact: 2^30 units of path per unit, sums under 2^64)
+            for (std::uint32_t l : rl.lengths) {
+                acc += l;
+                rule_at.push_back(double(acc) * unit);
+                rule_len.push_back(double(l) * unit);
+            }
+            return true;
+        }
+        std::vector<double> w;
+        for (std::uint64_t d : divisors) w.push_back(1.0 / double(std::max<std::uint64_t>(d, 1)));
         double sum = 0;
         for (double x : w) sum += x;
-        rule_at.clear();
         double acc = 0;
         for (double x : w) {
             acc += x;
             rule_at.push_back(total * acc / sum);
         }
         if (!rule_at.empty()) rule_at.back() = total;
-        rule_next = 0;
+        double last = 0;
+        for (double x : rule_at) {
+            rule_len.push_back(x - last);
+            last = x;
+        }
+        return true;
     }
     // The card cycle at which the feeds reach `s` mm along the arc's path.
     [[nodiscard]] double time_at(std::span<const PlannedSegment> arc_feeds, double s) const {

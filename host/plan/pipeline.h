@@ -34,6 +34,9 @@ struct PlannedCardSegment {
     // moves of its step segment (all of its parts: each move is timed against them).
     std::int64_t prev_event = 0;
     std::uint64_t step_moves = 0;
+    // PlanOptions::conic_rule_unit_mm: a conic's length word {S, K} (its arc's),
+    // plan::conic_rule_lengths.
+    std::uint32_t rule_word = 0;
 };
 
 struct PlanStats {
@@ -87,6 +90,12 @@ struct PlanOptions {
     // where the true curve passes its node. PlanStats::conic_rule_shift_cycles
     // says how far that moves them.
     bool conic_length_rule = false;
+    // ... > 0: the rule as a phase-timer card applies it, exactly: each arc's
+    // {S, K} (plan::conic_rule_lengths, PlannedCardSegment::rule_word) and its moves'
+    // lengths floor(K 2^S / m) in 2^-30 of this unit (the phases' path unit, mm),
+    // each move at the plan's time for the sum of the lengths before it. 0: the
+    // rule's proportions in real numbers, scaled to the arc's path (a projection).
+    double conic_rule_unit_mm = 0;
 };
 
 // The whole job planned: its blocks pushed through a PlanStream (after G1 chains

@@ -380,25 +380,29 @@ void set_checkpoints(CardJob& cj, const plan::PerAxis<int64_t>& start) {
     cj.has_nurbs = cj.has_nurbs || st.kind == plan::MotionKind::nurbs;
 }
 
-// A job for a phase-timer card (card::plan_phase_timer_job): arcs as chords (the card
-// does not time a conic's moves yet), planned whole. The card's timer starts with
-// START, and move n fires 2 * fire_half_clocks[n] + card::kPhaseTimerStartCycles
-// clocks after it (at scale 1).
+// A job for a phase-timer card (card::plan_phase_timer_job), planned whole: arcs as
+// conics where the machine file asks (each move measured by the walker's length
+// rule), or, when the card cannot walk them so (an arc's moves faster than its
+// walker gives them, a length the rule cannot measure), the whole job's arcs as
+// chords with a warning that says why. The card's timer starts with START, and move
+// n fires 2 * fire_half_clocks[n] + card::kPhaseTimerStartCycles clocks after it
+// (at scale 1).
 plan::Result<CardJob> plan_phase_timer_card_job(const plan::Job& job, const plan::Machine& machine,
                                                 const card::CardCaps& caps, const plan::PerAxis<int64_t>& start) {
   plan::Result<CardJob> r;
   plan::Machine m = machine;
-  if (m.planner.arcs != plan::ArcMode::chords) {
-    m.planner.arcs = plan::ArcMode::chords;
-    // Said once, at the first arc (a job without arcs has nothing to say).
-    for (const plan::MotionBlock& b : job.blocks)
-      if (b.kind == plan::MotionKind::arc_cw || b.kind == plan::MotionKind::arc_ccw) {
-        r.warnings.push_back({job.file, b.loc,
-                              "arcs planned as chords: a phase-timer card does not time a conic's moves yet"});
-        break;
-      }
-  }
   auto pt = card::plan_phase_timer_job(job, m, card::limits(caps), job.file);
+  if (!pt.ok() && m.planner.arcs == plan::ArcMode::conic && m.card.conic_width > 0) {
+    plan::Machine chords = m;
+    chords.planner.arcs = plan::ArcMode::chords;
+    auto again = card::plan_phase_timer_job(job, chords, card::limits(caps), job.file);
+    if (again.ok()) {
+      const plan::Diagnostic& why = pt.errors.front();
+      r.warnings.push_back({why.file, why.loc, "arcs planned as chords: " + why.message});
+      m = chords;
+      pt = std::move(again);
+    }
+  }
   r.warnings.insert(r.warnings.end(), pt.warnings.begin(), pt.warnings.end());
   if (!pt.ok()) {
     r.errors = pt.errors;

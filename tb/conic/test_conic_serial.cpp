@@ -4,7 +4,9 @@
 // its moves against the rule's walk (model::CpConic::rule, itself held to the
 // one-move-a-clock engine by test_conic): circles over every octant, other conics,
 // large circles, the pass timing, words while busy, clear, and a random soak of the
-// narrow build, whose values wrap.
+// narrow build, whose values wrap. With the length rule's divider (LEN = 1): every
+// move's length against the rule's definition, evaluated here from the conic, not
+// from the walker's recurrences.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -317,6 +319,152 @@ TEST(ConicSerial, NarrowBuildRandomSoakInLockstep) {
   EXPECT_GT(moves, 10000u);
   EXPECT_GT(ends, 50u);
   std::printf("narrow build: %llu moves taken, %llu ends\n", (unsigned long long)moves, (unsigned long long)ends);
+}
+
+// The length rule (docs/CONIC.md "The length rule"): move j's length is
+// floor(K 2^S / m), m the larger of |dG/dx| and |dG/dy| at the node the move
+// leaves, saturated to 2^32 - 1 (m = 0 included). Evaluated from the conic here.
+uint32_t rule_length(const ConicRequest& rq, const Node& p, uint32_t ks) {
+  __extension__ typedef unsigned __int128 u128;
+  const int64_t gx = 2 * rq.a * p.x + rq.b * p.y + rq.d, gy = rq.b * p.x + 2 * rq.c * p.y + rq.e;
+  const u128 m = u128(std::max(std::abs(gx), std::abs(gy)));
+  const u128 full = 0xFFFFFFFFu;
+  if (m == 0) return uint32_t(full);
+  const u128 q = (u128(ks & ((1u << 27) - 1)) << (ks >> 27)) / m;
+  return uint32_t(std::min(q, full));
+}
+
+// One walk on the LEN walker, its {S, K} on len_k and its segment loaded (len_go)
+// from `go_after` cycles after the start, and every cycle a move is presented, its
+// length checked against the rule. Returns the moves taken.
+struct LenRun {
+  std::vector<std::pair<int, int>> moves;
+  uint64_t lengths_checked = 0, saturated = 0;
+  std::vector<uint64_t> valid_at;
+  uint64_t load_cycle = 0;
+};
+LenRun run_len(Lockstep<ConicSerialLen>& ls, const ConicRequest& rq, uint32_t ks, unsigned ready_pct,
+               std::mt19937_64& rng, const std::vector<std::pair<int, int>>& want, unsigned go_after = 0) {
+  const auto k = rq.coeffs();
+  const auto n = model::CpConic::at(k, rq.start.x, rq.start.y);
+  const auto words = Serial::words(k, n, rq.cw, rq.end.x - rq.start.x, rq.end.y - rq.start.y);
+  // The rule's length of every move, from the nodes the walk leaves.
+  std::vector<uint32_t> len;
+  Node p = rq.start;
+  for (const auto& m : want) {
+    len.push_back(rule_length(rq, p, ks));
+    p = {p.x + m.first, p.y + m.second};
+  }
+  LenRun run;
+  model::CpConicSerialIn in;
+  in.len_k = ks;
+  for (unsigned w = 0; w < 7; ++w) {
+    in.wr = true;
+    in.wr_sel = w;
+    in.wr_data = words[w];
+    in.start = w == 6;
+    if (in.start) run.load_cycle = ls.cycle();
+    ls.step(in);
+  }
+  in.wr = in.start = false;
+  std::uniform_int_distribution<unsigned> pct(0, 99);
+  bool fresh = true;
+  for (uint64_t c = 0; c < (want.size() + 2) * 120 * (ready_pct >= 100 ? 1 : 20) && run.moves.size() < want.size();
+       ++c) {
+    in.move_ready = ready_pct >= 100 || pct(rng) < ready_pct;
+    in.len_go = ls.cycle() - run.load_cycle > go_after;
+    const model::CpConicSerialOut o = ls.step(in);
+    const size_t j = run.moves.size();   // the move presented, or the next to be
+    if (o.move_valid && fresh) {
+      run.valid_at.push_back(ls.cycle() - 1);
+      fresh = false;
+    }
+    if (o.move_valid) {
+      EXPECT_EQ(o.len, len[j]) << "move " << j << " at cycle " << ls.cycle() - 1;
+      ++run.lengths_checked;
+    }
+    if (o.move_valid && in.move_ready) {
+      run.moves.push_back({o.move_dx, o.move_dy});
+      fresh = true;
+    }
+    if (::testing::Test::HasFailure()) break;
+  }
+  for (uint32_t l : len) run.saturated += l == 0xFFFFFFFFu;
+  return run;
+}
+
+// Circles at the host's scale and on the quarter grid, and ellipses (rotated ones
+// among them), each with a {S, K} of its own: the walk's moves are the rule's, and
+// every move's length is K 2^S / m, in lockstep (len_o every cycle).
+TEST(ConicSerial, LenEveryMovesLengthIsTheRules) {
+  Lockstep<ConicSerialLen> ls("conic_serial_len");
+  ls.reset();
+  std::mt19937_64 rng(seed_from_env() + 5);
+  std::uniform_int_distribution<int> pick(0, 1 << 20);
+  uint64_t checked = 0, saturated = 0, walks = 0;
+  for (int t = 0; t < 60; ++t) {
+    ConicRequest rq;
+    if (t % 3 == 0) {   // the host's scale: A = C = 256, the centre on the 1/16 grid
+      const int64_t r = 50 + pick(rng) % 30000, cx16 = pick(rng) % 32 - 16, cy16 = pick(rng) % 32 - 16;
+      rq.a = rq.c = 256;
+      rq.d = -32 * cx16;
+      rq.e = -32 * cy16;
+      rq.f = cx16 * cx16 + cy16 * cy16 - 256 * r * r;
+      rq.cw = t % 2 == 1;
+      const long double angle = (pick(rng) % 6283) / 1000.0L;
+      rq.start = nearest_node(rq.conic(), cx16 / 16.0L + r * std::cos(angle), cy16 / 16.0L + r * std::sin(angle));
+      rq.end = walk(rq, {INT64_MAX, INT64_MAX}, 300 + pick(rng) % 900).back();
+    } else if (t % 3 == 1) {
+      rq = circle_from(pick(rng) % 64 - 32, pick(rng) % 64 - 32, 8 + pick(rng) % 600, t % 2 == 1,
+                       (pick(rng) % 6283) / 1000.0L, 40 + pick(rng) % 900);
+    } else {   // an ellipse, rotated when b != 0: 4x^2 + bxy + 9y^2 = r^2 scaled
+      rq.a = 4 + pick(rng) % 5;
+      rq.c = 9 + pick(rng) % 7;
+      rq.b = (t % 4 == 2) ? pick(rng) % 7 - 3 : 0;
+      const int64_t r2 = 200 + pick(rng) % 40000;
+      rq.f = -r2;
+      rq.cw = t % 2 == 0;
+      const long double x0 = std::sqrt((long double)r2 / rq.a);
+      rq.start = nearest_node(rq.conic(), x0, 0);
+      rq.end = walk(rq, {INT64_MAX, INT64_MAX}, 50 + pick(rng) % 400).back();
+    }
+    const auto want = expected_moves(rq, 100000, 40);
+    if (want.empty()) continue;
+    // K of 27 bits, S anywhere; now and then one that saturates.
+    const uint32_t kk = uint32_t((1u << 26) + pick(rng) % (1 << 26));
+    const uint32_t ss = t % 7 == 3 ? 31 : uint32_t(pick(rng) % 24);
+    const LenRun run = run_len(ls, rq, ss << 27 | kk, t % 2 ? 100 : 30 + pick(rng) % 70, rng, want,
+                               t % 5 == 0 ? pick(rng) % 500 : 0);
+    ASSERT_EQ(run.moves, want) << "walk " << t;
+    checked += run.lengths_checked;
+    saturated += run.saturated;
+    ++walks;
+  }
+  std::printf("%llu walks, %llu lengths checked, %llu moves saturated\n", (unsigned long long)walks,
+              (unsigned long long)checked, (unsigned long long)saturated);
+  EXPECT_GT(walks, 50u);
+  EXPECT_GT(checked, 20000u);
+  EXPECT_GT(saturated, 100u);
+}
+
+// docs/CONIC.md "The length rule": with LEN the walker presents a move once its
+// division is done: a consumer always ready takes one every IW + 1 + 27 + S + 1
+// cycles (the pass, then the 27 + S bits of K 2^S and the done clock); the first
+// comes that long after the start's pass.
+TEST(ConicSerial, LenAMoveEveryPassAndDivision) {
+  Lockstep<ConicSerialLen> ls;
+  ls.reset();
+  std::mt19937_64 rng(9);
+  for (uint32_t s : {0u, 7u, 31u}) {
+    const ConicRequest rq = circle_from(0, 0, 80, false, 0.1L, 30);
+    const auto want = expected_moves(rq, 100, 40);
+    const LenRun run = run_len(ls, rq, s << 27 | (1u << 26), 100, rng, want);
+    ASSERT_EQ(run.moves, want);
+    ASSERT_GE(run.valid_at.size(), 20u);
+    EXPECT_EQ(run.valid_at[0] - run.load_cycle, 40u + 2 + 27 + s + 1) << "S " << s;
+    for (size_t i = 1; i < run.valid_at.size(); ++i)
+      EXPECT_EQ(run.valid_at[i] - run.valid_at[i - 1], 40u + 1 + 27 + s + 1) << "move " << i << ", S " << s;
+  }
 }
 
 }  // namespace

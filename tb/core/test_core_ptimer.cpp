@@ -47,20 +47,23 @@ struct CorePtimer : sim::CorePortBase<Vcp_core_hx8k_pt, 4> {
 // (card::plan_phase_timer_job); each command one of the card's (command_words, on a
 // phase-timer card, counts it whole).
 // seed002.toml bound to the HX8K's card, arcs as chords; and that card's limits.
-plan::Machine hx8k_machine() {
+plan::Machine hx8k_machine(plan::ArcMode arcs = plan::ArcMode::chords) {
   auto loaded = plan::load_machine(std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/seed002.toml");
   EXPECT_TRUE(loaded.ok()) << plan::join(loaded.errors);
   plan::Machine m = *loaded;
-  m.planner.arcs = plan::ArcMode::chords;
+  m.planner.arcs = arcs;
   const builds::Build& b = builds::hx8k_pt;
-  EXPECT_TRUE(plan::bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw}).empty());
+  // (The card's conic walker: 40 bits, cp_core's CIW, READ 0x26.)
+  EXPECT_TRUE(plan::bind_card(m, {std::string(b.name), double(b.clock_hz), b.w, b.kmax, b.tw, b.umax,
+                                  b.conic ? 40u : 0u})
+                  .empty());
   return m;
 }
 const card::CardLimits kHx8kLimits{builds::hx8k_pt.umax, builds::hx8k_pt.kmax, builds::hx8k_pt.w,
                                    1u << builds::hx8k_pt.caw, 1u << builds::hx8k_pt.saw};
 
-card::PhaseTimerJob plan_tab() {
-  const plan::Machine m = hx8k_machine();
+card::PhaseTimerJob plan_tab(plan::ArcMode arcs = plan::ArcMode::chords) {
+  const plan::Machine m = hx8k_machine(arcs);
   const std::string file = std::string(CPSTEP_SOURCE_DIR) + "/examples/jobs/tab.ngc";
   auto job = plan::load_gcode(file);
   EXPECT_TRUE(job.ok());
@@ -131,6 +134,36 @@ TEST(CorePtimer, AJobsMovesFireWhereTheFitterSays) {
   expect_fitters_clocks(job, fires, last);
 }
 
+// The same job with its arcs as CONIC segments (one per arc): each conic move's length
+// comes from the walker's length rule (K 2^S / m, rtl/cp_conic_serial.v LEN, the
+// divider rtl/cp_div.v), which the host applied exactly to fit the phases; every move
+// fires at the fitter's clock, in lockstep, and each conic's L word is its arc's {S, K}.
+TEST(CorePtimer, AnArcsMovesFireWhereTheLengthRuleAndTheFitterSay) {
+  const card::PhaseTimerJob job = plan_tab(plan::ArcMode::conic);
+  ASSERT_FALSE(job.commands.empty());
+  size_t conics = 0;
+  for (size_t i = 0; i < job.wire.segments.size(); ++i) {
+    const card::WireSegment& s = job.wire.segments[i];
+    if (!s.conic) continue;
+    ++conics;
+    const plan::PlannedCardSegment& c = job.planned.card[job.wire.source[i]];
+    ASSERT_TRUE(c.conic);
+    ASSERT_TRUE(s.length);
+    EXPECT_EQ(*s.length, c.rule_word) << "wire segment " << i;
+    EXPECT_GE(*s.length & ((1u << 27) - 1), 1u << 26) << "K keeps 27 significant bits";
+  }
+  ASSERT_EQ(conics, 1u) << "tab.ngc's arc (G3), one CONIC";
+  using Port = sim::Skipping<CorePtimer>;
+  Lockstep<Port> ls("core_ptimer_tab_conics");
+  model::CpCoreOut last;
+  const std::vector<uint64_t> fires = run_job(ls, job, last);
+  std::printf("tab.ngc, arcs as conics: %llu segments (%zu conics), %llu phases, %llu bytes of segments and "
+              "phases; %zu moves\n",
+              (unsigned long long)job.segments, conics, (unsigned long long)job.phases,
+              (unsigned long long)job.bytes, fires.size());
+  expect_fitters_clocks(job, fires, last);
+}
+
 // A dwell shorter than a pause (2^32 - 1 clocks) is no segment of its own: the phases
 // hold the timer still through it. On the model core (skipping; the RTL is too slow
 // for the dwell's 8 M clocks), every move fires at the fitter's clock, the second line's
@@ -159,8 +192,8 @@ TEST(CorePtimer, AShortDwellIsTimedByThePhases) {
 }
 
 // What a phase-timer card cannot time yet, the host refuses before anything is sent:
-// arcs planned as conics, pauses (a dwell longer than 2^32 - 1 clocks, which the
-// planner times as pause moves).
+// pauses (a dwell longer than 2^32 - 1 clocks, which the planner times as pause
+// moves). An arc goes as a CONIC or as chords, as the machine file says.
 TEST(CorePtimer, ThePhaseTimerJobRefusesWhatTheCardCannotTime) {
   plan::Machine m = hx8k_machine();
   const card::CardLimits& limits = kHx8kLimits;
@@ -168,10 +201,12 @@ TEST(CorePtimer, ThePhaseTimerJobRefusesWhatTheCardCannotTime) {
   ASSERT_TRUE(arcs.ok()) << plan::join(arcs.errors);
   m.planner.arcs = plan::ArcMode::conic;
   auto conic = card::plan_phase_timer_job(*arcs, m, limits, "arc.ngc");
-  ASSERT_FALSE(conic.ok());
-  EXPECT_NE(plan::join(conic.errors).find("chords"), std::string::npos) << plan::join(conic.errors);
+  ASSERT_TRUE(conic.ok()) << plan::join(conic.errors);
+  EXPECT_EQ(conic->segments, 2u) << "the line and the arc, one CONIC";
   m.planner.arcs = plan::ArcMode::chords;
-  EXPECT_TRUE(card::plan_phase_timer_job(*arcs, m, limits, "arc.ngc").ok()) << "the same arc as chords";
+  auto chords = card::plan_phase_timer_job(*arcs, m, limits, "arc.ngc");
+  ASSERT_TRUE(chords.ok()) << plan::join(chords.errors);
+  EXPECT_GT(chords->segments, 4u) << "the same arc as chords";
   auto dwell = plan::parse_gcode("G21 G90\nG1 X5 F600\nG4 P200\nG1 X10\nM2\n", "dwell.ngc");
   ASSERT_TRUE(dwell.ok()) << plan::join(dwell.errors);
   auto paused = card::plan_phase_timer_job(*dwell, m, limits, "dwell.ngc");

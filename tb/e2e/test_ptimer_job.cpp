@@ -14,6 +14,8 @@
 #include <fstream>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "card/caps.h"
 #include "card/protocol.h"
 #include "card/ptimer_job.h"
@@ -45,7 +47,10 @@ TEST(PhaseTimerRun, EveryMoveFiresAtTheCycleTheHostComputed) {
   auto prepared = run::prepare_job(kTab, kMachine, caps);
   ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
   const run::CardJob& job = *prepared.value;
-  EXPECT_TRUE(has_warning(job.warnings, "arcs planned as chords")) << "seed002.toml asks for conics";
+  EXPECT_FALSE(has_warning(job.warnings, "arcs planned as chords")) << "seed002.toml asks for conics";
+  size_t conics = 0;
+  for (const card::WireSegment& s : job.wire.segments) conics += s.conic.has_value();
+  EXPECT_EQ(conics, 1u) << "tab.ngc's arc (G3), one CONIC segment";
   ASSERT_EQ(job.fire_cycles.size(), job.moves());
   ASSERT_GT(job.phases, 0u);
   EXPECT_EQ(job.phase_end_word.size(), job.phases);
@@ -58,7 +63,7 @@ TEST(PhaseTimerRun, EveryMoveFiresAtTheCycleTheHostComputed) {
       EXPECT_EQ(segments, 1u) << "START after the first segment";
       ++starts;
     }
-    segments += op == 0x1;
+    segments += op == 0x1 || op == 0x5;
     phases += op == 0x6;
   }
   EXPECT_EQ(starts, 1u);
@@ -83,13 +88,13 @@ TEST(PhaseTimerRun, EveryMoveFiresAtTheCycleTheHostComputed) {
   EXPECT_EQ(m.moves_off_chunk_time, 0u);
   EXPECT_LE(m.max_timing_error_cycles, job.machine.chunk_tolerance_cycles() + 2);
 
-  // The same job for the chunk card (the hx8k build, arcs as chords too): more bytes.
+  // The same job for the chunk card (the hx8k build, arcs as conics too): more bytes.
   plan::Machine chords = job.machine;
   auto gcode = run::read_card_gcode(kTab, chords, {});
   ASSERT_TRUE(gcode.ok());
   auto chunked = run::plan_card_job(*gcode, chords, *card::board_caps("hx8k"));
   ASSERT_TRUE(chunked.ok()) << plan::join(chunked.errors);
-  std::printf("tab.ngc, arcs as chords: %zu command words on the phase-timer card (%llu phases, %zu segments), "
+  std::printf("tab.ngc, arcs as conics: %zu command words on the phase-timer card (%llu phases, %zu segments), "
               "%zu on the chunk card; %llu bytes on the link (frames, polls and replies)\n",
               job.words.size(), (unsigned long long)job.phases, job.wire.segments.size(),
               chunked->words.size(), (unsigned long long)r.link.stats.bytes);
@@ -161,7 +166,9 @@ TEST(PhaseTimerRun, TheHeldMotionEndsWhereTheHandedPhasesEnd) {
 
 // What a phase-timer card cannot do yet is refused before anything is sent: pauses
 // (a dwell longer than the timer's 2^32 - 1 clocks). (Homing and probing run on it:
-// Home.EveryAxisHomesAtItsSwitchOnTheFastEngine, ProbeBoards.*/hx8k_pt.)
+// Home.EveryAxisHomesAtItsSwitchOnTheFastEngine, ProbeBoards.*/hx8k_pt.) Arcs go as
+// conics, with nothing to say; an arc whose moves come faster than the walker gives
+// them goes as chords, with a warning that says why.
 TEST(PhaseTimerRun, WhatTheCardCannotTimeIsRefusedUnsent) {
   const card::CardCaps caps = *card::board_caps("hx8k_pt");
   const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
@@ -173,22 +180,34 @@ TEST(PhaseTimerRun, WhatTheCardCannotTimeIsRefusedUnsent) {
   EXPECT_NE(plan::join(refused.errors).find("pauses"), std::string::npos) << plan::join(refused.errors);
   // The same job on the chunk card is planned (its pause runs as pause moves).
   EXPECT_TRUE(run::prepare_job(dwell, kMachine, *card::board_caps("hx8k")).ok());
-  // A job without arcs has nothing to say about them; one with an arc says it once, at it.
-  const fs::path lines = dir / "lines.ngc", arcs = dir / "arcs.ngc";
-  std::ofstream(lines) << "G21 G90\nG1 X5 F600\nG1 Y5\nM2\n";
+  const fs::path arcs = dir / "arcs.ngc";
   std::ofstream(arcs) << "G21 G90 G17\nG1 X5 F600\nG2 X10 Y5 I0 J5\nG2 X15 Y0 I5 J0\nM2\n";
-  auto l = run::prepare_job(lines, kMachine, caps);
-  ASSERT_TRUE(l.ok()) << plan::join(l.errors);
-  EXPECT_FALSE(has_warning(l->warnings, "arcs planned as chords"));
   auto a = run::prepare_job(arcs, kMachine, caps);
   ASSERT_TRUE(a.ok()) << plan::join(a.errors);
+  EXPECT_FALSE(has_warning(a->warnings, "arcs planned as chords"));
+  EXPECT_EQ(a->wire.segments.size(), 3u) << "a line and two CONIC segments";
+  // The walker's fastest: 8,000 steps/mm at 60 mm/s (moves some 100 clocks apart,
+  // drivers that take 100 ns pulses) makes the arcs' moves come sooner than a pass
+  // and a division apart.
+  const fs::path fast = dir / "fast.toml", fast_arcs = dir / "fast_arcs.ngc";
+  std::string axes;
+  for (const char* a : {"x", "y", "z"})
+    axes += fmt::format("[axes.{}]\nsteps_per_mm = 8000\ntravel_min_mm = -50\ntravel_max_mm = 50\n"
+                        "max_velocity_mm_s = 60\nmax_accel_mm_s2 = 5000\nmax_jerk_mm_s3 = 200000\n"
+                        "step_high_ns = 100\nstep_low_ns = 100\ndir_setup_ns = 100\ndir_hold_ns = 100\n",
+                        a);
+  std::ofstream(fast) << "[planner]\narc_tolerance_mm = 0.002\nchunk_tolerance_us = 1.0\n" << axes;
+  std::ofstream(fast_arcs) << "G21 G90 G17\nG1 X5 F3600\nG2 X7 Y2 I0 J2\nG2 X9 Y0 I2 J0\nM2\n";
+  auto f = run::prepare_job(fast_arcs, fast, caps);
+  ASSERT_TRUE(f.ok()) << plan::join(f.errors);
   size_t said = 0;
-  for (const plan::Diagnostic& d : a->warnings)
-    if (d.message.find("arcs planned as chords") != std::string::npos) {
+  for (const plan::Diagnostic& d : f->warnings)
+    if (d.message.find("as chords") != std::string::npos) {
       ++said;
-      EXPECT_EQ(d.loc.line, 3) << "at the first arc";
+      EXPECT_NE(d.message.find("walker"), std::string::npos) << d.message;
     }
-  EXPECT_EQ(said, 1u);
+  EXPECT_GE(said, 1u) << "why the arcs went as chords";
+  for (const card::WireSegment& s : f->wire.segments) EXPECT_FALSE(s.conic.has_value()) << "chords only";
 }
 
 }  // namespace
