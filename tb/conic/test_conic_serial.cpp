@@ -369,7 +369,7 @@ LenRun run_len(Lockstep<ConicSerialLen>& ls, const ConicRequest& rq, uint32_t ks
   in.wr = in.start = false;
   std::uniform_int_distribution<unsigned> pct(0, 99);
   bool fresh = true;
-  for (uint64_t c = 0; c < (want.size() + 2) * 120 * (ready_pct >= 100 ? 1 : 20) && run.moves.size() < want.size();
+  for (uint64_t c = 0; c < (want.size() + 2) * 120 * (ready_pct >= 100 ? 1 : 100) && run.moves.size() < want.size();
        ++c) {
     in.move_ready = ready_pct >= 100 || pct(rng) < ready_pct;
     in.len_go = ls.cycle() - run.load_cycle > go_after;
@@ -394,8 +394,9 @@ LenRun run_len(Lockstep<ConicSerialLen>& ls, const ConicRequest& rq, uint32_t ks
 }
 
 // Circles at the host's scale and on the quarter grid, and ellipses (rotated ones
-// among them), each with a {S, K} of its own: the walk's moves are the rule's, and
-// every move's length is K 2^S / m, in lockstep (len_o every cycle).
+// among them), each with a {S, K} of its own, the consumer always ready, at random or
+// slow: the walk's moves are the rule's, and every presented move's length is
+// K 2^S / m, in lockstep (len_o every cycle).
 TEST(ConicSerial, LenEveryMovesLengthIsTheRules) {
   Lockstep<ConicSerialLen> ls("conic_serial_len");
   ls.reset();
@@ -433,8 +434,10 @@ TEST(ConicSerial, LenEveryMovesLengthIsTheRules) {
     // K of 27 bits, S anywhere; now and then one that saturates.
     const uint32_t kk = uint32_t((1u << 26) + pick(rng) % (1 << 26));
     const uint32_t ss = t % 7 == 3 ? 31 : uint32_t(pick(rng) % 24);
-    const LenRun run = run_len(ls, rq, ss << 27 | kk, t % 2 ? 100 : 30 + pick(rng) % 70, rng, want,
-                               t % 5 == 0 ? pick(rng) % 500 : 0);
+    // The consumer: always ready, at random, or slower than a pass and a division (a
+    // decided move then waits behind the one presented, whose length must hold).
+    const unsigned ready = t % 2 ? 100 : t % 4 == 0 ? 1 + pick(rng) % 3 : 30 + pick(rng) % 70;
+    const LenRun run = run_len(ls, rq, ss << 27 | kk, ready, rng, want, t % 5 == 0 ? pick(rng) % 500 : 0);
     ASSERT_EQ(run.moves, want) << "walk " << t;
     checked += run.lengths_checked;
     saturated += run.saturated;
