@@ -126,7 +126,7 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
       const uint64_t n = uint64_t(s.u) << s.k;
       for (uint64_t j = 0; j < n; ++j) {
         const int64_t at = 2 * out.fire_half_clocks[first_move[i] + j];
-        const int64_t gap = j == 0 ? int64_t(plan::conic_gap_cycles(ciw)) + 27 + shift + 1
+        const int64_t gap = j == 0 ? int64_t(plan::conic_gap_cycles(ciw)) + conic_division_cycles(shift)
                                    : conic_move_gap_cycles(ciw, shift);
         if (have && at - last < gap)
           return fail(fmt::format("an arc's move comes {} clocks after the one before it, sooner than the card's "

@@ -24,10 +24,14 @@ namespace cpstep::card {
 // fires 2 * fire_half_clocks[n] + kPhaseTimerStartCycles clocks after START, at scale 1.
 inline constexpr int64_t kPhaseTimerStartCycles = 1;
 
-// The fewest clocks between two moves of a conic on a phase-timer card: the
-// walker's pass (IW + 1 clocks) and the length's division (the 27 + S bits of
-// K 2^S, then the done clock), rtl/cp_conic_serial.v LEN.
-inline constexpr int64_t conic_move_gap_cycles(unsigned ciw, unsigned s) { return int64_t(ciw) + 1 + 27 + s + 1; }
+// A conic move's length division on a phase-timer card: the 27 + S bits of K 2^S,
+// then the done clock (rtl/cp_div.v, rtl/cp_conic_serial.v LEN).
+inline constexpr int64_t conic_division_cycles(unsigned s) { return 27 + int64_t(s) + 1; }
+// The fewest clocks between two moves of a conic on such a card: the walker's pass
+// (IW + 1 clocks) and the division.
+inline constexpr int64_t conic_move_gap_cycles(unsigned ciw, unsigned s) {
+  return int64_t(ciw) + 1 + conic_division_cycles(s);
+}
 
 struct PhaseTimerJob {
   std::vector<uint32_t> preamble;               // encode_preamble: drivers, axes, inputs, feed
