@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 #include "plan/arc_fit.h"
 
+#include "plan/segments.h"
+
 #include <algorithm>
 #include <cmath>
 #include <deque>
@@ -188,6 +190,34 @@ struct ArcFitter::Impl {
     std::size_t need = 0;           // lines from s the next decision needs
     std::deque<MotionBlock> out;
 
+    // A NURBS block as arcs and lines (arc_fit.h): false when it stays a NURBS.
+    bool fit_curve(const MotionBlock& b) {
+        const double chord = tol * kCurveChordShare;
+        const std::vector<PerAxis<double>> pts = nurbs_chord_points(b, chord);
+        if (pts.size() < 3) return false;  // too few chords for an arc, or more than Nurbs::kMaxChords
+        ArcFitter inner(tol - chord);
+        MotionBlock line = b;
+        line.kind = MotionKind::linear;
+        line.curve.reset();
+        for (const PerAxis<double>& q : pts) {
+            line.end = q;
+            inner.push(line);
+            line.start = q;
+        }
+        inner.finish();
+        std::vector<MotionBlock> made;
+        while (auto nb = inner.next()) made.push_back(std::move(*nb));
+        const ArcFitStats& is = inner.stats();
+        if (is.arcs == 0 || made.size() >= nurbs_chord_points(b, tol).size()) return false;
+        ++st.curves;
+        st.curve_arcs += is.arcs;
+        st.curve_lines += made.size() - is.arcs;
+        // Within the rest of the tolerance of the chords, which lie within `chord` of the curve.
+        st.max_deviation_mm = std::max(st.max_deviation_mm, is.max_deviation_mm + chord);
+        for (MotionBlock& nb : made) out.push_back(std::move(nb));
+        return true;
+    }
+
     // Hands out what the lines held decide (all of them once the run `ended`).
     void decide(bool ended) {
         if (whole_runs && !ended) return;
@@ -268,7 +298,7 @@ void ArcFitter::push(const MotionBlock& b) {
         f.in_run = false;
     }
     if (!eligible(b)) {
-        f.out.push_back(b);
+        if (!(b.kind == MotionKind::nurbs && b.curve && f.fit_curve(b))) f.out.push_back(b);
         return;
     }
     f.in_run = true;

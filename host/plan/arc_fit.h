@@ -20,6 +20,10 @@ struct ArcFitStats {
     std::size_t merged = 0;           // runs of collinear lines made one line
     std::size_t lines_in_merged = 0;  // the G1 blocks those replace
     double max_deviation_mm = 0;      // the farthest input vertex from its arc or line
+    // NURBS blocks cut into arcs (and lines where no arc fits) instead of chords:
+    std::size_t curves = 0;           // the curves
+    std::size_t curve_arcs = 0;       // the arcs they became
+    std::size_t curve_lines = 0;      // and the lines
 };
 
 // The job with runs of consecutive G1 blocks replaced:
@@ -29,7 +33,12 @@ struct ArcFitStats {
 //   vertices' distance plus the line's sagitta);
 // - by one G1, when at least 2 lines lie within tol_mm of the line from their
 //   first point to their last and go the same way along it;
-// whichever replaces more lines. A run's lines share their feed, spindle, tool
+// whichever replaces more lines. A NURBS block (G5, G5.1, G5.2) is cut into
+// chords within kCurveChordShare * tol_mm of the curve, and runs of those are
+// fitted as above within the rest of tol_mm, so every arc and line made lies
+// within tol_mm of the curve; the curve becomes those blocks when any arc fits
+// and they are fewer than its chords within tol_mm, and stays a NURBS otherwise.
+// A run's lines share their feed, spindle, tool
 // and every coordinate but X and Y. The first and last points are kept exactly;
 // the new block carries the run's first block's source location.
 // A fitted block replaces at most kArcFitMaxLines lines (a longer run that fits
@@ -38,6 +47,8 @@ struct ArcFitStats {
 Job fit_arcs(const Job& job, double tol_mm, ArcFitStats* stats = nullptr);
 
 inline constexpr std::size_t kArcFitMaxLines = 4096;
+// The share of fit_arcs' tolerance a NURBS's chords take (the arcs the rest).
+inline constexpr double kCurveChordShare = 0.25;
 
 // fit_arcs() as the blocks arrive: push() them in order, finish() after the
 // last, next() hands out the fitted job's blocks in order, each as soon as

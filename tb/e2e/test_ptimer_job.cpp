@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <fmt/format.h>
@@ -20,6 +21,7 @@
 #include "card/protocol.h"
 #include "card/ptimer_job.h"
 #include "plan/common.h"
+#include "plan/queue_step.h"
 #include "run/card_job.h"
 #include "run/measure.h"
 #include "run/sim_run.h"
@@ -162,6 +164,55 @@ TEST(PhaseTimerRun, TheHeldMotionEndsWhereTheHandedPhasesEnd) {
     EXPECT_NEAR(held * hz, std::max(0.0, std::min(by_segments, by_phases)), 1e-6 * hz) << "phase " << p;
   }
   EXPECT_EQ(run::buffered_seconds(job, 0, 0, 0), 0.0);
+}
+
+// naca0025.ngc (seed 002's airfoil, one G5.2 NURBS) with planner.fit_arcs_mm = 0.002:
+// the curve goes as arcs, each one CONIC the card walks and measures, every move at
+// its cycle, and the wire carries at most half the bytes Klipper's queue_step takes
+// for the job's steps at 25 us (issue 13's goal; the steps of the G-code as written).
+TEST(PhaseTimerRun, TheAirfoilsNurbsGoesAsArcsWithinTheWireGoal) {
+  const card::CardCaps caps = run::connect_sim("hx8k_pt");
+  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
+  fs::create_directories(dir);
+  const fs::path fitted = dir / "seed002_fit.toml";
+  {
+    std::ifstream in(kMachine);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const size_t at = text.find("[planner]\n");
+    ASSERT_NE(at, std::string::npos);
+    std::ofstream(fitted) << text.substr(0, at + 10) << "fit_arcs_mm = 0.002\n" << text.substr(at + 10);
+  }
+  const std::string naca = std::string(CPSTEP_SOURCE_DIR) + "/examples/jobs/naca0025.ngc";
+  auto prepared = run::prepare_job(naca, fitted, caps);
+  ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
+  const run::CardJob& job = *prepared.value;
+  EXPECT_EQ(job.planned.stats.fit.curves, 1u);
+  size_t conics = 0;
+  for (const card::WireSegment& s : job.wire.segments) conics += s.conic.has_value();
+  EXPECT_EQ(conics, job.planned.stats.fit.curve_arcs) << "each arc of the curve one CONIC";
+  EXPECT_GT(conics, 5u);
+
+  run::SimRunOptions o;
+  o.board = "hx8k_pt";
+  const run::CardRun r = run::run_on_sim(job, o);
+  ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
+  EXPECT_EQ(r.moves_done, job.moves());
+  EXPECT_EQ(r.position_mismatches, 0u);
+  EXPECT_EQ(r.position, job.checkpoints.back().position);
+  ASSERT_EQ(r.move_cycles.size(), job.moves());
+  for (size_t n = 0; n < r.move_cycles.size(); ++n)
+    ASSERT_EQ(int64_t(r.move_cycles[n] - r.start_cycle), job.fire_cycles[n]) << "move " << n + 1;
+
+  const plan::QueueStepCost klipper = plan::queue_step_cost(run::klipper_path_steps(job), 25e-6 * caps.clock_hz);
+  ASSERT_TRUE(klipper.error.empty()) << klipper.error;
+  auto as_written = run::prepare_job(naca, kMachine, caps);
+  ASSERT_TRUE(as_written.ok()) << plan::join(as_written.errors);
+  std::printf("naca0025 on hx8k_pt: %zu bytes with its NURBS as %zu arcs (%zu as written, its chords); "
+              "Klipper's queue_step at 25 us %llu bytes, the goal %llu\n",
+              4 * job.words.size(), conics, 4 * as_written->words.size(), (unsigned long long)klipper.bytes,
+              (unsigned long long)klipper.bytes / 2);
+  EXPECT_LE(4 * job.words.size(), klipper.bytes / 2);
+  EXPECT_LT(job.words.size(), as_written->words.size());
 }
 
 // What a phase-timer card cannot do yet is refused before anything is sent: pauses

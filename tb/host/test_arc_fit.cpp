@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -16,6 +17,7 @@
 #include "plan/arc_fit.h"
 #include "plan/gcode.h"
 #include "plan/machine.h"
+#include "plan/nurbs.h"
 
 using namespace cpstep::plan;
 
@@ -358,4 +360,101 @@ TEST(ArcFit, ALongCollinearRunIsCutAtTheCap) {
     EXPECT_EQ(s.stats.merged, 3u);
     EXPECT_LE(s.max_held, kArcFitMaxLines + 1);
     expect_same_blocks(s.blocks, stream_fit(job, 0.001, true).blocks, "collinear");
+}
+
+namespace {
+
+// n + 1 points along block b's path in XY, from its start to its end.
+std::vector<Eigen::Vector3d> along(const MotionBlock& b, int n) {
+    std::vector<Eigen::Vector3d> pts;
+    if (b.kind == MotionKind::arc_cw || b.kind == MotionKind::arc_ccw) {
+        const double r = std::hypot(b.start[0] - b.center_x, b.start[1] - b.center_y);
+        const double a0 = std::atan2(b.start[1] - b.center_y, b.start[0] - b.center_x);
+        const double a1 = std::atan2(b.end[1] - b.center_y, b.end[0] - b.center_x);
+        double sweep = a1 - a0;
+        if (b.kind == MotionKind::arc_ccw) while (sweep <= 0) sweep += 2 * kPi;
+        else while (sweep >= 0) sweep -= 2 * kPi;
+        for (int i = 0; i <= n; ++i) {
+            const double a = a0 + sweep * i / n;
+            pts.emplace_back(b.center_x + r * std::cos(a), b.center_y + r * std::sin(a), 0.0);
+        }
+        return pts;
+    }
+    for (int i = 0; i <= n; ++i) {
+        const double t = double(i) / n;
+        pts.emplace_back(b.start[0] + t * (b.end[0] - b.start[0]), b.start[1] + t * (b.end[1] - b.start[1]), 0.0);
+    }
+    return pts;
+}
+
+}  // namespace
+
+// naca0025.ngc's NURBS (seed 002's airfoil) cut into arcs: the blocks made run
+// from the curve's start to its end without a gap, every point of them lies within
+// the tolerance of the true curve, and every point of the curve within the
+// tolerance of them (both measured here against the curve sampled finely).
+TEST(ArcFit, ANurbsBecomesArcsWithinTheToleranceOfTheCurve) {
+    const auto j = load_gcode(CPSTEP_EXAMPLES_DIR "/jobs/naca0025.ngc", GcodeOptions{});
+    ASSERT_TRUE(j.ok()) << join(j.errors);
+    const MotionBlock* curve = nullptr;
+    for (const MotionBlock& b : j.value->blocks)
+        if (b.kind == MotionKind::nurbs) curve = &b;
+    ASSERT_NE(curve, nullptr);
+    for (const double tol : {0.002, 0.01}) {
+        ArcFitStats st;
+        const Job out = fit_arcs(*j.value, tol, &st);
+        EXPECT_EQ(st.curves, 1u);
+        EXPECT_GT(st.curve_arcs, 5u);
+        EXPECT_EQ(st.arcs, 0u) << "no G1 lines in the job";
+        std::vector<MotionBlock> made;
+        for (const MotionBlock& b : out.blocks) {
+            EXPECT_NE(b.kind, MotionKind::nurbs) << "the curve was replaced";
+            if (b.kind == MotionKind::linear || b.kind == MotionKind::arc_cw || b.kind == MotionKind::arc_ccw)
+                if (b.feed > 0) made.push_back(b);
+        }
+        ASSERT_EQ(made.size(), st.curve_arcs + st.curve_lines);
+        const std::size_t chords = curve->curve->chord_parameters(tol).size() - 1;
+        EXPECT_LT(made.size() * 3, chords) << "fewer blocks than the curve's chords within the tolerance";
+        EXPECT_EQ(made.front().start, curve->start);
+        EXPECT_EQ(made.back().end, curve->end);
+        for (std::size_t k = 1; k < made.size(); ++k) EXPECT_EQ(made[k].start, made[k - 1].end) << "block " << k;
+        for (const MotionBlock& b : made) {
+            EXPECT_EQ(b.feed, curve->feed);
+            EXPECT_EQ(b.loc.line, curve->loc.line);
+        }
+        // The made path against the curve.
+        CurveDistance from_curve(*curve->curve, 1e-7);
+        double worst_out = 0;
+        for (const MotionBlock& b : made)
+            for (const Eigen::Vector3d& p : along(b, 400)) worst_out = std::max(worst_out, from_curve(p));
+        // The curve against the made path.
+        double worst_in = 0;
+        const std::vector<double> us = curve->curve->chord_parameters(1e-5);
+        for (std::size_t i = 0; i + 1 < us.size(); ++i)
+            for (int h = 0; h < 4; ++h) {
+                const Eigen::Vector3d q = curve->curve->point(us[i] + (us[i + 1] - us[i]) * h / 4);
+                double d = 1e9;
+                for (const MotionBlock& b : made) d = std::min(d, distance_to(b, q[0], q[1]));
+                worst_in = std::max(worst_in, d);
+            }
+        std::printf("naca0025 at %g mm: %zu arcs and %zu lines for %zu chords; the path within %.5f mm of the "
+                    "curve, the curve within %.5f mm of it (bound %.5f)\n",
+                    tol, st.curve_arcs, st.curve_lines, chords, worst_out, worst_in, st.max_deviation_mm);
+        EXPECT_LE(worst_out, tol + 1e-6);
+        EXPECT_LE(worst_in, tol + 1e-6);
+        EXPECT_LE(st.max_deviation_mm, tol + 1e-12);
+    }
+}
+
+// A curve the fitting cannot shorten stays a NURBS: a straight cubic has too few
+// chords for an arc.
+TEST(ArcFit, ANurbsTheArcsCannotShortenStaysACurve) {
+    const Job in = parse("G21 G90 G17\nG0 X0 Y0\nG5 I1 J0 P-1 Q0 X3 Y0 F600\nG1 X4 Y0\n");
+    ArcFitStats st;
+    const Job out = fit_arcs(in, 0.002, &st);
+    EXPECT_EQ(st.curves, 0u);
+    std::size_t curves = 0;
+    for (const MotionBlock& b : out.blocks) curves += b.kind == MotionKind::nurbs;
+    EXPECT_EQ(curves, 1u);
+    EXPECT_EQ(out.blocks.size(), in.blocks.size());
 }
