@@ -149,6 +149,9 @@ std::optional<uint64_t> CpPtimer::quiet_advs(bool len_valid, uint64_t limit) con
   // each tick's end; the phase's last clock ends it. Due when r >= 0 (not while owed).
   const uint64_t tick = uint64_t(1) << p_.s;
   const cp_i128 lo = -(cp_i128(1) << (rw() - 1)), hi = (cp_i128(1) << (rw() - 1)) - 1;
+  // A flat phase (a rest: step, H and u 0) changes nothing until its last clock.
+  if (q.step == 0 && q.h == 0 && q.u == 0)
+    return std::min<uint64_t>(limit, (tick - q.tcnt) + (uint64_t(q.tleft) - 1) * tick - 1);
   cp_i128 r = q.r;
   int64_t step = q.step, h = q.h;
   uint64_t tleft = q.tleft, tcnt = q.tcnt, n = 0;
@@ -180,6 +183,12 @@ void CpPtimer::skip_advs(uint64_t n) {
     return;
   }
   const uint64_t tick = uint64_t(1) << p_.s;
+  if (r_.step == 0 && r_.h == 0 && r_.u == 0) {   // flat: whole ticks at once, r kept
+    const uint64_t at = r_.tcnt + n;
+    r_.tleft -= uint32_t(at / tick);
+    r_.tcnt = uint32_t(at % tick);
+    return;
+  }
   while (n > 0) {
     const uint64_t k = std::min<uint64_t>(n, tick - r_.tcnt);
     r_.r = sx128(r_.r + cp_i128(k) * r_.step, rw());

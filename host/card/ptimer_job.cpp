@@ -15,6 +15,8 @@ namespace cpstep::card {
 
 namespace {
 
+constexpr uint64_t kPhaseTicksMax = (uint64_t{1} << 24) - 1;
+
 // A phase's length in the timer's half clocks (2^6 of them a tick; a timed move's in clocks).
 int64_t phase_half_clocks(const plan::TimerPhase& ph) {
   const int64_t t = ph.ticks == 0 ? 1 : int64_t(ph.ticks);
@@ -145,6 +147,10 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
   std::vector<std::pair<int64_t, std::vector<uint32_t>>> timed;
   int64_t t = 0;
   for (const plan::TimerPhase& ph : fitter.phases()) {
+    // W0[23:0] holds the ticks (a timed move's clocks), 0 meaning 1: a longer phase
+    // would run short on the card.
+    if (ph.ticks > kPhaseTicksMax)
+      return fail(fmt::format("phase {}: {} ticks do not fit the PHASE word's 24-bit field", out.phases, ph.ticks));
     std::vector<uint32_t> w;
     encode_phase(wire_phase(ph), w);
     timed.push_back({2 * t, std::move(w)});

@@ -21,6 +21,8 @@ i128 ceil_div(i128 a, i128 b) { return -floor_div(-a, b); }  // b > 0
 
 // A phase is at most this many ticks (keeps every product within 128 bits).
 constexpr std::uint64_t kMaxPhaseTicks = std::uint64_t{1} << 24;
+// The PHASE word's ticks field (W0[23:0]; 0 there means 1): a rest phase's most.
+constexpr std::uint64_t kMaxFieldTicks = (std::uint64_t{1} << 24) - 1;
 // A timed move's clocks fit the phase word's 24-bit field.
 constexpr std::int64_t kMaxTimedClocks = std::int64_t{1} << 24;
 // How many moves past a phase its u is steered by.
@@ -111,7 +113,7 @@ bool PhaseFitter::push(std::span<const double> ideal, std::span<const double> le
         p0_ = s0_ = a0_ = 0;
         if (R > 0) {
             for (std::uint64_t left = R; left > 0;) {
-                const std::uint64_t t = std::min(left, kMaxPhaseTicks);
+                const std::uint64_t t = std::min(left, kMaxFieldTicks);
                 phases_.push_back({t, 0, true});
                 ++stats_.rests;
                 ++stats_.phases;

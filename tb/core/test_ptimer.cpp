@@ -159,11 +159,14 @@ TEST(Ptimer, SkippedAdvancesLandWhereClockedOnesDo) {
   model::CpPtimer a;
   model::CpPtimerIn in;
   std::deque<std::pair<uint32_t, uint32_t>> words;
-  uint64_t spans = 0, span_clocks = 0, whole = 0, ended = 0, owed_spans = 0, timed_spans = 0;
+  uint64_t spans = 0, span_clocks = 0, whole = 0, ended = 0, owed_spans = 0, timed_spans = 0, flat_spans = 0;
   bool unknown = false;
   for (int c = 0; c < 1000000; ++c) {
-    if (words.empty() && chance(rng, 30))
-      for (auto& x : random_phase(rng, 60)) words.push_back(x);
+    if (words.empty() && chance(rng, 30)) {
+      // Now and then a rest that stays flat (u = 0: a dwell's phases), skipped whole.
+      const auto w = chance(rng, 8) ? phase_words(4, uint32_t(pick(rng, 1, 3000)), 0, 0, 0, 0) : random_phase(rng, 60);
+      for (auto& x : w) words.push_back(x);
+    }
     a.in = {};
     model::CpPtimerOut o = a.outputs();
     if (chance(rng, 1)) unknown = !unknown;
@@ -193,6 +196,7 @@ TEST(Ptimer, SkippedAdvancesLandWhereClockedOnesDo) {
       ++spans;
       span_clocks += n;
       owed_spans += unknown;
+      flat_spans += a.step() == 0 && a.h() == 0 && n > 64;
       timed_spans += (o.kind & 2) != 0;
       if (n == *q && n < limit) {
         // The advance after the whole span: is it an event (an output changes, or
@@ -206,13 +210,14 @@ TEST(Ptimer, SkippedAdvancesLandWhereClockedOnesDo) {
     }
     a.tick();
   }
-  std::printf("%llu spans skipped, %llu clocks, %llu of them owed, %llu timed; %llu of %llu whole spans ended by "
-              "an event\n",
+  std::printf("%llu spans skipped, %llu clocks, %llu of them owed, %llu timed, %llu flat over a tick; %llu of %llu "
+              "whole spans ended by an event\n",
               (unsigned long long)spans, (unsigned long long)span_clocks, (unsigned long long)owed_spans,
-              (unsigned long long)timed_spans, (unsigned long long)ended, (unsigned long long)whole);
+              (unsigned long long)timed_spans, (unsigned long long)flat_spans, (unsigned long long)ended, (unsigned long long)whole);
   EXPECT_GT(spans, 5000u);
   EXPECT_GT(owed_spans, 50u);
   EXPECT_GT(timed_spans, 100u);
+  EXPECT_GT(flat_spans, 100u) << "flat rests skipped more than a tick at once";
   EXPECT_GT(ended * 10, whole * 9) << "most quiet spans end where an event comes";
 }
 

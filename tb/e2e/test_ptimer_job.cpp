@@ -215,6 +215,47 @@ TEST(PhaseTimerRun, TheAirfoilsNurbsGoesAsArcsWithinTheWireGoal) {
   EXPECT_LT(job.words.size(), as_written->words.size());
 }
 
+// A dwell longer than one phase holds (2^24 - 1 ticks of 64 half clocks: 53.7 s at
+// 40 MHz) waits in several rest phases, each within the PHASE word's 24-bit field; one
+// of exactly 2^24 ticks was sent as 0 (1 tick on the card), and every move after the
+// dwell fired 53.7 s early. Every move at its cycle, the dwell's 100 s between them.
+TEST(PhaseTimerRun, ADwellLongerThanOnePhaseWaitsInRestPhasesThatFitTheirField) {
+  const card::CardCaps caps = run::connect_sim("hx8k_pt");
+  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
+  fs::create_directories(dir);
+  const fs::path dwell = dir / "long_dwell.ngc";
+  std::ofstream(dwell) << "G21 G90\nG1 X5 F600\nG4 P100\nG1 X10\nM2\n";
+  auto prepared = run::prepare_job(dwell, kMachine, caps);
+  ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
+  const run::CardJob& job = *prepared.value;
+  // Every PHASE word's ticks field as the card reads it (0: 1), the rest phases' sum.
+  uint64_t rest_half_clocks = 0, rests = 0;
+  for (size_t i = 0; i < job.words.size(); i += card::command_words(job.words[i], 4, true)) {
+    const uint32_t w = job.words[i];
+    if (w >> 28 != 0x6 || !(w >> 26 & 1) || (w >> 25 & 1)) continue;   // a rest, not a timed move
+    const uint64_t ticks = (w & 0xFFFFFF) == 0 ? 1 : (w & 0xFFFFFF);
+    rest_half_clocks += ticks << 6;
+    ++rests;
+  }
+  EXPECT_GE(rests, 2u) << "100 s is more than one phase holds";
+  EXPECT_GE(double(rest_half_clocks) / (caps.clock_hz / 2.0), 99.0) << "the rests hold the dwell";
+
+  run::SimRunOptions o;
+  o.board = "hx8k_pt";
+  const run::CardRun r = run::run_on_sim(job, o);
+  ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
+  EXPECT_EQ(r.position, job.checkpoints.back().position);
+  ASSERT_EQ(r.move_cycles.size(), job.moves());
+  size_t gap_at = 0;
+  for (size_t n = 0; n < r.move_cycles.size(); ++n) {
+    ASSERT_EQ(int64_t(r.move_cycles[n] - r.start_cycle), job.fire_cycles[n]) << "move " << n + 1;
+    if (n > 0 && r.move_cycles[n] - r.move_cycles[n - 1] > r.move_cycles[gap_at] - r.move_cycles[gap_at ? gap_at - 1 : 0])
+      gap_at = n;
+  }
+  ASSERT_GT(gap_at, 0u);
+  EXPECT_GE(double(r.move_cycles[gap_at] - r.move_cycles[gap_at - 1]) / caps.clock_hz, 100.0) << "the dwell";
+}
+
 // What a phase-timer card cannot do yet is refused before anything is sent: pauses
 // (a dwell longer than the timer's 2^32 - 1 clocks). (Homing and probing run on it:
 // Home.EveryAxisHomesAtItsSwitchOnTheFastEngine, ProbeBoards.*/hx8k_pt.) Arcs go as
