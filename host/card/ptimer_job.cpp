@@ -16,6 +16,9 @@ namespace cpstep::card {
 namespace {
 
 constexpr uint64_t kPhaseTicksMax = (uint64_t{1} << 24) - 1;
+// A pause segment's length per move: the path, which stands still, never reaches
+// it; each of its moves is a timed move (plan::PhaseFitter::push_pause).
+constexpr uint32_t kPauseLength = 0xFFFFFFFFu;
 
 // A phase's length in the timer's half clocks (2^6 of them a tick; a timed move's in clocks).
 int64_t phase_half_clocks(const plan::TimerPhase& ph) {
@@ -65,6 +68,15 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
     lengths.push_back(one ? std::optional<uint32_t>(uint32_t(l)) : std::nullopt);
     if (!fitter.push(half, lengths_mm, rest_at < 0 ? rest_at : rest_at / 2, ch)) hook_error = fitter.error();
   };
+  // A pause's moves (v all 0): timed moves at their clocks, rests between (one
+  // batch each, with no length: its segment's L is kPauseLength).
+  o.on_pause_times = [&](std::span<const double> ideal) {
+    if (!hook_error.empty()) return;
+    std::vector<double> half(ideal.begin(), ideal.end());
+    for (double& t : half) t /= 2;
+    lengths.push_back(std::nullopt);
+    if (!fitter.push_pause(half)) hook_error = fitter.error();
+  };
   auto planned = plan::plan_job(job, machine, o);
   r.warnings = planned.warnings;
   if (!planned.ok()) {
@@ -87,9 +99,10 @@ plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const pla
   for (size_t i = 0; i < wire.segments.size(); ++i) {
     WireSegment& s = wire.segments[i];
     const size_t c = wire.source[i];
-    if (planned->card[c].segment.pause) return fail("a phase-timer card does not take pauses (dwells, M0) yet");
     if (c >= lengths.size()) return fail(fmt::format("card segment {} has no length per move", c));
-    if (planned->card[c].conic) {
+    if (planned->card[c].segment.pause) {
+      s.length = kPauseLength;
+    } else if (planned->card[c].conic) {
       s.length = planned->card[c].rule_word;
     } else if (lengths[c]) {
       s.length = *lengths[c];

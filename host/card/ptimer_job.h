@@ -59,9 +59,12 @@ struct PhaseTimerJob {
 // Plans `job` on `machine` (bound to the card: its clock) for a phase-timer card of
 // `limits`. Arcs as the machine file plans them (planner.arcs): as conics, each
 // move measured by the walker's length rule (plan::conic_rule_lengths, the CONIC's
-// L word its arc's {S, K}), its moves at least conic_move_gap_cycles apart. The job
-// must have no pauses (dwells, M0): errors otherwise, as for a line too long for
-// one length word. `file` names the G-code in errors.
+// L word its arc's {S, K}), its moves at least conic_move_gap_cycles apart. A
+// dwell waits in rest phases; a pause (a dwell longer than a move interval holds,
+// or one after the last move) is a segment of pause moves (v all 0, L
+// 0xFFFFFFFF) each fired by a timed move at its clock. Errors for what the card
+// cannot time, as for a line too long for one length word. `file` names the
+// G-code in errors.
 plan::Result<PhaseTimerJob> plan_phase_timer_job(const plan::Job& job, const plan::Machine& machine,
                                                  const CardLimits& limits, const std::string& file);
 

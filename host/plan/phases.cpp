@@ -134,6 +134,36 @@ bool PhaseFitter::push(std::span<const double> ideal, std::span<const double> le
     return fit(false);
 }
 
+bool PhaseFitter::push_pause(std::span<const double> ideal) {
+    if (!error_.empty()) return false;
+    if (!fit(true)) return false;   // the motion before: every move timed, its last phase closed
+    const std::int64_t T = std::int64_t{1} << fmt_.tick_log2;
+    for (const double tau : ideal) {
+        const std::int64_t at = static_cast<std::int64_t>(std::floor(tau));
+        // Hold still (p, S and H zero) until a timed move reaches the pause move.
+        while (at - c0_ >= kMaxTimedClocks) {
+            const std::uint64_t R = std::min<std::uint64_t>(kMaxFieldTicks, std::uint64_t((at - c0_ - 1) / T));
+            phases_.push_back({R, 0, true});
+            ++stats_.rests;
+            ++stats_.phases;
+            c0_ += std::int64_t(R) * T;
+        }
+        if (at <= c0_) {
+            error_ = fmt::format("pause move at clock {:.1f} comes before the phases reach it (clock {})", tau, c0_);
+            return false;
+        }
+        phases_.push_back({std::uint64_t(at - c0_), 0, true, false, 0, 0, 0, true});
+        ++stats_.rests;
+        fires_.push_back(at);
+        c0_ = at;
+        ++stats_.phases;
+        ++stats_.timed;
+    }
+    p0_ = s0_ = a0_ = 0;
+    pending_rest_ = false;
+    return true;
+}
+
 bool PhaseFitter::finish() { return error_.empty() && fit(true); }
 
 // One phase tried from the state `st`: the longest run of queued moves (at

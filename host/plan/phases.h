@@ -121,6 +121,11 @@ public:
     // False with error() when no phase can time a move within its window.
     bool push(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at = -1,
               std::span<const PlanJerk> plan = {});
+    // A pause's moves (they step nothing; absolute clocks, after every earlier
+    // move's): the moves before are fitted, then each pause move is a timed move at
+    // its clock (never late), after flat rests where it is further than a timed
+    // move reaches; the motion after it starts from rest (push()'s rest_at).
+    bool push_pause(std::span<const double> ideal);
     // Every move pushed is fitted (the last phase closed).
     bool finish();
 

@@ -72,6 +72,7 @@ struct PlanStream::Impl {
     double tol;
     std::function<void(std::span<const double>, std::span<const double>, double, std::span<const PlanJerk>)>
         on_move_times;
+    std::function<void(std::span<const double>)> on_pause_times;
     double arc_path_done = 0;   // on_move_times: the path length of the arc's pieces so far
     bool conic_length_rule = false;
     double rule_unit_mm = 0;       // conic_rule_unit_mm
@@ -122,6 +123,7 @@ struct PlanStream::Impl {
           lim(job_chunk_limits(machine, options)),
           tol(machine.chunk_tolerance_cycles()),
           on_move_times(options.on_move_times),
+          on_pause_times(options.on_pause_times),
           conic_length_rule(options.conic_length_rule),
           rule_unit_mm(options.conic_rule_unit_mm),
           segmenter(machine, file),
@@ -190,7 +192,9 @@ struct PlanStream::Impl {
                              longest, m.card.clock_hz)});
             return false;
         }
-        auto chunks = compress(pause_times(prev, until, n), prev, tol, lim);
+        const std::vector<double> times = pause_times(prev, until, n);
+        if (on_pause_times) on_pause_times(times);
+        auto chunks = compress(times, prev, tol, lim);
         if (!chunks.ok()) {
             loop_errors.push_back({file, dwell_loc, fmt::format("pause timing: {}", chunks.error)});
             return false;

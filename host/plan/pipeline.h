@@ -84,6 +84,10 @@ struct PlanOptions {
     std::function<void(std::span<const double> ideal, std::span<const double> lengths_mm, double rest_at,
                        std::span<const PlanJerk> plan)>
         on_move_times;
+    // Each pause's moves (a dwell longer than a move interval holds, or one after
+    // the last move: docs/PLANNING.md "Dwells"), as the card loop makes its card
+    // segment: their ideal times (absolute clocks), before the moves after them.
+    std::function<void(std::span<const double> ideal)> on_pause_times;
     // on_move_times: a conic's moves as a card would time them by the length
     // rule of plan::conic_rule_divisors (one K per arc, its moves' lengths summing
     // to the arc's path), each at the plan's time for its position, instead of

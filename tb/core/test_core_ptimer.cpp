@@ -191,10 +191,10 @@ TEST(CorePtimer, AShortDwellIsTimedByThePhases) {
   expect_fitters_clocks(*job, fires, last);
 }
 
-// What a phase-timer card cannot time yet, the host refuses before anything is sent:
-// pauses (a dwell longer than 2^32 - 1 clocks, which the planner times as pause
-// moves). An arc goes as a CONIC or as chords, as the machine file says.
-TEST(CorePtimer, ThePhaseTimerJobRefusesWhatTheCardCannotTime) {
+// The phase-timer job: an arc goes as a CONIC or as chords, as the machine file
+// says; a pause (a dwell longer than 2^32 - 1 clocks, which the planner times as
+// pause moves) as a segment of pause moves fired by timed phases.
+TEST(CorePtimer, ThePhaseTimerJobPlansArcsEitherWayAndPausesAsTimedMoves) {
   plan::Machine m = hx8k_machine();
   const card::CardLimits& limits = kHx8kLimits;
   auto arcs = plan::parse_gcode("G21 G90 G17\nG1 X5 F600\nG2 X10 Y5 I0 J5\nM2\n", "arc.ngc");
@@ -209,9 +209,26 @@ TEST(CorePtimer, ThePhaseTimerJobRefusesWhatTheCardCannotTime) {
   EXPECT_GT(chords->segments, 4u) << "the same arc as chords";
   auto dwell = plan::parse_gcode("G21 G90\nG1 X5 F600\nG4 P200\nG1 X10\nM2\n", "dwell.ngc");
   ASSERT_TRUE(dwell.ok()) << plan::join(dwell.errors);
+  // A dwell over 2^32 - 1 clocks: a segment of pause moves (every v 0, L never
+  // reached), each fired by a timed phase at its clock (docs/PLANNING.md "Dwells").
   auto paused = card::plan_phase_timer_job(*dwell, m, limits, "dwell.ngc");
-  ASSERT_FALSE(paused.ok());
-  EXPECT_NE(plan::join(paused.errors).find("pauses"), std::string::npos) << plan::join(paused.errors);
+  ASSERT_TRUE(paused.ok()) << plan::join(paused.errors);
+  const uint64_t pause_moves = paused->planned.stats.pause_moves;
+  ASSERT_GT(pause_moves, 0u);
+  size_t still = 0;
+  for (const card::WireSegment& s : paused->wire.segments) {
+    bool none = true;
+    for (uint32_t v : s.v) none = none && v == 0;
+    if (!none) continue;
+    ++still;
+    EXPECT_EQ(uint64_t(s.u) << s.k, pause_moves);
+    EXPECT_EQ(s.length, std::optional<uint32_t>(0xFFFFFFFFu));
+  }
+  EXPECT_EQ(still, 1u);
+  size_t timed = 0;
+  for (const auto& c : paused->commands) timed += (c[0] >> 28) == 0x6 && (c[0] >> 25 & 1);
+  EXPECT_GE(timed, pause_moves) << "each pause move a timed phase";
+  EXPECT_EQ(paused->fire_half_clocks.size(), paused->planned.stats.moves + pause_moves);
 }
 
 // The card says what it is (READ 0x23 [26], through the core's read port, RTL and

@@ -5,8 +5,7 @@
 // and streams the PHASE and SEGMENT commands through the card's SPI pins; every move
 // must fire at the cycle the host computed for it (MoveClock's chunk time: twice the
 // fitter's half clocks after the timer's start), every card segment end where the
-// plan says, and the wire must carry fewer bytes than the chunk card's job. What
-// such a card cannot do yet is refused before anything is sent.
+// plan says, and the wire must carry fewer bytes than the chunk card's job.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -256,22 +255,84 @@ TEST(PhaseTimerRun, ADwellLongerThanOnePhaseWaitsInRestPhasesThatFitTheirField) 
   EXPECT_GE(double(r.move_cycles[gap_at] - r.move_cycles[gap_at - 1]) / caps.clock_hz, 100.0) << "the dwell";
 }
 
-// What a phase-timer card cannot do yet is refused before anything is sent: pauses
-// (a dwell longer than the timer's 2^32 - 1 clocks). (Homing and probing run on it:
-// Home.EveryAxisHomesAtItsSwitchOnTheFastEngine, ProbeBoards.*/hx8k_pt.) Arcs go as
-// conics, with nothing to say; an arc whose moves come faster than the walker gives
-// them goes as chords, with a warning that says why.
-TEST(PhaseTimerRun, WhatTheCardCannotTimeIsRefusedUnsent) {
+// Pauses (docs/PLANNING.md "Dwells"): a dwell longer than a move interval holds
+// (2^32 - 1 clocks, 107 s at 40 MHz) and a dwell after the last move are a segment of
+// pause moves (every v 0, L 0xFFFFFFFF), each fired by a timed move at its clock after
+// flat rests; the card counts them, the pins show none. 200 s between two lines on the
+// fast engine; a trailing dwell with the torch on, on the Verilated card in lockstep
+// with the model: the card runs on, the torch held, until the dwell's end.
+TEST(PhaseTimerRun, PausesAreTimedMovesOfASegmentThatStepsNothing) {
+  const card::CardCaps caps = run::connect_sim("hx8k_pt");
+  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
+  fs::create_directories(dir);
+  struct Case {
+    const char* name;
+    const char* gcode;
+    run::Engine engine;
+    double dwell_s;
+  };
+  int64_t end_after_pin_move = -1;
+  for (const Case& c : {Case{"pause.ngc", "G21 G90\nG1 X5 F600\nG4 P200\nG1 X10\nM2\n", run::Engine::model, 200},
+                        Case{"trailing.ngc", "G21 G90\nM3\nG1 X0.5 F600\nG4 P0.05\nM5\nM2\n",
+                             run::Engine::lockstep, 0.05}}) {
+    SCOPED_TRACE(c.name);
+    const fs::path path = dir / c.name;
+    std::ofstream(path) << c.gcode;
+    auto prepared = run::prepare_job(path, kMachine, caps);
+    ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
+    const run::CardJob& job = *prepared.value;
+    ASSERT_GT(job.planned.stats.pause_moves, 0u);
+    size_t pauses = 0;
+    for (const card::WireSegment& s : job.wire.segments) {
+      bool still = true;
+      for (uint32_t v : s.v) still = still && v == 0;
+      if (!still) continue;
+      ++pauses;
+      EXPECT_EQ(s.length, std::optional<uint32_t>(0xFFFFFFFFu)) << "a pause's L: never reached";
+    }
+    EXPECT_EQ(pauses, 1u);
+    EXPECT_EQ(job.fire_cycles.size(), job.card_moves()) << "pause moves timed too";
+
+    run::SimRunOptions o;
+    o.board = "hx8k_pt";
+    o.engine = c.engine;
+    const run::CardRun r = run::run_on_sim(job, o);
+    ASSERT_TRUE(r.ok()) << r.faults.front().name << ": " << r.faults.front().message;
+    EXPECT_EQ(r.moves_done, job.card_moves()) << "the card counts the pause moves";
+    EXPECT_EQ(r.position, job.checkpoints.back().position);
+    EXPECT_EQ(r.position_mismatches, 0u);
+    ASSERT_EQ(r.move_cycles.size(), job.moves()) << "the pins show no pause move";
+    const run::RunMeasure m = run::measure_run(job, r);
+    EXPECT_EQ(m.moves_off_chunk_time, 0u);
+    EXPECT_EQ(m.max_chunk_error_cycles, 0);
+    // The dwell on the pins: the longest gap between moves, or the run past the last.
+    uint64_t gap = r.cycles - r.move_cycles.back();
+    for (size_t n = 1; n < r.move_cycles.size(); ++n) gap = std::max(gap, r.move_cycles[n] - r.move_cycles[n - 1]);
+    // The run ends as long after its last move when that is a pause move (its time
+    // the host's) as when it is a move on the pins (the first case).
+    const int64_t end_after = int64_t(r.cycles - r.start_cycle) - job.fire_cycles.back();
+    if (c.engine == run::Engine::model) {
+      EXPECT_EQ(int64_t(r.move_cycles.back() - r.start_cycle), job.fire_cycles.back()) << "the last move on the pins";
+      end_after_pin_move = end_after;
+    } else {
+      EXPECT_EQ(end_after, end_after_pin_move) << "the run ends where the last pause move is due";
+    }
+    EXPECT_GE(double(gap) / caps.clock_hz, c.dwell_s);
+    EXPECT_LT(double(gap) / caps.clock_hz, c.dwell_s + 1.0);
+    EXPECT_TRUE(r.torch_verdict.ok()) << (r.torch_verdict.errors.empty() ? "" : r.torch_verdict.errors.front());
+    if (c.engine == run::Engine::lockstep)   // M3 ... G4 P0.05 M5: on through the dwell
+      EXPECT_GE(r.torch_verdict.on_cycles / caps.clock_hz, c.dwell_s);
+  }
+}
+
+// Arcs go as conics, with nothing to say; an arc whose moves come faster than the
+// walker gives them goes as chords, with a warning that says why. (Homing and probing
+// run on the card too: Home.EveryAxisHomesAtItsSwitchOnTheFastEngine,
+// ProbeBoards.*/hx8k_pt; pauses above.)
+TEST(PhaseTimerRun, ArcsTheWalkerCannotPaceGoAsChordsWithAWarning) {
   const card::CardCaps caps = *card::board_caps("hx8k_pt");
   const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
   fs::create_directories(dir);
-  const fs::path dwell = dir / "dwell.ngc";
-  std::ofstream(dwell) << "G21 G90\nG1 X5 F600\nG4 P200\nG1 X10\nM2\n";
-  auto refused = run::prepare_job(dwell, kMachine, caps);
-  ASSERT_FALSE(refused.ok());
-  EXPECT_NE(plan::join(refused.errors).find("pauses"), std::string::npos) << plan::join(refused.errors);
-  // The same job on the chunk card is planned (its pause runs as pause moves).
-  EXPECT_TRUE(run::prepare_job(dwell, kMachine, *card::board_caps("hx8k")).ok());
   const fs::path arcs = dir / "arcs.ngc";
   std::ofstream(arcs) << "G21 G90 G17\nG1 X5 F600\nG2 X10 Y5 I0 J5\nG2 X15 Y0 I5 J0\nM2\n";
   auto a = run::prepare_job(arcs, kMachine, caps);
