@@ -89,13 +89,15 @@ void print_plan_summary(const run::CardJob& j) {
   else
     fmt::print("segments   {} card segments ({} step segments)\n", j.wire_segments(), s.step_segments);
   if (j.machine.planner.fit_arcs_mm > 0)  // planner.fit_arcs_mm: G1 chains as arcs
-    fmt::print("fitted     {} arcs from {} G1 lines, {} lines from {};{} within {:.4f} mm of the G-code "
+    fmt::print("fitted     {} arcs from {} G1 lines, {} lines from {}; within {:.4f} mm of the G-code "
                "(planner.fit_arcs_mm = {:g})\n",
-               s.fit.arcs, s.fit.lines_in_arcs, s.fit.merged, s.fit.lines_in_merged,
-               s.fit.curves ? fmt::format(" {} NURBS as {} arcs and {} lines;", s.fit.curves, s.fit.curve_arcs,
-                                          s.fit.curve_lines)
-                            : std::string(),
-               s.fit.max_deviation_mm, j.machine.planner.fit_arcs_mm);
+               s.fit.arcs, s.fit.lines_in_arcs, s.fit.merged, s.fit.lines_in_merged, s.fit.max_deviation_mm,
+               j.machine.planner.fit_arcs_mm);
+  if (s.fit.curves)  // NURBS as arcs on a card that walks them
+    fmt::print("nurbs      {} NURBS as {} arcs and {} lines, within {:.4f} mm of the curves (planner.arc_tolerance_mm "
+               "= {:g}, the card walks arcs)\n",
+               s.fit.curves, s.fit.curve_arcs, s.fit.curve_lines, s.fit.curve_max_deviation_mm,
+               j.machine.planner.arc_tolerance_mm);
   if (j.caps.ciw && s.conic_arcs + s.chord_arcs > 0) {  // a card with a walker: how the arcs went
     fmt::print("arcs       {} walked by the card's conic walker ({} CONIC segments), {} as chords", s.conic_arcs,
                s.conic_segments, s.chord_arcs);

@@ -178,7 +178,8 @@ std::optional<std::size_t> longest(std::size_t s, std::size_t avail, bool known,
 }  // namespace
 
 struct ArcFitter::Impl {
-    double tol = 0;
+    double tol = 0;          // G1 chains (0: passed through)
+    double curve_tol = 0;    // NURBS blocks (0: passed through)
     ArcFitStats st;
     bool finished = false;
     bool in_run = false;
@@ -192,10 +193,10 @@ struct ArcFitter::Impl {
 
     // A NURBS block as arcs and lines (arc_fit.h): false when it stays a NURBS.
     bool fit_curve(const MotionBlock& b) {
-        const double chord = tol * kCurveChordShare;
+        const double chord = curve_tol * kCurveChordShare;
         const std::vector<PerAxis<double>> pts = nurbs_chord_points(b, chord);
         if (pts.size() < 3) return false;  // too few chords for an arc, or more than Nurbs::kMaxChords
-        ArcFitter inner(tol - chord);
+        ArcFitter inner(ArcFitTolerances{curve_tol - chord, 0});
         MotionBlock line = b;
         line.kind = MotionKind::linear;
         line.curve.reset();
@@ -208,12 +209,12 @@ struct ArcFitter::Impl {
         std::vector<MotionBlock> made;
         while (auto nb = inner.next()) made.push_back(std::move(*nb));
         const ArcFitStats& is = inner.stats();
-        if (is.arcs == 0 || made.size() >= nurbs_chord_points(b, tol).size()) return false;
+        if (is.arcs == 0 || made.size() >= nurbs_chord_points(b, curve_tol).size()) return false;
         ++st.curves;
         st.curve_arcs += is.arcs;
         st.curve_lines += made.size() - is.arcs;
         // Within the rest of the tolerance of the chords, which lie within `chord` of the curve.
-        st.max_deviation_mm = std::max(st.max_deviation_mm, is.max_deviation_mm + chord);
+        st.curve_max_deviation_mm = std::max(st.curve_max_deviation_mm, is.max_deviation_mm + chord);
         for (MotionBlock& nb : made) out.push_back(std::move(nb));
         return true;
     }
@@ -271,9 +272,18 @@ struct ArcFitter::Impl {
     }
 };
 
-ArcFitter::ArcFitter(double tol_mm, bool whole_runs) : impl_(std::make_unique<Impl>()) {
-    impl_->tol = tol_mm;
+ArcFitter::ArcFitter(ArcFitTolerances tol, bool whole_runs) : impl_(std::make_unique<Impl>()) {
+    impl_->tol = tol.lines_mm > 0 ? tol.lines_mm : 0;
+    impl_->curve_tol = tol.curves_mm > 0 ? tol.curves_mm : 0;
     impl_->whole_runs = whole_runs;
+}
+ArcFitter::ArcFitter(double tol_mm, bool whole_runs) : ArcFitter(ArcFitTolerances{tol_mm, tol_mm}, whole_runs) {}
+
+ArcFitTolerances arc_fit_tolerances(const Machine& m) {
+    ArcFitTolerances t;
+    t.lines_mm = m.planner.fit_arcs_mm;
+    if (m.planner.arcs == ArcMode::conic && m.card.conic_width > 0) t.curves_mm = m.planner.arc_tolerance_mm;
+    return t;
 }
 ArcFitter::~ArcFitter() = default;
 ArcFitter::ArcFitter(ArcFitter&&) noexcept = default;
@@ -282,7 +292,7 @@ ArcFitter& ArcFitter::operator=(ArcFitter&&) noexcept = default;
 void ArcFitter::push(const MotionBlock& b) {
     Impl& f = *impl_;
     if (f.finished) throw std::logic_error("ArcFitter::push after finish");
-    if (!(f.tol > 0)) {
+    if (!(f.tol > 0) && !(f.curve_tol > 0)) {
         f.out.push_back(b);
         return;
     }
@@ -297,8 +307,8 @@ void ArcFitter::push(const MotionBlock& b) {
         f.decide(true);
         f.in_run = false;
     }
-    if (!eligible(b)) {
-        if (!(b.kind == MotionKind::nurbs && b.curve && f.fit_curve(b))) f.out.push_back(b);
+    if (!(f.tol > 0) || !eligible(b)) {   // (no chains fitted: every block ends a run)
+        if (!(b.kind == MotionKind::nurbs && b.curve && f.curve_tol > 0 && f.fit_curve(b))) f.out.push_back(b);
         return;
     }
     f.in_run = true;
@@ -330,7 +340,11 @@ const ArcFitStats& ArcFitter::stats() const { return impl_->st; }
 std::size_t ArcFitter::held() const { return impl_->run.size() - impl_->s + impl_->out.size(); }
 
 Job fit_arcs(const Job& job, double tol_mm, ArcFitStats* stats) {
-    if (!(tol_mm > 0)) return job;
+    return fit_arcs(job, ArcFitTolerances{tol_mm, tol_mm}, stats);
+}
+
+Job fit_arcs(const Job& job, ArcFitTolerances tol_mm, ArcFitStats* stats) {
+    if (!tol_mm.any()) return job;
     Job out;
     out.file = job.file;
     out.blocks.reserve(job.blocks.size());

@@ -612,8 +612,9 @@ Result<PlannedJob> plan_job(const Job& given, const Machine& m, const PlanOption
     // rest of the plan is of the fitted job.
     ArcFitStats fit;
     Job fitted;
-    if (m.planner.fit_arcs_mm > 0) fitted = fit_arcs(given, m.planner.fit_arcs_mm, &fit);
-    const Job& job = m.planner.fit_arcs_mm > 0 ? fitted : given;
+    const ArcFitTolerances fit_tol = arc_fit_tolerances(m);
+    if (fit_tol.any()) fitted = fit_arcs(given, fit_tol, &fit);
+    const Job& job = fit_tol.any() ? fitted : given;
     if (!(m.card.clock_hz > 0)) {
         result.errors.push_back({m.file, {}, "no card clock: the machine file gives no [card] clock_hz and no "
                                              "card was asked (plan::bind_card())"});

@@ -163,7 +163,7 @@ class BlockSource {
     if (record) reader_.emplace(std::filesystem::path(job.job_file), job.gcode_options, record);
     else if (job.gcode_file) reader_.emplace(job.gcode_file, job.gcode_options);
     else if (!job.blocks) throw std::logic_error("a streamed job with neither blocks nor a G-code file");
-    if (reader_ && job.machine.planner.fit_arcs_mm > 0) fitter_.emplace(job.machine.planner.fit_arcs_mm);
+    if (reader_ && plan::arc_fit_tolerances(job.machine).any()) fitter_.emplace(plan::arc_fit_tolerances(job.machine));
   }
   std::optional<plan::MotionBlock> next() {
     if (!reader_) {
@@ -312,6 +312,8 @@ plan::Result<CardJob> plan_streamed_from(CardJob cj, const card::CardCaps& caps,
   }
   cj.planned.stats = stream.stats();
   cj.planned.stats.fit = source.fit_stats() ? *source.fit_stats() : fit;
+  // A NURBS cut into arcs (a card that walks them): the run is still measured against it.
+  cj.has_nurbs = cj.has_nurbs || cj.planned.stats.fit.curves > 0;
   cj.planned.chunk_limits = stream.chunk_limits();
   // Where the plan starts (its first step segment's start, else the card's
   // position) and where its last card segment ends.
@@ -347,8 +349,8 @@ plan::Result<CardJob> plan_streamed(std::shared_ptr<const plan::Job> job, const 
                                     const card::CardCaps& caps, const plan::PerAxis<int64_t>& start) {
   CardJob cj = streamed_job(job->file, machine, caps);
   plan::ArcFitStats fit;
-  cj.blocks = machine.planner.fit_arcs_mm > 0
-                  ? std::make_shared<const plan::Job>(plan::fit_arcs(*job, machine.planner.fit_arcs_mm, &fit))
+  cj.blocks = plan::arc_fit_tolerances(machine).any()
+                  ? std::make_shared<const plan::Job>(plan::fit_arcs(*job, plan::arc_fit_tolerances(machine), &fit))
                   : std::move(job);
   return plan_streamed_from(std::move(cj), caps, start, fit);
 }
@@ -378,6 +380,7 @@ void set_checkpoints(CardJob& cj, const plan::PerAxis<int64_t>& start) {
   cj.final_position = cj.checkpoints.empty() ? cj.start : cj.checkpoints.back().position;
   for (const plan::StepSegment& st : cj.planned.step_segments)
     cj.has_nurbs = cj.has_nurbs || st.kind == plan::MotionKind::nurbs;
+  cj.has_nurbs = cj.has_nurbs || cj.planned.stats.fit.curves > 0;   // a NURBS as arcs
 }
 
 // A job for a phase-timer card (card::plan_phase_timer_job), planned whole: arcs as

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "plan/arc_fit.h"
 #include "plan/gcode.h"
 #include "plan/planner.h"
 #include "plan/segments.h"
@@ -25,8 +26,8 @@ Windows peak_windows(const plan::AxisConfig& axis) {
 
 namespace {
 
-// The job as Klipper takes it: its own plan, or, when the machine file fits arcs to
-// G1 chains (planner.fit_arcs_mm), the feeds of the G-code as written (Klipper takes
+// The job as Klipper takes it: its own plan, or, when the plan fitted arcs (G1
+// chains, planner.fit_arcs_mm; NURBS on a card that walks arcs), the feeds of the G-code as written (Klipper takes
 // the lines as they are). Empty when that plan fails.
 plan::PlannedJob klipper_plan(const CardJob& job) {
   plan::Machine m = job.machine;
@@ -46,7 +47,8 @@ plan::PlannedJob klipper_plan(const CardJob& job) {
   return p;
 }
 
-bool fits_arcs(const CardJob& job) { return job.machine.planner.fit_arcs_mm > 0; }
+// Whether the plan's blocks were fitted (G1 chains, or NURBS as arcs on a card that walks them).
+bool fits_arcs(const CardJob& job) { return plan::arc_fit_tolerances(job.machine).any(); }
 
 }  // namespace
 
@@ -170,16 +172,22 @@ void RunMeter::start(uint64_t start_cycle, const plan::PerAxis<int64_t>& positio
         curves_->by_loc[{kept.loc.line, kept.loc.col}] = &kept;
       }
     if (curves_->by_loc.empty()) curves_.reset();
-  } else if (nurbs && !blocks) {
-    auto parsed = plan::load_gcode(job_.job_file, plan::gcode_options(job_.machine));
-    if (parsed.ok()) blocks = std::make_shared<const plan::Job>(std::move(*parsed.value));
   }
-  if (nurbs && blocks) {
+  // The curves of parsed blocks, by their line and column; none: no Curves.
+  const auto index = [this](std::shared_ptr<const plan::Job> parsed) {
     curves_ = std::make_unique<Curves>();
-    curves_->parsed = std::move(blocks);
+    curves_->parsed = std::move(parsed);
     for (const auto& b : curves_->parsed->blocks)
       if (b.kind == plan::MotionKind::nurbs && b.curve) curves_->by_loc[{b.loc.line, b.loc.col}] = &b;
     if (curves_->by_loc.empty()) curves_.reset();
+  };
+  if (nurbs && !curves_ && blocks) index(std::move(blocks));
+  if (nurbs && !curves_ && !job_.gcode_file) {
+    // No blocks given, or fitted blocks, which hold the arcs a NURBS became on a card
+    // that walks them (plan/arc_fit.h), not the curve: the G-code as written has it, at
+    // the same line and column as its arcs.
+    auto parsed = plan::load_gcode(job_.job_file, plan::gcode_options(job_.machine));
+    if (parsed.ok()) index(std::make_shared<const plan::Job>(std::move(*parsed.value)));
   }
   checkpoint_from_ = 0;
   checkpoints_.reset();
