@@ -33,6 +33,14 @@ namespace fs = std::filesystem;
 const std::string kMachine = std::string(CPSTEP_SOURCE_DIR) + "/examples/machines/seed002.toml";
 const std::string kTab = std::string(CPSTEP_SOURCE_DIR) + "/examples/jobs/tab.ngc";
 
+// A file of this suite's scratch folder (made when needed) holding `text`.
+fs::path scratch_file(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
+  fs::create_directories(dir);
+  std::ofstream(dir / name) << text;
+  return dir / name;
+}
+
 bool has_warning(const std::vector<plan::Diagnostic>& w, const std::string& text) {
   for (const plan::Diagnostic& d : w)
     if (d.message.find(text) != std::string::npos) return true;
@@ -173,16 +181,12 @@ TEST(PhaseTimerRun, TheHeldMotionEndsWhereTheHandedPhasesEnd) {
 // written). With planner.arcs = "chords" the curve is its chords, and over the goal.
 TEST(PhaseTimerRun, TheAirfoilsNurbsGoesAsArcsWithinTheWireGoal) {
   const card::CardCaps caps = run::connect_sim("hx8k_pt");
-  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
-  fs::create_directories(dir);
-  const fs::path chords_machine = dir / "seed002_chords.toml";
-  {
-    std::ifstream in(kMachine);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const size_t at = text.find("[planner]\n");
-    ASSERT_NE(at, std::string::npos);
-    std::ofstream(chords_machine) << text.substr(0, at + 10) << "arcs = \"chords\"\n" << text.substr(at + 10);
-  }
+  std::ifstream in(kMachine);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = text.find("[planner]\n");
+  ASSERT_NE(at, std::string::npos);
+  const fs::path chords_machine =
+      scratch_file("seed002_chords.toml", text.substr(0, at + 10) + "arcs = \"chords\"\n" + text.substr(at + 10));
   const std::string naca = std::string(CPSTEP_SOURCE_DIR) + "/examples/jobs/naca0025.ngc";
   auto prepared = run::prepare_job(naca, kMachine, caps);
   ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
@@ -224,10 +228,7 @@ TEST(PhaseTimerRun, TheAirfoilsNurbsGoesAsArcsWithinTheWireGoal) {
 // dwell fired 53.7 s early. Every move at its cycle, the dwell's 100 s between them.
 TEST(PhaseTimerRun, ADwellLongerThanOnePhaseWaitsInRestPhasesThatFitTheirField) {
   const card::CardCaps caps = run::connect_sim("hx8k_pt");
-  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
-  fs::create_directories(dir);
-  const fs::path dwell = dir / "long_dwell.ngc";
-  std::ofstream(dwell) << "G21 G90\nG1 X5 F600\nG4 P100\nG1 X10\nM2\n";
+  const fs::path dwell = scratch_file("long_dwell.ngc", "G21 G90\nG1 X5 F600\nG4 P100\nG1 X10\nM2\n");
   auto prepared = run::prepare_job(dwell, kMachine, caps);
   ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
   const run::CardJob& job = *prepared.value;
@@ -267,8 +268,6 @@ TEST(PhaseTimerRun, ADwellLongerThanOnePhaseWaitsInRestPhasesThatFitTheirField) 
 // with the model: the card runs on, the torch held, until the dwell's end.
 TEST(PhaseTimerRun, PausesAreTimedMovesOfASegmentThatStepsNothing) {
   const card::CardCaps caps = run::connect_sim("hx8k_pt");
-  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
-  fs::create_directories(dir);
   struct Case {
     const char* name;
     const char* gcode;
@@ -280,8 +279,7 @@ TEST(PhaseTimerRun, PausesAreTimedMovesOfASegmentThatStepsNothing) {
                         Case{"trailing.ngc", "G21 G90\nM3\nG1 X0.5 F600\nG4 P0.05\nM5\nM2\n",
                              run::Engine::lockstep, 0.05}}) {
     SCOPED_TRACE(c.name);
-    const fs::path path = dir / c.name;
-    std::ofstream(path) << c.gcode;
+    const fs::path path = scratch_file(c.name, c.gcode);
     auto prepared = run::prepare_job(path, kMachine, caps);
     ASSERT_TRUE(prepared.ok()) << plan::join(prepared.errors);
     const run::CardJob& job = *prepared.value;
@@ -324,8 +322,9 @@ TEST(PhaseTimerRun, PausesAreTimedMovesOfASegmentThatStepsNothing) {
     EXPECT_GE(double(gap) / caps.clock_hz, c.dwell_s);
     EXPECT_LT(double(gap) / caps.clock_hz, c.dwell_s + 1.0);
     EXPECT_TRUE(r.torch_verdict.ok()) << (r.torch_verdict.errors.empty() ? "" : r.torch_verdict.errors.front());
-    if (c.engine == run::Engine::lockstep)   // M3 ... G4 P0.05 M5: on through the dwell
+    if (c.engine == run::Engine::lockstep) {  // M3 ... G4 P0.05 M5: on through the dwell
       EXPECT_GE(r.torch_verdict.on_cycles / caps.clock_hz, c.dwell_s);
+    }
   }
 }
 
@@ -335,10 +334,7 @@ TEST(PhaseTimerRun, PausesAreTimedMovesOfASegmentThatStepsNothing) {
 // ProbeBoards.*/hx8k_pt; pauses above.)
 TEST(PhaseTimerRun, ArcsTheWalkerCannotPaceGoAsChordsWithAWarning) {
   const card::CardCaps caps = *card::board_caps("hx8k_pt");
-  const fs::path dir = fs::path(CPSTEP_TEST_DIR) / "ptimer_job";
-  fs::create_directories(dir);
-  const fs::path arcs = dir / "arcs.ngc";
-  std::ofstream(arcs) << "G21 G90 G17\nG1 X5 F600\nG2 X10 Y5 I0 J5\nG2 X15 Y0 I5 J0\nM2\n";
+  const fs::path arcs = scratch_file("arcs.ngc", "G21 G90 G17\nG1 X5 F600\nG2 X10 Y5 I0 J5\nG2 X15 Y0 I5 J0\nM2\n");
   auto a = run::prepare_job(arcs, kMachine, caps);
   ASSERT_TRUE(a.ok()) << plan::join(a.errors);
   EXPECT_FALSE(has_warning(a->warnings, "arcs planned as chords"));
@@ -346,15 +342,15 @@ TEST(PhaseTimerRun, ArcsTheWalkerCannotPaceGoAsChordsWithAWarning) {
   // The walker's fastest: 8,000 steps/mm at 60 mm/s (moves some 100 clocks apart,
   // drivers that take 100 ns pulses) makes the arcs' moves come sooner than a pass
   // and a division apart.
-  const fs::path fast = dir / "fast.toml", fast_arcs = dir / "fast_arcs.ngc";
   std::string axes;
-  for (const char* a : {"x", "y", "z"})
+  for (const char* axis : {"x", "y", "z"})
     axes += fmt::format("[axes.{}]\nsteps_per_mm = 8000\ntravel_min_mm = -50\ntravel_max_mm = 50\n"
                         "max_velocity_mm_s = 60\nmax_accel_mm_s2 = 5000\nmax_jerk_mm_s3 = 200000\n"
                         "step_high_ns = 100\nstep_low_ns = 100\ndir_setup_ns = 100\ndir_hold_ns = 100\n",
-                        a);
-  std::ofstream(fast) << "[planner]\narc_tolerance_mm = 0.002\nchunk_tolerance_us = 1.0\n" << axes;
-  std::ofstream(fast_arcs) << "G21 G90 G17\nG1 X5 F3600\nG2 X7 Y2 I0 J2\nG2 X9 Y0 I2 J0\nM2\n";
+                        axis);
+  const fs::path fast = scratch_file("fast.toml", "[planner]\narc_tolerance_mm = 0.002\nchunk_tolerance_us = 1.0\n" + axes);
+  const fs::path fast_arcs =
+      scratch_file("fast_arcs.ngc", "G21 G90 G17\nG1 X5 F3600\nG2 X7 Y2 I0 J2\nG2 X9 Y0 I2 J0\nM2\n");
   auto f = run::prepare_job(fast_arcs, fast, caps);
   ASSERT_TRUE(f.ok()) << plan::join(f.errors);
   size_t said = 0;
