@@ -163,7 +163,7 @@ class BlockSource {
     if (record) reader_.emplace(std::filesystem::path(job.job_file), job.gcode_options, record);
     else if (job.gcode_file) reader_.emplace(job.gcode_file, job.gcode_options);
     else if (!job.blocks) throw std::logic_error("a streamed job with neither blocks nor a G-code file");
-    if (reader_ && plan::arc_fit_tolerances(job.machine).any()) fitter_.emplace(plan::arc_fit_tolerances(job.machine));
+    if (const auto tol = plan::arc_fit_tolerances(job.machine); reader_ && tol.any()) fitter_.emplace(tol);
   }
   std::optional<plan::MotionBlock> next() {
     if (!reader_) {
@@ -349,9 +349,9 @@ plan::Result<CardJob> plan_streamed(std::shared_ptr<const plan::Job> job, const 
                                     const card::CardCaps& caps, const plan::PerAxis<int64_t>& start) {
   CardJob cj = streamed_job(job->file, machine, caps);
   plan::ArcFitStats fit;
-  cj.blocks = plan::arc_fit_tolerances(machine).any()
-                  ? std::make_shared<const plan::Job>(plan::fit_arcs(*job, plan::arc_fit_tolerances(machine), &fit))
-                  : std::move(job);
+  const plan::ArcFitTolerances tol = plan::arc_fit_tolerances(machine);
+  cj.blocks = tol.any() ? std::make_shared<const plan::Job>(plan::fit_arcs(*job, tol, &fit))
+                        : std::move(job);
   return plan_streamed_from(std::move(cj), caps, start, fit);
 }
 
