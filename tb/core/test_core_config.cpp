@@ -116,8 +116,9 @@ void config_while_pulse_high(Stop how, unsigned axis) {
   h.idle(t.high + 20);
   EXPECT_TRUE(h.chk.errors().empty()) << h.chk.report();
   EXPECT_EQ(e0.step.size(), 2u) << "one pulse on axis 0's raw STEP pin, and nothing else";
-  if (e0.step.size() >= 2)
+  if (e0.step.size() >= 2) {
     EXPECT_EQ(e0.step[1] - e0.step[0], t.high) << "the pulse completes its high time: no runt";
+  }
   EXPECT_EQ(e0.dir.size(), e0_dir);
   EXPECT_EQ(ea.step.size(), ea_step + (axis == 0 ? 1 : 0)) << "a refused polarity write moves no pin";
   EXPECT_EQ(ea.dir.size(), ea_dir) << "a refused polarity write moves no pin";
