@@ -89,8 +89,7 @@ CpStatus::Out CpStatus::eval_outputs(const In& i) const {
   o.rd_data1 = read(i, i.rd_addr1);
   o.fault = q.fault;
   o.err = q.err;
-  // A latched fault lets the segment under way complete; E-stop and abort do not.
-  o.flush = i.estop || i.abort || (q.fault && !i.seg_active);
+  o.flush = flush(i);
   o.stretched = q.stretched;
   o.enable = q.enable;
   o.status = status_word(i);
@@ -139,7 +138,11 @@ CpStatus::Regs CpStatus::next(const In& i) const {
   // CLEAR drops what was latched before this cycle (a stretch in this very cycle
   // stays); then the first fault latches.
   // CLEAR does not clear an E-stop: only the out-of-band ACK does (input released).
-  const bool clearing = !i.estop && ((i.clear && (q.err & 0xFF) != uint32_t(CoreError::estop)) || i.ack);
+  // Neither clears a fault whose flush is still pending (the segment under way has not
+  // ended): the queues are flushed before the core takes segments again.
+  const bool flush_pending = q.fault && !flush(i);
+  const bool clearing =
+      !i.estop && !flush_pending && ((i.clear && (q.err & 0xFF) != uint32_t(CoreError::estop)) || i.ack);
   if (clearing) {
     d.fault = false;
     d.err = 0;

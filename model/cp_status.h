@@ -127,6 +127,9 @@ class CpStatus {
     bool operator==(const Regs&) const = default;
   };
   bool wd_at() const { return r_.wd_count == uint64_t(r_.wd_limit) << 12; }
+  // The queues flush in this clock: E-stop, abort, or a latched fault once the
+  // segment under way has ended (it completes first).
+  bool flush(const In& i) const { return i.estop || i.abort || (r_.fault && !i.seg_active); }
   Regs reset_state() const;
   Regs next(const In& i) const;  // the registers after a clock (not in reset)
   uint32_t status_word(const In& i) const;

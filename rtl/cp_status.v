@@ -183,6 +183,8 @@ always @* begin
 end
 
 // ---------------------------------------------------------------- next state
+// A latched fault waits for the segment under way to end before its flush.
+wire flush_pending = fault_q && !flush_o;
 reg clearing;
 always @* begin
     fault_d = fault_q;  err_d = err_q;  enable_d = enable_q;
@@ -196,8 +198,9 @@ always @* begin
     // CLEAR drops what was latched before this cycle (a stretch in this very cycle
     // stays), but not an E-stop: only the out-of-band ACK, with the input released,
     // clears that (a CLEAR buffered before the E-stop cannot); then the first fault
-    // latches.
-    clearing = !estop_i && ((clear_i && err_q != E_ESTOP) || ack_i);
+    // latches. Neither clears a fault whose flush is still pending (the segment under
+    // way has not ended): the queues are flushed before the core takes segments again.
+    clearing = !estop_i && !flush_pending && ((clear_i && err_q != E_ESTOP) || ack_i);
     if (clearing) begin
         fault_d     = 1'b0;
         err_d       = E_NONE;

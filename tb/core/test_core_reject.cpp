@@ -30,6 +30,17 @@ void expect_runs_after_clear(Harness& h, const std::string& where) {
   h.expect_consistent(where + ", the job after CLEAR");
 }
 
+// One segment of 400 moves, 25 clocks apart (400, -130, 0, 57), STARTed: true once it
+// runs — its patterns are built (one axis after the other) and it has moved.
+bool start_running(Harness& h) {
+  card::WireSegment a;
+  if (!h.gen.from_deltas({400, -130, 0, 57}, a)) return false;
+  a.chunks = {{25, 400, 0}};
+  h.segment(a);
+  h.control(true, false, false);
+  return h.wait_for([](const model::CpCoreOut& o) { return o.position[0] > 8; }, 5000);
+}
+
 // Before START: a good segment, the bad input, a good segment, START. The fault flushes
 // the queue at once; START is refused; no STEP pulse at all.
 TEST(CoreReject, BeforeStartNothingRuns) {
@@ -59,14 +70,7 @@ TEST(CoreReject, WhileRunningTheRunningSegmentCompletes) {
   for (const BadInput& bad : bad_inputs(Core::model_params())) {
     Harness h(std::string("reject_running_") + bad.name, 2);
     const std::string where = std::string(bad.name) + " (running)";
-    card::WireSegment a;
-    ASSERT_TRUE(h.gen.from_deltas({400, -130, 0, 57}, a));
-    a.chunks = {{25, 400, 0}};
-    h.segment(a);
-    h.control(true, false, false);
-    // Running: its patterns are built (one axis after the other) and it has moved.
-    ASSERT_TRUE(h.wait_for([](const model::CpCoreOut& o) { return o.position[0] > 8; }, 5000))
-        << where << ": the segment did not start";
+    ASSERT_TRUE(start_running(h)) << where << ": the segment did not start";
     h.expecting = false;
     h.send(bad.words());
     // (a pattern is refused during its build, W cycles later)
@@ -100,6 +104,54 @@ TEST(CoreReject, PatternAboveWAsTheRunningSegmentStopsTheRun) {
   h.stretch_slack = 1;  // its first move was due, and counted late, while it built
   expect_stopped_with(h, 8, "pattern above W, first segment");
   expect_runs_after_clear(h, "pattern above W, first segment");
+}
+
+// A fault raised while a segment is being built (a pattern above W: the build stops at
+// that axis, leaving the later axes' words queued) while another segment runs: its flush
+// waits for the running segment to end, and until then CLEAR and ACK leave the fault
+// (docs/CORE.md "Validation"). A CLEAR that dropped it would let the builder take the
+// abandoned segment's next word as a header (finding 20, docs/RELIABILITY.md). The wait
+// ends with the segment's last move, or with ABORT.
+TEST(CoreReject, ClearWaitsForTheFlushOfAFaultRaisedMidBuild) {
+  for (const bool abort : {false, true}) {
+    const std::string where = abort ? "ended by ABORT" : "ended by the segment";
+    Harness h(abort ? "reject_clear_pending_abort" : "reject_clear_pending", 6);
+    const auto p = Core::model_params();
+    ASSERT_TRUE(start_running(h)) << where << ": the segment did not start";
+    h.expecting = false;
+    h.send(words_of(p.w + 1, 0, {p.w + 1, 1, 7, 3}, {{5, uint16_t(p.w + 1), 0}}));
+    ASSERT_TRUE(h.wait_for([](const model::CpCoreOut& o) { return o.fault; }, 5000))
+        << where << ": no fault latched";
+    h.control(false, false, true);
+    card::Status st = h.status();
+    EXPECT_TRUE(st.fault) << where << ": CLEAR dropped a fault whose flush was pending";
+    EXPECT_EQ(st.err_code, 8u) << where;
+    EXPECT_TRUE(st.running) << where << ": the segment under way should still run";
+    h.ack();
+    st = h.status();
+    EXPECT_TRUE(st.fault) << where << ": ACK dropped a fault whose flush was pending";
+    EXPECT_EQ(st.err_code, 8u) << where;
+    if (abort) {
+      h.control(false, true, false);  // flushes at once (the first fault's code stays)
+      h.chk.abandon();
+      h.idle(300);
+      h.stretch_slack = 1;  // a move counted late may have been cut
+      expect_stopped_with(h, 8, where);
+      EXPECT_LT(h.chk.position(0), 400) << where << ": the segment was not cut";
+    } else {
+      h.finish();
+      h.idle(300);
+      EXPECT_EQ(h.chk.segments_done(), 1u) << where << ": the running segment did not complete";
+      EXPECT_EQ(h.chk.position(0), 400) << where;
+      EXPECT_EQ(h.chk.position(1), -130) << where;
+      EXPECT_EQ(h.chk.position(3), 57) << where;
+      expect_stopped_with(h, 8, where);
+    }
+    // Flushed: CLEAR clears, and a job after it runs exactly (its segments built from
+    // their own words).
+    expect_runs_after_clear(h, where);
+    if (HasFailure()) return;
+  }
 }
 
 // The limits themselves are accepted: U/gcd = W, k = KMAX, 2^CAW chunks (these run),
