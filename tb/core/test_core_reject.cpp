@@ -111,11 +111,14 @@ TEST(CoreReject, PatternAboveWAsTheRunningSegmentStopsTheRun) {
 // waits for the running segment to end, and until then CLEAR and ACK leave the fault
 // (docs/CORE.md "Validation"). A CLEAR that dropped it would let the builder take the
 // abandoned segment's next word as a header (finding 20, docs/RELIABILITY.md). The wait
-// ends with the segment's last move, or with ABORT.
+// ends with the segment's last move, or with ABORT, or the out-of-band STOP or FLUSH.
 TEST(CoreReject, ClearWaitsForTheFlushOfAFaultRaisedMidBuild) {
-  for (const bool abort : {false, true}) {
-    const std::string where = abort ? "ended by ABORT" : "ended by the segment";
-    Harness h(abort ? "reject_clear_pending_abort" : "reject_clear_pending", 6);
+  enum class End { segment, abort, stop, flush };
+  const std::pair<End, const char*> ends[] = {
+      {End::segment, "segment"}, {End::abort, "abort"}, {End::stop, "stop"}, {End::flush, "flush"}};
+  for (const auto& [end, name] : ends) {
+    const std::string where = std::string("ended by ") + name;
+    Harness h(std::string("reject_clear_pending_") + name, 6);
     const auto p = Core::model_params();
     ASSERT_TRUE(start_running(h)) << where << ": the segment did not start";
     h.expecting = false;
@@ -131,22 +134,28 @@ TEST(CoreReject, ClearWaitsForTheFlushOfAFaultRaisedMidBuild) {
     st = h.status();
     EXPECT_TRUE(st.fault) << where << ": ACK dropped a fault whose flush was pending";
     EXPECT_EQ(st.err_code, 8u) << where;
-    if (abort) {
-      h.control(false, true, false);  // flushes at once (the first fault's code stays)
-      h.chk.abandon();
-      h.idle(300);
-      h.stretch_slack = 1;  // a move counted late may have been cut
-      expect_stopped_with(h, 8, where);
-      EXPECT_LT(h.chk.position(0), 400) << where << ": the segment was not cut";
-    } else {
+    if (end == End::segment) {
       h.finish();
       h.idle(300);
       EXPECT_EQ(h.chk.segments_done(), 1u) << where << ": the running segment did not complete";
       EXPECT_EQ(h.chk.position(0), 400) << where;
       EXPECT_EQ(h.chk.position(1), -130) << where;
       EXPECT_EQ(h.chk.position(3), 57) << where;
-      expect_stopped_with(h, 8, where);
+    } else {
+      // Each flushes at once (ABORT's own code is not latched: the first fault's stays).
+      if (end == End::abort) {
+        h.control(false, true, false);
+      } else {
+        model::CpCoreIn in;
+        (end == End::stop ? in.ctl_stop : in.ctl_flush) = true;
+        h.drv.step(in);
+      }
+      h.chk.abandon();
+      h.idle(300);
+      h.stretch_slack = 1;  // a move counted late may have been cut
+      EXPECT_LT(h.chk.position(0), 400) << where << ": the segment was not cut";
     }
+    expect_stopped_with(h, 8, where);
     // Flushed: CLEAR clears, and a job after it runs exactly (its segments built from
     // their own words).
     expect_runs_after_clear(h, where);
