@@ -37,6 +37,15 @@ Hom de_boor(int q, std::size_t k, Local d, const std::vector<double>& t, double 
     return d[static_cast<std::size_t>(q)];
 }
 
+// The homogeneous control points (w P, w) of span k for degree p: d[j] is
+// the point of global index k - p + j.
+Local local_points(const std::vector<Hom>& hom, int p, std::size_t k) {
+    const std::size_t first = k - static_cast<std::size_t>(p);
+    Local d{};
+    for (int j = 0; j <= p; ++j) d[static_cast<std::size_t>(j)] = hom[first + static_cast<std::size_t>(j)];
+    return d;
+}
+
 // 5-point Gauss-Legendre on [a, b].
 constexpr std::array<double, 5> kGlX = {0.0, -0.5384693101056831, 0.5384693101056831, -0.9061798459386640,
                                         0.9061798459386640};
@@ -144,12 +153,17 @@ std::size_t Nurbs::span(double u) const {
     return k;
 }
 
+Eigen::Vector3d Nurbs::point(double u) const {
+    const std::size_t k = span(u);
+    const Hom a0 = de_boor(degree(), k, local_points(hom_, degree(), k), knots_, u);
+    return a0.head<3>() / a0[3];
+}
+
 NurbsPoint Nurbs::eval(double u) const {
     const int p = degree();
     const std::size_t k = span(u);
     const std::size_t first = k - static_cast<std::size_t>(p);
-    Local d{};
-    for (int j = 0; j <= p; ++j) d[static_cast<std::size_t>(j)] = hom_[first + static_cast<std::size_t>(j)];
+    const Local d = local_points(hom_, p, k);
     const Hom a0 = de_boor(p, k, d, knots_, u);
     Hom a1 = Hom::Zero(), a2 = Hom::Zero();
     if (p >= 1) {
@@ -228,12 +242,13 @@ double Nurbs::chord_error_until(double ua, double ub, double stop) const {
     const Eigen::Vector3d chord = Q - P;
     const double len = chord.norm();
     auto dist = [&](double u) {
-        const Eigen::Vector3d v = point(u) - P;
+        const Eigen::Vector3d c = point(u);
+        const Eigen::Vector3d v = c - P;
         if (len == 0) return v.norm();
         // Distance to the segment (not the infinite line): beyond an end, to that end.
         const double t = v.dot(chord) / (len * len);
         if (t <= 0) return v.norm();
-        if (t >= 1) return (point(u) - Q).norm();
+        if (t >= 1) return (c - Q).norm();
         return (v - t * chord).norm();
     };
     constexpr int kN = 16;
@@ -251,6 +266,7 @@ double Nurbs::chord_error_until(double ua, double ub, double stop) const {
     double x1 = b - g * (b - a), x2 = a + g * (b - a);
     double f1 = dist(x1), f2 = dist(x2);
     for (int it = 0; it < 60 && b - a > 1e-15 * std::max(1.0, std::abs(b)); ++it) {
+        if (std::max(f1, f2) > stop) return std::max(f1, f2);  // (the answer to "> stop?" is known)
         if (f1 > f2) {
             b = x2; x2 = x1; f2 = f1; x1 = b - g * (b - a); f1 = dist(x1);
         } else {
@@ -300,7 +316,15 @@ std::vector<double> Nurbs::chord_parameters(double tol_mm, std::size_t max_chord
             over = true;
             return;
         }
-        if (depth < 40 && chord_error_until(a, b, tol_mm) > tol_mm) {
+        if (chord_error_until(a, b, tol_mm) > tol_mm) {
+            // A piece 2^-40 of a half span that still stands off by more than the
+            // tolerance: the curve's numbers are too large for it in double
+            // precision. Refused, as a curve of too many chords is (not accepted
+            // out of tolerance, nor halved a million times before the cap).
+            if (depth >= kMaxDepth) {
+                over = true;
+                return;
+            }
             const double m = (a + b) / 2;
             self(self, a, m, depth + 1);
             self(self, m, b, depth + 1);

@@ -60,7 +60,9 @@ public:
     // C(u), C'(u), C''(u). Outside [u_min, u_max] the end spans' rational
     // pieces are continued (smoothly), which integrators that overshoot use.
     [[nodiscard]] NurbsPoint eval(double u) const;
-    [[nodiscard]] Eigen::Vector3d point(double u) const { return eval(u).c; }
+    // C(u) alone: eval(u).c exactly (the same arithmetic), without the
+    // derivatives (about half the work: what chord sampling calls most).
+    [[nodiscard]] Eigen::Vector3d point(double u) const;
 
     // Radius of curvature |C'|^3 / |C' x C''| (infinity where straight).
     [[nodiscard]] double radius(double u) const;
@@ -78,11 +80,14 @@ public:
     // stand off the curve by at most tol_mm (every knot span split into at
     // least two, then halved until chord_error() fits). Empty when that takes
     // more than max_chords chords (a curve far too large for the tolerance:
-    // callers refuse it rather than sample for ever). A curve whose
+    // callers refuse it rather than sample for ever), or when a piece halved
+    // kMaxDepth times still does not fit (numbers too large for the tolerance
+    // in double precision, e.g. a control point at 1e26). A curve whose
     // chord_estimate() is over kEstimateMargin x max_chords is refused that
     // way before any chord is made.
     static constexpr std::size_t kMaxChords = 1'000'000;
     static constexpr double kEstimateMargin = 2;
+    static constexpr int kMaxDepth = 40;
     [[nodiscard]] std::vector<double> chord_parameters(double tol_mm, std::size_t max_chords = kMaxChords) const;
 
     // The fewest chords within tol_mm any polyline of the curve can have, in

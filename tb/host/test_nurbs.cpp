@@ -153,6 +153,66 @@ TEST(Nurbs, RefusesBadInput) {
     EXPECT_FALSE(Nurbs::validate(3, 5, {1, 1, 1, 1, 1}, Nurbs::uniform_clamped_knots(5, 3)));
 }
 
+// xorshift64 to [0, 1): the random curves' numbers.
+struct Unit {
+    uint64_t s = 0x9e3779b97f4a7c15ULL;
+    double operator()() {
+        s ^= s << 13; s ^= s >> 7; s ^= s << 17;
+        return static_cast<double>(s >> 11) / 9007199254740992.0;
+    }
+};
+
+// Orders 2..6, weights 0.2..5, uneven knots, points up to 10^3 mm.
+Nurbs random_curve(Unit& rnd) {
+    const int order = 2 + static_cast<int>(rnd() * 5);
+    const std::size_t n = static_cast<std::size_t>(order) + static_cast<std::size_t>(rnd() * 8);
+    const double scale = std::pow(10.0, 3 * rnd());
+    std::vector<Vector3d> p;
+    std::vector<double> w;
+    for (std::size_t i = 0; i < n; ++i) {
+        p.emplace_back(scale * (rnd() - 0.5), scale * (rnd() - 0.5), 0);
+        w.push_back(0.2 + 4.8 * rnd() * rnd());
+    }
+    std::vector<double> k(static_cast<std::size_t>(order), 0.0);
+    double u = 0;
+    for (std::size_t i = 0; i + static_cast<std::size_t>(order) < n; ++i) k.push_back(u += 0.05 + rnd());
+    k.insert(k.end(), static_cast<std::size_t>(order), u + 0.05 + rnd());
+    return Nurbs(order, p, w, k);
+}
+
+TEST(Nurbs, PointIsEvalsPointExactly) {
+    // point() is the cheap form chord sampling calls: the same number as
+    // eval().c, to the bit, inside the domain, at its knots and beyond its ends.
+    Unit rnd;
+    for (int t = 0; t < 200; ++t) {
+        const Nurbs c = random_curve(rnd);
+        std::vector<double> us = c.breakpoints();
+        const double lo = c.u_min(), hi = c.u_max(), pad = 0.1 * (hi - lo);
+        for (int i = 0; i < 40; ++i) us.push_back(lo - pad + (hi - lo + 2 * pad) * rnd());
+        for (const double u : us) {
+            const Vector3d a = c.point(u), b = c.eval(u).c;
+            for (int j = 0; j < 3; ++j) ASSERT_EQ(a[j], b[j]) << "curve " << t << " at u = " << u << ", axis " << j;
+        }
+    }
+}
+
+TEST(Nurbs, ChordParametersRefuseACurveTooLargeForDoublePrecision) {
+    // A straight line 200 mm long at x = 10^20 mm: its points' x carries
+    // rounding of up to 2^14 mm (the spacing of doubles there), so no chord,
+    // however short, fits 0.001 mm. It is refused once a piece halved
+    // kMaxDepth times still stands off, whatever the cap: not sampled into
+    // chords that break the tolerance, nor halved towards the cap for ever.
+    const Nurbs far(3, {Vector3d(1e20, 0, 0), Vector3d(1e20, 100, 0), Vector3d(1e20, 200, 0)}, {1, 3, 1},
+                    {0, 0, 0, 1, 1, 1});
+    // (The estimate sees only the rounding's curvature: far below a cap it refuses.)
+    EXPECT_LT(far.chord_estimate(0.001), 1000);
+    EXPECT_TRUE(far.chord_parameters(0.001, std::size_t{1} << 50).empty());
+    // The same line near the origin samples as one chord a half span.
+    const Nurbs near(3, {Vector3d(1, 0, 0), Vector3d(1, 100, 0), Vector3d(1, 200, 0)}, {1, 3, 1},
+                     {0, 0, 0, 1, 1, 1});
+    EXPECT_EQ(near.chord_parameters(0.001, std::size_t{1} << 50).size(), 3u);
+}
+
 TEST(Nurbs, ChordParametersKeepTheTolerance) {
     const Nurbs f = full_circle(10, 0, 0);
     const double tol = 0.002;
@@ -179,30 +239,13 @@ TEST(Nurbs, ChordEstimateIsTheCircleCountAndNeverAboveAFactorOfTheChords) {
             EXPECT_NEAR(full_circle(r, 3, -4).chord_estimate(tol), need, 0.02 * need + 8) << r << " mm at " << tol;
         }
     }
-    // Random curves (orders 2..6, weights 0.2..5, uneven knots, points up to 10^3 mm):
-    // the chords chord_parameters makes are never fewer than the estimate over
-    // kEstimateMargin, so refusing by the estimate refuses nothing sampling would take.
-    uint64_t s = 0x9e3779b97f4a7c15ULL;
-    auto rnd = [&s] {
-        s ^= s << 13; s ^= s >> 7; s ^= s << 17;
-        return static_cast<double>(s >> 11) / 9007199254740992.0;  // [0, 1)
-    };
+    // Random curves: the chords chord_parameters makes are never fewer than the
+    // estimate over kEstimateMargin, so refusing by the estimate refuses nothing
+    // sampling would take.
+    Unit rnd;
     double worst = 0;
     for (int t = 0; t < 300; ++t) {
-        const int order = 2 + static_cast<int>(rnd() * 5);
-        const std::size_t n = static_cast<std::size_t>(order) + static_cast<std::size_t>(rnd() * 8);
-        const double scale = std::pow(10.0, 3 * rnd());
-        std::vector<Vector3d> p;
-        std::vector<double> w;
-        for (std::size_t i = 0; i < n; ++i) {
-            p.emplace_back(scale * (rnd() - 0.5), scale * (rnd() - 0.5), 0);
-            w.push_back(0.2 + 4.8 * rnd() * rnd());
-        }
-        std::vector<double> k(static_cast<std::size_t>(order), 0.0);
-        double u = 0;
-        for (std::size_t i = 0; i + static_cast<std::size_t>(order) < n; ++i) k.push_back(u += 0.05 + rnd());
-        k.insert(k.end(), static_cast<std::size_t>(order), u + 0.05 + rnd());
-        const Nurbs c(order, p, w, k);
+        const Nurbs c = random_curve(rnd);
         const double tol = std::pow(10.0, -1 - 3 * rnd());
         const auto us = c.chord_parameters(tol, 100'000'000);
         ASSERT_FALSE(us.empty());
