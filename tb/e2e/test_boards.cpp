@@ -151,7 +151,7 @@ TEST(BoardsMachineKeys, AStatedClockOtherThanTheCardsIsRefusedAtItsLine) {
 }
 
 INSTANTIATE_TEST_SUITE_P(All, Boards, ::testing::ValuesIn(boards()),
-                         [](const auto& info) { return std::string(info.param->name); });
+                         [](const auto& p) { return std::string(p.param->name); });
 
 }  // namespace
 }  // namespace cpstep::tb

@@ -134,7 +134,9 @@ TEST_P(Engines, TheSameRunOnBothEngines) {
   EXPECT_EQ(ls.bad_replies, lr.bad_replies);
   EXPECT_EQ(ls.lost_results, lr.lost_results);
   EXPECT_EQ(model.link.busy_cycles, rtl.link.busy_cycles);
-  if (c.damage) EXPECT_GT(lr.damaged + lr.bad_replies, 0u) << "the link damaged nothing";
+  if (c.damage) {
+    EXPECT_GT(lr.damaged + lr.bad_replies, 0u) << "the link damaged nothing";
+  }
   // The fast engine took its shortcuts.
   EXPECT_EQ(model.engine, run::Engine::model);
   EXPECT_GT(model.skipped_cycles, model.sim_cycles / 2);
@@ -145,9 +147,9 @@ INSTANTIATE_TEST_SUITE_P(ExampleJobs, Engines,
                          ::testing::Values(Case{"tab.ngc", "icebreaker", false}, Case{"tab.ngc", "hx8k", false},
                                            Case{"tight_arcs.ngc", "icebreaker", false},
                                            Case{"tab.ngc", "icebreaker", true}),
-                         [](const auto& info) {
-                           return fmt::format("{}_{}{}", fs::path(info.param.job).stem().string(), info.param.board,
-                                              info.param.damage ? "_damaged" : "");
+                         [](const auto& p) {
+                           return fmt::format("{}_{}{}", fs::path(p.param.job).stem().string(), p.param.board,
+                                              p.param.damage ? "_damaged" : "");
                          });
 
 // A G-code program written into the test's directory, planned on seed002.toml for the card `caps`.

@@ -99,8 +99,8 @@ TEST_P(FeedJobs, HoldAtTheFastestPointKeepsEveryLimitAndThePath) {
 INSTANTIATE_TEST_SUITE_P(Examples, FeedJobs,
                          ::testing::Values("tab.ngc", "bracket.ngc", "plasma.ngc", "tight_arcs.ngc", "naca0025.ngc",
                                            "dense.ngc"),
-                         [](const auto& info) {
-                           std::string n = info.param;
+                         [](const auto& p) {
+                           std::string n = p.param;
                            return n.substr(0, n.find('.'));
                          });
 

@@ -89,7 +89,7 @@ TEST_P(ProbeBoards, TheExampleJobTouchesOffAndCutsAtTheHeightFound) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Hx8k, ProbeBoards, ::testing::Values("hx8k", "hx8k_pt"),
-                         [](const auto& info) { return std::string(info.param); });
+                         [](const auto& p) { return std::string(p.param); });
 
 // #5070 after a probe that trips and one that does not, used by the program.
 TEST(Probe, TheProgramReadsTheTripFlagAndPosition) {

@@ -355,8 +355,8 @@ TEST_P(RunMeterJobs, AStreamedJobIsTheWholeJob) {
 
 INSTANTIATE_TEST_SUITE_P(Examples, RunMeterJobs,
                          ::testing::Values("tab.ngc", "tight_arcs.ngc", "naca0025.ngc", "bracket.ngc", "plasma.ngc"),
-                         [](const auto& info) {
-                           std::string n = info.param;
+                         [](const auto& p) {
+                           std::string n = p.param;
                            return n.substr(0, n.find('.'));
                          });
 
