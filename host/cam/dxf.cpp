@@ -512,7 +512,7 @@ class Reader : public DL_CreationAdapter {
     const std::vector<double> us = curve.chord_parameters(opt_.spline_tolerance_mm / unit, opt_.max_spline_chords);
     if (us.empty()) {
       error(s.src, fmt::format("sampling the spline within {:g} mm takes more than {} chords (control points "
-                               "too far apart for the tolerance)",
+                               "too far apart, or too far from the origin, for the tolerance)",
                                opt_.spline_tolerance_mm, opt_.max_spline_chords));
       return;
     }

@@ -82,7 +82,7 @@ public:
     // more than max_chords chords (a curve far too large for the tolerance:
     // callers refuse it rather than sample for ever), or when a piece halved
     // kMaxDepth times still does not fit (numbers too large for the tolerance
-    // in double precision, e.g. a control point at 1e26). A curve whose
+    // in double precision, e.g. a line at x = 1e20 mm). A curve whose
     // chord_estimate() is over kEstimateMargin x max_chords is refused that
     // way before any chord is made.
     static constexpr std::size_t kMaxChords = 1'000'000;

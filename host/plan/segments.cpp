@@ -136,7 +136,7 @@ std::vector<PerAxis<double>> arc_chord_points(const MotionBlock& b, double tol) 
 std::vector<PerAxis<double>> nurbs_chord_points(const MotionBlock& b, double tol, std::vector<double>* radii) {
     const Nurbs& c = *b.curve;
     const std::vector<double> us = c.chord_parameters(tol);
-    if (us.empty()) return {};  // more chords than Nurbs::kMaxChords: refused by the caller
+    if (us.empty()) return {};  // more chords than Nurbs::kMaxChords, or too far out: refused by the caller
     const std::size_t n = us.size();
     std::vector<double> r(n);
     for (std::size_t i = 0; i < n; ++i) r[i] = c.radius(us[i]);
@@ -366,7 +366,8 @@ struct StepSegmenter::Impl {
             pts = nurbs_chord_points(b, m.planner.arc_tolerance_mm, &curve_r);
             if (pts.empty()) {
                 errors.push_back({file, b.loc,
-                                  fmt::format("the curve needs more than {} chords within arc_tolerance_mm = {:g}",
+                                  fmt::format("the curve needs more than {} chords within arc_tolerance_mm = {:g} (or its "
+                                              "numbers are too large to meet it in double precision)",
                                               Nurbs::kMaxChords, m.planner.arc_tolerance_mm)});
                 return;
             }

@@ -153,6 +153,8 @@ TEST(Nurbs, RefusesBadInput) {
     EXPECT_FALSE(Nurbs::validate(3, 5, {1, 1, 1, 1, 1}, Nurbs::uniform_clamped_knots(5, 3)));
 }
 
+namespace {
+
 // xorshift64 to [0, 1): the random curves' numbers.
 struct Unit {
     uint64_t s = 0x9e3779b97f4a7c15ULL;
@@ -179,6 +181,8 @@ Nurbs random_curve(Unit& rnd) {
     k.insert(k.end(), static_cast<std::size_t>(order), u + 0.05 + rnd());
     return Nurbs(order, p, w, k);
 }
+
+}  // namespace
 
 TEST(Nurbs, PointIsEvalsPointExactly) {
     // point() is the cheap form chord sampling calls: the same number as
