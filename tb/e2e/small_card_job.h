@@ -165,8 +165,10 @@ inline std::vector<uint32_t> limits_setup(const Job& j, uint32_t filter) {
 
 // A new job `next` (its segments, START out of band) runs from where the card stood
 // at `before`: no fault, its moves counted on, its end on the counters and pins.
+// (`before` is taken by value: CardClient::poll() returns a reference to its latest
+// reply, which the polls here would change.)
 inline void expect_next_job_runs_exactly(card::CardClient& c, const Card& card, const Job& next,
-                                         const card::Reply& before) {
+                                         const card::Reply before) {
   const std::vector<int32_t> at = before.positions;
   ASSERT_EQ(c.send(next.segments), next.segments.size());
   ASSERT_TRUE(c.urgent(card::urgent::start));

@@ -28,9 +28,13 @@ using namespace small_card;
 
 // (Replies are copied: CardClient::poll() returns a reference to its latest reply.)
 
-// A ramp tick every 4 clocks: a time constant of 4,096 clocks, a hold from 1 to its
-// stand in 16.9 of them (about 69,000 clocks, some 58 moves of 1,200).
+// A ramp tick every 4 clocks: a time constant τ of 4,096 clocks, a hold from 1 to its
+// stand in 16.9 of them (about 69,000 clocks, 58 planned intervals of 1,200; the
+// scaled time meanwhile is 2·τ, some 7 moves).
 constexpr uint32_t kTick = 4;
+
+// The steps the STEP pins made, signed by DIR.
+std::vector<int32_t> pin_steps(const Card& card) { return {int32_t(card.pins[0]), int32_t(card.pins[1])}; }
 
 std::vector<uint32_t> feed_setup(const Job& j) {
   std::vector<uint32_t> w = j.setup;
@@ -80,7 +84,7 @@ TEST(Feed, HoldAndResumeAtRandomCyclesKeepThePathAndItsTimes) {
         card.spi.idle(30000);
         const card::Reply still = c.poll();
         EXPECT_EQ(still.moves, held.moves) << "no move while held";
-        EXPECT_EQ(still.positions, (std::vector<int32_t>{int32_t(card.pins[0]), int32_t(card.pins[1])}))
+        EXPECT_EQ(still.positions, pin_steps(card))
             << "the pins' steps are the counters";
         EXPECT_LT(card.last_step, card.cs_rose) << "no STEP edge while standing";
         const size_t stood = card.move_cycles.size();
@@ -152,6 +156,213 @@ TEST(Feed, OverrideScalesEveryInterval) {
     EXPECT_EQ(m[k] - m[k - 1], delay / 2) << k;
   for (size_t k = settled_at[2] + 1; k < m.size(); ++k) EXPECT_EQ(m[k] - m[k - 1], delay) << k;
   EXPECT_GE(card.shortest_high, kStepHigh);
+}
+
+// Faults while held (docs/CORE.md "Validation: whole segments or nothing" and
+// "Feed hold and override"): the hold is not a fault and a fault does not end it.
+// make_job's geometry: where the job stands after its first `s` segments.
+std::vector<int32_t> after_segments(unsigned s) {
+  int32_t x = 0, y = 0;
+  for (unsigned i = 0; i < s; ++i) {
+    x += 8;
+    y += (i / 3) % 2 == 0 ? int32_t(2 + i % 5) : -int32_t(2 + i % 5);
+  }
+  return {x, y};
+}
+
+// A segment the card refuses (v_y = 9 > U = 8: SEG_V_GT_U, code 2).
+std::vector<uint32_t> bad_segment() {
+  card::WireSegment w;
+  w.u = 8;
+  w.v = {8, 9};
+  w.dir_positive = {true, true};
+  w.chunks = {{1200, 8, 0, 0}};
+  std::vector<uint32_t> out;
+  card::encode_segment(w, out);
+  return out;
+}
+
+// The run off where the hold stood it (`held`): nothing queued, no move since, the
+// counters the pins'.
+void expect_off_at_the_stand(const card::Reply& r, const card::Reply& held, const Card& card) {
+  EXPECT_FALSE(card::decode_status(r.status).running);
+  EXPECT_EQ(r.status >> 16, 0u) << "no segment and no chunk queued: flushed";
+  EXPECT_EQ(r.moves, held.moves);
+  EXPECT_EQ(r.positions, held.positions);
+  EXPECT_EQ(r.positions, pin_steps(card));
+}
+
+std::vector<uint32_t> clear_word() {
+  std::vector<uint32_t> w;
+  card::encode_control(false, false, true, w);
+  return w;
+}
+
+// The job (all its words sent: they fit the buffer and queues) started; once 12
+// moves are made, HOLD, nothing more sent: the reply at the stand. (The hold from
+// 100 % makes some 2·τ = 8,192 clocks of scaled time, a handful of moves; the queues
+// keep room, so a word sent now reaches the parser.)
+card::Reply run_then_hold(card::CardClient& c, Card& card, const Job& j) {
+  const std::vector<uint32_t> setup = feed_setup(j);
+  EXPECT_EQ(c.send(setup), setup.size());
+  EXPECT_TRUE(c.urgent(card::urgent::start));
+  EXPECT_EQ(c.send(j.segments), j.segments.size());
+  for (int i = 0; i < 100 && c.poll().moves < 12; ++i) card.spi.idle(2000);
+  EXPECT_TRUE(c.urgent(card::urgent::hold));
+  card::Reply held = c.poll();
+  for (int i = 0; i < 200 && card::decode_status(held.status).feed_ramping; ++i) {
+    card.spi.idle(2000);
+    held = c.poll();
+  }
+  const card::Status st = card::decode_status(held.status);
+  EXPECT_TRUE(st.held && !st.feed_ramping && st.running) << "held to a stand, the run on";
+  EXPECT_GE(held.moves, 12u);
+  EXPECT_LT(held.moves + 16, j.moves) << "the job is far from its end";
+  return held;
+}
+
+// Each test: the card held to a stand mid-job (`held`), `next` the job after.
+class FeedHeld : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    held = run_then_hold(c, card, j);
+    ASSERT_FALSE(HasFailure()) << "no stand to start from";
+  }
+  const Job j = make_job(6, 1200), next = make_job(3, 500);
+  Card card;
+  card::CardClient c{card.link, card.options()};
+  card::Reply held;
+};
+
+// A segment refused while held: the fault latches at once, but its flush waits for
+// the segment under way, which stands: the run stays on and held, nothing moves, the
+// queues keep their segments, and neither CLEAR nor ACK clears the fault. RESUME: that
+// segment completes on the path (and no other), then the queues are flushed; CLEAR
+// clears; the next job runs from there exactly.
+TEST_F(FeedHeld, AFaultWhileHeldWaitsForTheSegmentUnderWayToComplete) {
+  const std::vector<uint32_t> bad = bad_segment();
+  ASSERT_EQ(c.send(bad), bad.size());
+  card.spi.idle(2000);
+  const card::Reply refused = c.poll();
+  card::Status st = card::decode_status(refused.status);
+  EXPECT_TRUE(st.fault);
+  EXPECT_EQ(st.err_code, 2u) << "SEG_V_GT_U";
+  EXPECT_TRUE(st.running && st.held) << "the segment under way has not ended: no flush yet";
+  EXPECT_GE(st.segments_queued, 1u) << "the queued segments wait for the flush";
+  EXPECT_EQ(refused.moves, held.moves);
+
+  ASSERT_EQ(c.send(clear_word()), 1u);
+  ASSERT_TRUE(c.urgent(card::urgent::ack));
+  const uint64_t stood_from = card.twin.cycle();
+  card.spi.idle(30000);
+  const card::Reply still = c.poll();
+  st = card::decode_status(still.status);
+  EXPECT_TRUE(st.fault && st.err_code == 2u) << "CLEAR and ACK wait for the flush: " << st.err_code;
+  EXPECT_TRUE(st.running && st.held);
+  EXPECT_EQ(still.moves, held.moves) << "no move while held";
+  EXPECT_LT(card.last_step, stood_from) << "no STEP edge while standing";
+  EXPECT_EQ(still.positions, pin_steps(card));
+
+  ASSERT_TRUE(c.urgent(card::urgent::resume));
+  ASSERT_TRUE(c.wait_until_stopped());
+  const card::Reply ended = c.poll();
+  st = card::decode_status(ended.status);
+  EXPECT_TRUE(st.fault && st.err_code == 2u) << st.err_code;
+  EXPECT_FALSE(st.running);
+  EXPECT_FALSE(st.held);
+  EXPECT_EQ(ended.status >> 16, 0u) << "no segment and no chunk queued: flushed";
+  // The segment under way at the stand, completed: the first segment boundary after
+  // the held count (the next segment is loaded at a boundary, so one exactly there
+  // runs it whole).
+  EXPECT_EQ(ended.moves, (held.moves / 8 + 1) * 8);
+  EXPECT_EQ(ended.positions, after_segments(ended.moves / 8)) << "the segment completed on the path";
+  EXPECT_EQ(ended.positions, pin_steps(card));
+
+  ASSERT_EQ(c.send(clear_word()), 1u);
+  card.spi.idle(2000);
+  const card::Reply cleared = c.poll();
+  EXPECT_FALSE(card::decode_status(cleared.status).fault) << "CLEAR after the flush clears";
+  expect_next_job_runs_exactly(c, card, next, cleared);
+  EXPECT_GE(card.shortest_high, kStepHigh) << "no runt STEP pulse";
+}
+
+// STOP while held, a fault latched: the run is off, so the flush happens at once
+// (the segment under way dropped where it stood) and CLEAR clears. The hold outlives
+// STOP, the fault and CLEAR: a new job STARTed while still held does not move until
+// RESUME, then runs from where the card stood, exactly.
+TEST_F(FeedHeld, StopWhileHeldFlushesAtOnceAndTheHoldStays) {
+  const std::vector<uint32_t> bad = bad_segment();
+  ASSERT_EQ(c.send(bad), bad.size());
+  ASSERT_TRUE(c.urgent(card::urgent::stop));
+  card.spi.idle(2000);
+  const card::Reply stopped = c.poll();
+  card::Status st = card::decode_status(stopped.status);
+  EXPECT_TRUE(st.fault && st.err_code == 2u) << st.err_code;
+  EXPECT_TRUE(st.held);
+  expect_off_at_the_stand(stopped, held, card);  // flushed at once: no segment under way
+
+  ASSERT_EQ(c.send(clear_word()), 1u);
+  card.spi.idle(2000);
+  EXPECT_FALSE(card::decode_status(c.poll().status).fault) << "CLEAR clears";
+  ASSERT_EQ(c.send(next.segments), next.segments.size());
+  ASSERT_TRUE(c.urgent(card::urgent::start));
+  const uint64_t started = card.twin.cycle();
+  card.spi.idle(30000);
+  const card::Reply waiting = c.poll();
+  st = card::decode_status(waiting.status);
+  EXPECT_TRUE(st.running && st.held) << "started, still held";
+  EXPECT_EQ(waiting.moves, held.moves) << "no move while held";
+  EXPECT_LT(card.last_step, started);
+
+  ASSERT_TRUE(c.urgent(card::urgent::resume));
+  ASSERT_TRUE(c.wait_until_stopped());
+  const card::Reply r = c.poll();
+  EXPECT_EQ(r.status & 0xFF02, 0u) << "no fault";
+  EXPECT_EQ(r.moves, held.moves + next.moves);
+  const std::vector<int32_t> end{held.positions[0] + next.x, held.positions[1] + next.y};
+  EXPECT_EQ(r.positions, end);
+  EXPECT_EQ(pin_steps(card), end);
+  EXPECT_GE(card.shortest_high, kStepHigh) << "no runt STEP pulse";
+}
+
+// E-stop while held: the run stops at once, drivers off, the queues flushed, ESTOP
+// latched; ACK does nothing while the input is on, clears once it is released. The
+// hold stays; RESUME and the next job runs from the stand exactly.
+TEST_F(FeedHeld, EstopWhileHeldLatchesAndAckClearsOnceReleased) {
+  const uint64_t pressed = card.twin.cycle();
+  card.spi.set_estop(true);
+  card.spi.idle(2000);
+  const card::Reply stopped = c.poll();
+  card::Status st = card::decode_status(stopped.status);
+  EXPECT_TRUE(st.fault && st.err_code == 10u) << st.err_code;
+  EXPECT_FALSE(st.drivers_enabled);
+  EXPECT_GE(card.enable_fell, pressed) << "the ENABLE pin fell";
+  expect_off_at_the_stand(stopped, held, card);
+
+  ASSERT_TRUE(c.urgent(card::urgent::ack));
+  card.spi.idle(2000);
+  EXPECT_EQ(card::decode_status(c.poll().status).err_code, 10u) << "ACK under E-stop does nothing";
+  card.spi.set_estop(false);
+  card.spi.idle(2000);
+  ASSERT_EQ(c.send(clear_word()), 1u);
+  card.spi.idle(2000);
+  EXPECT_EQ(card::decode_status(c.poll().status).err_code, 10u) << "CLEAR does not clear an E-stop";
+  ASSERT_TRUE(c.urgent(card::urgent::ack));
+  card.spi.idle(2000);
+  const card::Reply acked = c.poll();
+  st = card::decode_status(acked.status);
+  EXPECT_FALSE(st.fault) << st.err_code;
+  EXPECT_TRUE(st.held) << "the hold outlives the E-stop";
+  ASSERT_TRUE(c.urgent(card::urgent::resume));
+  card.spi.idle(2000);
+  std::vector<uint32_t> drivers;
+  card::encode_drivers(true, drivers);
+  ASSERT_EQ(c.send(drivers), drivers.size());
+  const card::Reply resumed = c.poll();
+  EXPECT_EQ(resumed.moves, held.moves);
+  EXPECT_EQ(resumed.positions, held.positions) << "E-stop, ACK and RESUME moved nothing";
+  expect_next_job_runs_exactly(c, card, next, resumed);
+  EXPECT_GE(card.shortest_high, kStepHigh) << "no runt STEP pulse";
 }
 
 }  // namespace
