@@ -618,7 +618,9 @@ TEST(CorePartStatus, RandomRequestsMatchTheModel) {
     flushes += o.flush;
     trips += o.wd_trip && !last.wd_trip;
     trip_cycles += o.wd_trip;
-    if (last.wd_trip) EXPECT_FALSE(o.enable) << "a tripped watchdog holds the drivers off";
+    if (last.wd_trip) {
+      EXPECT_FALSE(o.enable) << "a tripped watchdog holds the drivers off";
+    }
     if (c > 0 && o.cfg != last.cfg) ++cfg_changes;
     last = o;
   }

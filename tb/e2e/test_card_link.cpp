@@ -298,8 +298,9 @@ TEST_F(CardLink, SegmentEndsAreTheLastMoveTimesAndBufferedTimeSpansThem) {
         EXPECT_DOUBLE_EQ(run::buffered_seconds(j, done, made, handed), std::max(expect, 0.0))
             << "segments done " << done << ", moves made " << made << ", segments handed " << sent;
         // A word short of the segment: it is not the card's yet.
-        if (sent > 0 && handed > 0)
+        if (sent > 0 && handed > 0) {
           EXPECT_LE(run::buffered_seconds(j, done, made, handed - 1), run::buffered_seconds(j, done, made, handed));
+        }
       }
   }
   EXPECT_EQ(run::buffered_seconds(j, 0, 0, 0), 0.0);

@@ -298,10 +298,10 @@ std::vector<uint32_t> random_commands(Bench<P>& b, const builds::Build& build, s
             card::encode_phase(ph, c);
             break;
           }
-          card::WireSegment w = to_wire(s, b.chance(0.5));
-          w.length = b.chance(0.05) ? 0 : b.rand(1, 0xFFFFFFFF);  // 0: SEG_LENGTH
-          if (b.chance(0.08)) w.v[0] = w.u + 1;                   // SEG_V_GT_U
-          card::encode_segment(w, c, b.chance(0.3));
+          card::WireSegment ws = to_wire(s, b.chance(0.5));
+          ws.length = b.chance(0.05) ? 0 : b.rand(1, 0xFFFFFFFF);  // 0: SEG_LENGTH
+          if (b.chance(0.08)) ws.v[0] = ws.u + 1;                    // SEG_V_GT_U
+          card::encode_segment(ws, c, b.chance(0.3));
           break;
         }
         if (build.conic && b.chance(0.3)) {
