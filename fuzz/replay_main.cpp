@@ -2,7 +2,12 @@
 // A fuzz target without libFuzzer: runs LLVMFuzzerTestOneInput on each file named
 // on the command line, or on every file of each directory named (sorted), and
 // prints how many it ran. The normal build runs the seed corpora through it (ctest
-// label unit); a crash or a failed invariant aborts.
+// label unit); a crash or a failed invariant aborts, and an input that takes the
+// process's peak memory past libFuzzer's limit (-rss_limit_mb, 2048 MB, which
+// scripts/fuzz and the smoke tests use) fails the run, naming it: without ASan an
+// out-of-memory finding would otherwise replay as a pass.
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +19,14 @@
 
 namespace fs = std::filesystem;
 
+constexpr long kRssLimitMb = 2048;
+
+static long peak_rss_mb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024;  // (Linux: kilobytes)
+}
+
 static bool run_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   if (!in) {
@@ -21,7 +34,13 @@ static bool run_file(const fs::path& p) {
     return false;
   }
   const std::vector<char> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  const bool under = peak_rss_mb() <= kRssLimitMb;
   LLVMFuzzerTestOneInput(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
+  if (under && peak_rss_mb() > kRssLimitMb) {
+    std::fprintf(stderr, "replay: %s: peak memory %ld MB, past libFuzzer's limit of %ld MB\n", p.c_str(),
+                 peak_rss_mb(), kRssLimitMb);
+    return false;
+  }
   return true;
 }
 

@@ -97,7 +97,9 @@ constexpr DeclaredCount kDeclaredCounts[] = {
 
 // Every SPLINE or LWPOLYLINE count past what its entity holds, wherever it sits:
 // the pairs read as libdxflib reads them (a group code is the number its line
-// starts with, 0 when none: a damaged section header does not hide an entity).
+// starts with, 0 when none: a damaged section header does not hide an entity; and
+// group 9, a header variable's name, starts an entity as 0 does: "9 / SPLINE" is a
+// SPLINE to libdxflib).
 std::vector<std::string> declared_count_errors(const std::string& text, const std::string& path) {
   struct Entity {
     std::string type, handle;
@@ -129,7 +131,7 @@ std::vector<std::string> declared_count_errors(const std::string& text, const st
   for (std::size_t i = 0; i + 1 < lines.size(); i += 2) {
     const std::string code = std::to_string(std::atoi(lines[i].c_str()));
     const std::string& value = lines[i + 1];
-    if (code == "0") {
+    if (code == "0" || code == "9") {
       if (cur) check(*cur);
       cur.reset();
       if (value == "SPLINE" || value == "LWPOLYLINE") cur = Entity{value, "", int(i) + 1, {}, {}};

@@ -405,6 +405,11 @@ TEST(Dxf, DeclaredCountsPastTheEntityAreRefused) {
                "0\nSECTION\n2\nENTITIES\n0\nLWPOLYLINE\n5\nD4\n90\n8777771421\n90\n2\n70\n0\n10\n0\n20\n0\n10\n1\n"
                "20\n1\n0\nENDSEC\n0\nEOF\n",
                "LWPOLYLINE handle D4: group 90 declares 8777771421 vertices, the entity has 2");
+  // Group 9 (a header variable's name) starts an entity in libdxflib as 0 does: a
+  // "SPLINE" there declaring 5309503 control points is refused too (fuzz finding 21:
+  // 4507309503 knots, an out-of-memory in libdxflib's allocation before the fix).
+  refused_once("nine.dxf", "0\nSECTION\n2\nHEADER\n9\nSPLINE\n5\nE5\n73\n5309503\n0\nENDSEC\n0\nEOF\n",
+               "SPLINE handle E5: group 73 declares 5309503 control points, the entity has 0");
 }
 
 TEST(Dxf, NestedBlocksAndUnevenScaleMakeAnEllipse) {
