@@ -395,6 +395,13 @@ class Reader : public DL_CreationAdapter {
       s.type = it->second[k].type;
       s.handle = it->second[k].handle;
       s.line = it->second[k].line;
+    } else if (k == (it == ps_.by_kind.end() ? 0 : it->second.size())) {
+      // libdxflib reads entities wherever a line reads as group 0 or 9 before their
+      // name; a drawing's are the "0 / TYPE" records of its ENTITIES and BLOCKS
+      // sections. One more than those is a damaged file: refused, not cut.
+      out_.errors.push_back(file_ + ": libdxflib read a " + type +
+                            " that is not an entity record of the ENTITIES or BLOCKS sections (" +
+                            std::to_string(k) + " found there): the file is damaged");
     }
     out_.drawing.sources.push_back(s);
     return int(out_.drawing.sources.size()) - 1;

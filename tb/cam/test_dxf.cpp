@@ -381,9 +381,9 @@ TEST(Dxf, DeclaredCountsPastTheEntityAreRefused) {
   // Each text below is refused with one error that says `message`.
   const auto dir = camtest::temp_dir("dxf");
   const auto refused_once = [&](const std::string& name, const std::string& text, const std::string& message) {
-    const DxfResult r = load_dxf(camtest::write(dir / name, text));
-    ASSERT_EQ(r.errors.size(), 1u) << name;
-    EXPECT_NE(r.errors[0].find(message), std::string::npos) << r.errors[0];
+    const DxfResult one = load_dxf(camtest::write(dir / name, text));
+    ASSERT_EQ(one.errors.size(), 1u) << name;
+    EXPECT_NE(one.errors[0].find(message), std::string::npos) << one.errors[0];
   };
   // Wherever the entity sits: behind a damaged section header ("'" for the 0
   // before SECTION, which libdxflib reads as 0 all the same) it is refused too.
@@ -410,6 +410,38 @@ TEST(Dxf, DeclaredCountsPastTheEntityAreRefused) {
   // 4507309503 knots, an out-of-memory in libdxflib's allocation before the fix).
   refused_once("nine.dxf", "0\nSECTION\n2\nHEADER\n9\nSPLINE\n5\nE5\n73\n5309503\n0\nENDSEC\n0\nEOF\n",
                "SPLINE handle E5: group 73 declares 5309503 control points, the entity has 0");
+}
+
+// libdxflib reads an entity wherever a line reads as group 0 or 9 before its name: in
+// the HEADER after a 9, or behind a damaged section header. A drawing's entities are
+// the "0 / TYPE" records of its ENTITIES and BLOCKS sections; one read beyond those is
+// a damaged file, refused (not cut), and the good drawing beside it shows that
+// nothing else is.
+TEST(Dxf, EntitiesLibdxflibReadsOutsideTheirSectionsAreRefused) {
+  const std::string line = "0\nLINE\n5\nF1\n8\n0\n10\n0\n20\n0\n11\n10\n21\n0\n";
+  const std::string entities = "0\nSECTION\n2\nENTITIES\n" + line + "0\nENDSEC\n";
+  const auto dir = camtest::temp_dir("dxf");
+  const DxfResult good = load_dxf(camtest::write(dir / "good.dxf", entities + "0\nEOF\n"));
+  ASSERT_TRUE(good.ok()) << good.errors.front();
+  EXPECT_EQ(good.drawing.segs.size(), 1u);
+  // A LINE in the HEADER, after a 9 (a header variable's name).
+  const DxfResult nine = load_dxf(camtest::write(
+      dir / "nine.dxf",
+      "0\nSECTION\n2\nHEADER\n9\nLINE\n10\n0\n20\n5\n11\n10\n21\n5\n0\nENDSEC\n" + entities + "0\nEOF\n"));
+  ASSERT_EQ(nine.errors.size(), 1u) << (nine.errors.empty() ? "accepted" : nine.errors[1]);
+  EXPECT_NE(nine.errors[0].find("nine.dxf: libdxflib read a LINE that is not an entity record of the ENTITIES or "
+                                "BLOCKS sections (1 found there): the file is damaged"),
+            std::string::npos)
+      << nine.errors[0];
+  // Behind a damaged section header ("'" for the 0 before SECTION).
+  const DxfResult hidden =
+      load_dxf(camtest::write(dir / "hidden.dxf", "0\nSECTION\n2\nHEADER\n0\nENDSEC\n'\nSECTION\n2\nENTITIES\n" +
+                                                    line + "0\nENDSEC\n0\nEOF\n"));
+  ASSERT_EQ(hidden.errors.size(), 1u) << (hidden.errors.empty() ? "accepted" : hidden.errors[1]);
+  EXPECT_NE(hidden.errors[0].find("libdxflib read a LINE that is not an entity record of the ENTITIES or BLOCKS "
+                                  "sections (0 found there)"),
+            std::string::npos)
+      << hidden.errors[0];
 }
 
 TEST(Dxf, NestedBlocksAndUnevenScaleMakeAnEllipse) {
