@@ -3,10 +3,12 @@
 
 #include <stdexcept>
 
+#include "model/bits.h"
+
 namespace cpstep::model {
 namespace {
 
-__extension__ typedef unsigned __int128 u128;
+using bits::u128;
 
 // v modulo 2^w, as a signed w-bit value.
 i128 wrap(i128 v, unsigned w) {

@@ -19,8 +19,8 @@ int64_t sx(int64_t x, unsigned w) {
 
 // The low `w` bits of x as a signed value (w < 128).
 cp_i128 sx128(cp_i128 x, unsigned w) {
-  const cp_u128 m = (static_cast<cp_u128>(1) << w) - 1;
-  cp_u128 v = static_cast<cp_u128>(x) & m;
+  const bits::u128 m = (static_cast<bits::u128>(1) << w) - 1;
+  bits::u128 v = static_cast<bits::u128>(x) & m;
   if (v >> (w - 1) & 1) v |= ~m;
   return static_cast<cp_i128>(v);
 }

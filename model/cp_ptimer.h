@@ -34,7 +34,6 @@
 namespace cpstep::model {
 
 __extension__ typedef __int128 cp_i128;   // r: F + S + 3 bits, signed
-__extension__ typedef unsigned __int128 cp_u128;
 
 struct CpPtimerIn {
   bool rst = false;

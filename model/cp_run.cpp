@@ -245,23 +245,23 @@ uint64_t CpRun::ptimer_quiet_for(const In& i) const {
   if (sc > (1u << 17)) return 0;   // (two carries' worth a clock: clocked one by one)
   // Clock c advances the timer for the j-th time when pa + (c+1)·sc first reaches
   // j·2^17: the advance after the quiet ones comes in clock ceil(((advs+1)·2^17 - pa) / sc) - 1.
-  const cp_u128 need = ((cp_u128)(*advs + 1) << 17) - r_.pa;
+  const bits::u128 need = ((bits::u128)(*advs + 1) << 17) - r_.pa;
   return uint64_t((need + sc - 1) / sc) - 1;
 }
 
 void CpRun::skip(uint64_t cycles, uint32_t scale) {
   if (cycles == 0) return;
   if (p_.ptimer) {
-    const cp_u128 pa = r_.pa + (cp_u128)(scale & 0x3FFFF) * cycles;
+    const bits::u128 pa = r_.pa + (bits::u128)(scale & 0x3FFFF) * cycles;
     if (r_.running) ptimer_.skip_advs(uint64_t(pa >> 17));
     r_.pa = uint32_t(pa & 0x1FFFF);
   }
-  const cp_u128 sc = scale & 0x3FFFF;
-  const cp_u128 total = r_.ph + sc * cycles;
-  const cp_u128 before_last = r_.ph + sc * (cycles - 1);
+  const bits::u128 sc = scale & 0x3FFFF;
+  const bits::u128 total = r_.ph + sc * cycles;
+  const bits::u128 before_last = r_.ph + sc * (cycles - 1);
   r_.inc = uint32_t(((before_last & 0xFFFF) + sc) >> 16);
   r_.ph = uint32_t(total & 0xFFFF);
-  const cp_u128 e = r_.elapsed + (total >> 16);
+  const bits::u128 e = r_.elapsed + (total >> 16);
   r_.elapsed = e > 0xFFFFFFFFu ? 0xFFFFFFFFu : uint32_t(e);
 }
 

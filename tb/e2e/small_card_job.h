@@ -99,6 +99,8 @@ struct Card {
     });
     spi.reset();
   }
+  // The steps the STEP pins made, signed by DIR, as the reply's positions.
+  std::vector<int32_t> steps() const { return {int32_t(pins[0]), int32_t(pins[1])}; }
   card::ClientOptions options() const {
     card::ClientOptions o;
     o.axes = 2;

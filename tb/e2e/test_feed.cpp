@@ -33,9 +33,6 @@ using namespace small_card;
 // scaled time meanwhile is 2·τ, some 7 moves).
 constexpr uint32_t kTick = 4;
 
-// The steps the STEP pins made, signed by DIR.
-std::vector<int32_t> pin_steps(const Card& card) { return {int32_t(card.pins[0]), int32_t(card.pins[1])}; }
-
 std::vector<uint32_t> feed_setup(const Job& j) {
   std::vector<uint32_t> w = j.setup;
   card::encode_config(0, card::ConfigField::feed_tick, kTick, w);
@@ -84,7 +81,7 @@ TEST(Feed, HoldAndResumeAtRandomCyclesKeepThePathAndItsTimes) {
         card.spi.idle(30000);
         const card::Reply still = c.poll();
         EXPECT_EQ(still.moves, held.moves) << "no move while held";
-        EXPECT_EQ(still.positions, pin_steps(card))
+        EXPECT_EQ(still.positions, card.steps())
             << "the pins' steps are the counters";
         EXPECT_LT(card.last_step, card.cs_rose) << "no STEP edge while standing";
         const size_t stood = card.move_cycles.size();
@@ -189,7 +186,7 @@ void expect_off_at_the_stand(const card::Reply& r, const card::Reply& held, cons
   EXPECT_EQ(r.status >> 16, 0u) << "no segment and no chunk queued: flushed";
   EXPECT_EQ(r.moves, held.moves);
   EXPECT_EQ(r.positions, held.positions);
-  EXPECT_EQ(r.positions, pin_steps(card));
+  EXPECT_EQ(r.positions, card.steps());
 }
 
 std::vector<uint32_t> clear_word() {
@@ -209,11 +206,8 @@ card::Reply run_then_hold(card::CardClient& c, Card& card, const Job& j) {
   EXPECT_EQ(c.send(j.segments), j.segments.size());
   for (int i = 0; i < 100 && c.poll().moves < 12; ++i) card.spi.idle(2000);
   EXPECT_TRUE(c.urgent(card::urgent::hold));
-  card::Reply held = c.poll();
-  for (int i = 0; i < 200 && card::decode_status(held.status).feed_ramping; ++i) {
-    card.spi.idle(2000);
-    held = c.poll();
-  }
+  size_t all_sent = j.segments.size();
+  const card::Reply held = wait_settled(c, card, j, all_sent, 400000);
   const card::Status st = card::decode_status(held.status);
   EXPECT_TRUE(st.held && !st.feed_ramping && st.running) << "held to a stand, the run on";
   EXPECT_GE(held.moves, 12u);
@@ -261,7 +255,7 @@ TEST_F(FeedHeld, AFaultWhileHeldWaitsForTheSegmentUnderWayToComplete) {
   EXPECT_TRUE(st.running && st.held);
   EXPECT_EQ(still.moves, held.moves) << "no move while held";
   EXPECT_LT(card.last_step, stood_from) << "no STEP edge while standing";
-  EXPECT_EQ(still.positions, pin_steps(card));
+  EXPECT_EQ(still.positions, card.steps());
 
   ASSERT_TRUE(c.urgent(card::urgent::resume));
   ASSERT_TRUE(c.wait_until_stopped());
@@ -276,7 +270,7 @@ TEST_F(FeedHeld, AFaultWhileHeldWaitsForTheSegmentUnderWayToComplete) {
   // runs it whole).
   EXPECT_EQ(ended.moves, (held.moves / 8 + 1) * 8);
   EXPECT_EQ(ended.positions, after_segments(ended.moves / 8)) << "the segment completed on the path";
-  EXPECT_EQ(ended.positions, pin_steps(card));
+  EXPECT_EQ(ended.positions, card.steps());
 
   ASSERT_EQ(c.send(clear_word()), 1u);
   card.spi.idle(2000);
@@ -321,7 +315,7 @@ TEST_F(FeedHeld, StopWhileHeldFlushesAtOnceAndTheHoldStays) {
   EXPECT_EQ(r.moves, held.moves + next.moves);
   const std::vector<int32_t> end{held.positions[0] + next.x, held.positions[1] + next.y};
   EXPECT_EQ(r.positions, end);
-  EXPECT_EQ(pin_steps(card), end);
+  EXPECT_EQ(card.steps(), end);
   EXPECT_GE(card.shortest_high, kStepHigh) << "no runt STEP pulse";
 }
 

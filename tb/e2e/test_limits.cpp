@@ -65,7 +65,7 @@ TEST(Limits, ASwitchClosedMidJobStopsAtOnceAndOnlyMovingAwayRuns) {
     expect_limit_fault(r);
     EXPECT_LE(card.last_step, closed + kLatest) << "a move fired after the switch was seen";
     EXPECT_GT(card.last_step + 2000, closed) << "the job was moving when the switch closed";
-    EXPECT_EQ(r.positions, (std::vector<int32_t>{int32_t(card.pins[0]), int32_t(card.pins[1])}));
+    EXPECT_EQ(r.positions, card.steps());
     EXPECT_GE(card.shortest_high, kStepHigh) << "no runt STEP pulse";
     EXPECT_EQ(c.read_register(card::Register::limits_at), 0x100u) << "x's max stopped it";
     EXPECT_EQ(c.read_register(card::Register::inputs), 0x100u) << "and is still active";

@@ -89,7 +89,7 @@ TEST(OutOfBand, StopAtRandomCyclesThenStartGoesOnExactly) {
         card.spi.idle(3000);
         const card::Reply still = c.poll();
         EXPECT_EQ(still.moves, s.moves) << "no move while stopped";
-        EXPECT_EQ(still.positions, (std::vector<int32_t>{int32_t(card.pins[0]), int32_t(card.pins[1])}))
+        EXPECT_EQ(still.positions, card.steps())
             << "the pins' steps are the counters";
         ASSERT_TRUE(c.urgent(card::urgent::start));
       }
@@ -126,7 +126,7 @@ TEST(OutOfBand, FlushEmptiesEverythingAndANewJobRunsExactly) {
   EXPECT_EQ(after.free_words, 32u) << "the command buffer is empty";
   EXPECT_EQ(after.status >> 16, 0u) << "no segment and no chunk queued";
   EXPECT_LT(after.moves, first.moves);
-  EXPECT_EQ(after.positions, (std::vector<int32_t>{int32_t(card.pins[0]), int32_t(card.pins[1])}));
+  EXPECT_EQ(after.positions, card.steps());
   card.spi.idle(20000);
   EXPECT_EQ(c.poll().moves, after.moves) << "nothing that was buffered runs";
 

@@ -66,7 +66,7 @@ card::Reply trip_mid_job(Card& card, card::CardClient& c, const Job& j, uint32_t
   EXPECT_FALSE(st.running);
   EXPECT_LE(card.last_step, closed + kLatest) << "a move fired after the trip was seen";
   EXPECT_GT(card.last_step + 2000, closed) << "the job was moving when the input closed";
-  EXPECT_EQ(r.positions, (std::vector<int32_t>{int32_t(card.pins[0]), int32_t(card.pins[1])}))
+  EXPECT_EQ(r.positions, card.steps())
       << "the counters hold the position at the trip: the pulses on the pins";
   EXPECT_GE(card.shortest_high, kStepHigh) << "no runt STEP pulse";
   EXPECT_GT(r.status >> 16, 0u) << "what was queued stays until FLUSH";
@@ -136,7 +136,7 @@ TEST(Seek, AProbeAlreadyInContactHoldsTheRunOffAndModeTwoTripsOnItsLoss) {
   EXPECT_GT(r.moves, 0u);
   EXPECT_LT(r.moves, j.moves);
   EXPECT_LE(card.last_step, opened + kLatest);
-  EXPECT_EQ(r.positions, (std::vector<int32_t>{int32_t(card.pins[0]), int32_t(card.pins[1])}));
+  EXPECT_EQ(r.positions, card.steps());
   ASSERT_TRUE(c.urgent(card::urgent::flush));
   EXPECT_EQ(seek_state(c), 4u);
 }
