@@ -9,8 +9,9 @@
 
 namespace cpstep::model::bits {
 
-// The model's wide unsigned arithmetic (products and sums past 64 bits).
+// The model's wide arithmetic (products and sums past 64 bits).
 __extension__ typedef unsigned __int128 u128;
+__extension__ typedef __int128 i128;
 
 inline uint32_t mask(unsigned bits) { return bits >= 32 ? ~0u : (1u << bits) - 1; }
 inline uint64_t mask64(unsigned bits) { return bits >= 64 ? ~uint64_t(0) : (uint64_t(1) << bits) - 1; }

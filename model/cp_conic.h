@@ -14,9 +14,11 @@
 
 #include <cstdint>
 
+#include "model/bits.h"
+
 namespace cpstep::model {
 
-__extension__ typedef __int128 i128;  // wide enough for every width the parameters allow (<= 120 bits)
+using bits::i128;  // wide enough for every width the parameters allow (<= 120 bits)
 
 struct CpConicParams {
   unsigned qw = 16;        // signed width accepted for A, B, C

@@ -18,18 +18,18 @@ int64_t sx(int64_t x, unsigned w) {
 }
 
 // The low `w` bits of x as a signed value (w < 128).
-cp_i128 sx128(cp_i128 x, unsigned w) {
+bits::i128 sx128(bits::i128 x, unsigned w) {
   const bits::u128 m = (static_cast<bits::u128>(1) << w) - 1;
   bits::u128 v = static_cast<bits::u128>(x) & m;
   if (v >> (w - 1) & 1) v |= ~m;
-  return static_cast<cp_i128>(v);
+  return static_cast<bits::i128>(v);
 }
 
 }  // namespace
 
-cp_i128 CpPtimer::threshold() const {
+bits::i128 CpPtimer::threshold() const {
   const uint64_t len = in.len & bits::mask64(p_.lw);
-  return cp_i128(len) << p_.s;
+  return bits::i128(len) << p_.s;
 }
 
 CpPtimerOut CpPtimer::outputs() const {
@@ -70,7 +70,7 @@ void CpPtimer::tick() {
   // The due move fires (a timed one clears its flag): r takes off the length of
   // the move now pending, the next one, if it is known, else owes it. (A length
   // owed, after a start from rest or such a fire, is taken off when known.)
-  cp_i128 r = o.r;
+  bits::i128 r = o.r;
   if (in.fire && due && o.tdue) n.tdue = false;
   if (in.fire && o.bdue) n.bdue = false;
   // (A bdue move's fire takes nothing off: the r that replaced it is the next move's.)
@@ -124,7 +124,7 @@ void CpPtimer::tick() {
         n.h = sx(int64_t(o.nh), p_.hw);
       }
       if (o.nkind & 1) {   // load r (its top 64 bits)
-        r = cp_i128(int64_t(o.np)) << (rw() - 64);
+        r = bits::i128(int64_t(o.np)) << (rw() - 64);
         n.owe = false;
       }
     } else {
@@ -148,11 +148,11 @@ std::optional<uint64_t> CpPtimer::quiet_advs(bool len_valid, uint64_t limit) con
   // A jerk phase: r rises by the step each advancing clock, the step and H change at
   // each tick's end; the phase's last clock ends it. Due when r >= 0 (not while owed).
   const uint64_t tick = uint64_t(1) << p_.s;
-  const cp_i128 lo = -(cp_i128(1) << (rw() - 1)), hi = (cp_i128(1) << (rw() - 1)) - 1;
+  const bits::i128 lo = -(bits::i128(1) << (rw() - 1)), hi = (bits::i128(1) << (rw() - 1)) - 1;
   // A flat phase (a rest: step, H and u 0) changes nothing until its last clock.
   if (q.step == 0 && q.h == 0 && q.u == 0)
     return std::min<uint64_t>(limit, (tick - q.tcnt) + (uint64_t(q.tleft) - 1) * tick - 1);
-  cp_i128 r = q.r;
+  bits::i128 r = q.r;
   int64_t step = q.step, h = q.h;
   uint64_t tleft = q.tleft, tcnt = q.tcnt, n = 0;
   while (n < limit) {
@@ -160,10 +160,10 @@ std::optional<uint64_t> CpPtimer::quiet_advs(bool len_valid, uint64_t limit) con
     const bool last = tleft == 1;
     const uint64_t quiet = std::min<uint64_t>(last ? rest - 1 : rest, limit - n);
     if (!q.owe && step > 0) {
-      const cp_i128 need = (-r + step - 1) / step;      // the first clock after which r >= 0
-      if (need <= cp_i128(quiet)) return n + uint64_t(need) - 1;
+      const bits::i128 need = (-r + step - 1) / step;      // the first clock after which r >= 0
+      if (need <= bits::i128(quiet)) return n + uint64_t(need) - 1;
     }
-    const cp_i128 end = r + cp_i128(quiet) * step;
+    const bits::i128 end = r + bits::i128(quiet) * step;
     if (end < lo || end > hi) return n;                 // (r would wrap: clocked one by one)
     n += quiet;
     if (last || quiet < rest) return n;
@@ -191,7 +191,7 @@ void CpPtimer::skip_advs(uint64_t n) {
   }
   while (n > 0) {
     const uint64_t k = std::min<uint64_t>(n, tick - r_.tcnt);
-    r_.r = sx128(r_.r + cp_i128(k) * r_.step, rw());
+    r_.r = sx128(r_.r + bits::i128(k) * r_.step, rw());
     n -= k;
     if (r_.tcnt + k == tick) {
       r_.tcnt = 0;

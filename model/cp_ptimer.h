@@ -31,9 +31,10 @@
 #include <cstdint>
 #include <optional>
 
+#include "model/bits.h"
+
 namespace cpstep::model {
 
-__extension__ typedef __int128 cp_i128;   // r: F + S + 3 bits, signed
 
 struct CpPtimerIn {
   bool rst = false;
@@ -87,7 +88,7 @@ class CpPtimer {
   void skip_advs(uint64_t n);
 
   // For the benches.
-  cp_i128 r() const { return r_.r; }
+  bits::i128 r() const { return r_.r; }
   int64_t step() const { return r_.step; }
   int64_t h() const { return r_.h; }
   unsigned rw() const { return p_.f + p_.s + 3; }
@@ -103,13 +104,13 @@ class CpPtimer {
     int64_t u = 0, h = 0, step = 0;   // u, H, the step S
     // p minus the pending move's length (times 2^S), signed in rw() bits; -1 after
     // reset and clear: nothing due until a phase starts from rest or loads r.
-    cp_i128 r = -1;
+    bits::i128 r = -1;
     bool nvalid = false;
     uint32_t nkind = 0, nticks = 0;
     int64_t nu = 0;
     uint64_t np = 0, ns = 0, nh = 0;   // r, S, H as written (64 bits each)
   };
-  cp_i128 threshold() const;
+  bits::i128 threshold() const;
   Params p_;
   Regs r_;
   uint64_t loads_ = 0;
